@@ -1,0 +1,25 @@
+"""Errors raised by the benchmark (the synthetic world and its scorers).
+
+Every error derives from :class:`BenchmarkError`; the CLI turns them into a one-line message and
+exit status 2.
+"""
+
+
+class BenchmarkError(Exception):
+    """Base class of every error raised by `benchmark`."""
+
+
+class ScenarioError(BenchmarkError, ValueError):
+    """A scenario parameter is out of range; the message names the value and the accepted ones."""
+
+
+class EpisodeFileError(BenchmarkError):
+    """An episode file is missing, truncated, of another format or of an unsupported version."""
+
+
+class RenderError(BenchmarkError):
+    """No depth renderer could be created (e.g. EGL or Mesa missing); the message says how to fix it."""
+
+
+class SimulationError(BenchmarkError):
+    """The simulation diverged or the task failed (e.g. the box was dropped)."""

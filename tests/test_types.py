@@ -1,0 +1,62 @@
+import numpy as np
+import pytest
+
+from fsv import Calibration, Contacts, DepthVideo, InputError, Kinematics, ObjectModel, Poses
+
+
+def test_depth_video_rejects_negative_depth():
+    with pytest.raises(InputError, match=">= 0"):
+        DepthVideo(depth_m=-np.ones((2, 4, 5)), fps=30)
+
+
+def test_depth_video_times():
+    v = DepthVideo(depth_m=np.zeros((4, 3, 2)), fps=30)
+    np.testing.assert_allclose(v.t, [0, 1 / 30, 2 / 30, 3 / 30])
+    assert v.depth_m.dtype == np.float32
+
+
+def test_backproject_principal_point_lies_on_axis():
+    K = np.array([[200.0, 0, 2], [0, 200.0, 1], [0, 0, 1]])
+    cal = Calibration(K=K, T_world_cam=np.eye(4), width=5, height=3)
+    pts = cal.backproject(np.full((3, 5), 0.5))
+    np.testing.assert_allclose(pts[1, 2], [0, 0, 0.5])
+    np.testing.assert_allclose(pts[1, 4], [2 / 200 * 0.5, 0, 0.5])
+
+
+def test_calibration_rejects_non_rotation():
+    T = np.eye(4)
+    T[0, 0] = 2
+    with pytest.raises(InputError, match="rotation"):
+        Calibration(K=np.eye(3), T_world_cam=T, width=2, height=2)
+
+
+def test_poses_check_lengths():
+    with pytest.raises(InputError, match="differ"):
+        Poses(t=np.zeros(3), pos=np.zeros((2, 3)), rot=np.tile(np.eye(3), (3, 1, 1)))
+
+
+def test_kinematics_imu_is_specific_force_in_object_frame():
+    T = 2
+    R = np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]])  # object x along world y
+    kin = Kinematics(
+        t=np.arange(T) / 30, pos=np.zeros((T, 3)), rot=np.tile(R, (T, 1, 1)),
+        vel=np.zeros((T, 3)), acc=np.tile([0.0, 1.0, 0.0], (T, 1)),
+        omega=np.tile([0.0, 0.0, 2.0], (T, 1)), alpha=np.zeros((T, 3)), valid=np.ones(T, bool),
+    )
+    acc, gyro = kin.imu(np.array([0, 0, -9.81]))
+    np.testing.assert_allclose(acc[0], [1.0, 0, 9.81])
+    np.testing.assert_allclose(gyro[0], [0, 0, 2.0])
+
+
+def test_contacts_sliding_requires_active():
+    z = np.zeros((1, 1, 3))
+    with pytest.raises(InputError, match="sliding"):
+        Contacts(("thumb",), active=[[False]], sliding=[[True]], point=z, normal=z, slide_dir=z)
+
+
+def test_object_model_inertia_of_paper_box():
+    I = ObjectModel.solid_box_inertia([0.171, 0.111, 0.06], 0.45)
+    m = ObjectModel(size_m=[0.171, 0.111, 0.06], mass_kg=0.45, inertia=I, friction=0.8)
+    assert m.inertia[2, 2] == pytest.approx(0.45 / 12 * (0.171**2 + 0.111**2))
+    with pytest.raises(InputError, match="mass_kg"):
+        ObjectModel(size_m=[1, 1, 1], mass_kg=0, inertia=np.eye(3), friction=0.5)
