@@ -1,0 +1,402 @@
+"""Learning how humans share internal grip forces (the paper's §3.6): two small networks.
+
+* ``ANN_L2`` predicts the amount of internal force, ||f^(i)||_2 over the fingers in contact, [N].
+* ``ANN_decomp`` predicts each finger's share, f_k^(i) / ||f^(i)||_2 (dimensionless).
+
+Both take the features of :mod:`fsv.features` (eq. 10-13), are multilayer perceptrons with logistic
+(sigmoid) hidden neurons and a linear output (like R's ``neuralnet`` with ``linear.output=TRUE``),
+two hidden layers of (6, 7) and (8, 13) neurons as in the paper, and are trained full-batch with
+resilient backpropagation (``torch.optim.Rprop``) on standardised inputs.
+
+Fingers not in contact. The hand has a fixed number K of finger slots (thumb first). The input is
+``[p1, p3, p2_1..p2_K, p4_1..p4_K, active_1..active_K]`` (2 + 3K values) with p2_k = p4_k = 0 for
+a finger not in contact, so the network sees which fingers touch. ``ANN_decomp`` has K outputs;
+its loss counts only the fingers in contact, and at prediction time the shares of fingers not in
+contact are set to 0 and the remaining shares are rescaled to unit L2 norm, so that the predicted
+internal forces have exactly the norm ``ANN_L2`` predicts.
+
+Determinism. Weights are drawn from a ``torch.Generator`` seeded with ``LearnConfig.seed``; the
+global torch RNG is neither read nor advanced. Rprop on the full batch has no randomness, and
+training runs single-threaded (the thread count is restored afterwards) so that floating-point
+reductions happen in one order: the same data and config give bit-identical weights. Everything
+is float64.
+
+Files. :meth:`InternalForceModel.save` writes one ``torch.save`` archive (weights, input and
+target normalisation, config, finger names, free-form metadata) atomically; :func:`load` reads it
+back with ``weights_only=True`` and predicts bit-identically.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import torch
+
+from fsv.errors import InputError
+from fsv.features import Features
+
+FORMAT = "fsv-internal-forces"
+VERSION = 1
+
+
+@dataclass(frozen=True)
+class LearnConfig:
+    """Architecture and training of the two networks.
+
+    Attributes:
+        hidden_l2: Hidden layer sizes of ANN_L2 (the paper: 6, 7).
+        hidden_decomp: Hidden layer sizes of ANN_decomp (the paper: 8, 13).
+        epochs: Full-batch Rprop iterations per network.
+        lr: Rprop's initial step size.
+        etas: Rprop's (decrease, increase) factors.
+        step_sizes: Rprop's (min, max) step sizes.
+        folds: Number of folds for :func:`cross_validate`.
+        seed: Seed of the weight initialisation.
+        min_l2_n: Samples whose internal-force norm is below this [N] carry no share information
+            and are left out of ANN_decomp's loss.
+    """
+
+    hidden_l2: tuple = (6, 7)
+    hidden_decomp: tuple = (8, 13)
+    epochs: int = 1500
+    lr: float = 0.01
+    etas: tuple = (0.5, 1.2)
+    step_sizes: tuple = (1e-6, 50.0)
+    folds: int = 5
+    seed: int = 0
+    min_l2_n: float = 0.05
+
+    def __post_init__(self):
+        for name in ("hidden_l2", "hidden_decomp"):
+            h = tuple(int(v) for v in getattr(self, name))
+            if len(h) == 0 or any(v <= 0 for v in h):
+                raise InputError(f"LearnConfig.{name} must be a non-empty tuple of positive sizes, got {h}")
+            object.__setattr__(self, name, h)
+        for name in ("epochs", "folds", "seed"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or int(v) != v or v < (2 if name == "folds" else 0 if name == "seed" else 1):
+                raise InputError(f"LearnConfig.{name} must be an integer >= {2 if name == 'folds' else 0 if name == 'seed' else 1}, got {v!r}")
+            object.__setattr__(self, name, int(v))
+        if not (self.lr > 0 and self.min_l2_n >= 0):
+            raise InputError(f"LearnConfig.lr must be > 0 and min_l2_n >= 0, got {self.lr!r}, {self.min_l2_n!r}")
+        object.__setattr__(self, "etas", tuple(float(v) for v in self.etas))
+        object.__setattr__(self, "step_sizes", tuple(float(v) for v in self.step_sizes))
+
+
+@dataclass(frozen=True)
+class TrainingSet:
+    """Samples for the two networks: one row per (frame, hand).
+
+    Attributes:
+        x: Network inputs (see :meth:`fsv.features.Features.matrix`), shape (N, 2 + 3K).
+        internal: Internal normal forces f_k^(i) per finger (eq. 9's decomposition), shape (N, K),
+            [N]; ignored where not active.
+        active: Finger k in contact, shape (N, K).
+        groups: Group label per sample (e.g. the episode), shape (N,); cross-validation folds
+            never split a group.
+    """
+
+    x: np.ndarray
+    internal: np.ndarray
+    active: np.ndarray
+    groups: np.ndarray = field(default=None)
+
+    def __post_init__(self):
+        x = np.asarray(self.x, dtype=np.float64)
+        f = np.asarray(self.internal, dtype=np.float64)
+        a = np.asarray(self.active, dtype=bool)
+        if x.ndim != 2 or f.ndim != 2 or a.shape != f.shape or x.shape[0] != f.shape[0]:
+            raise InputError(f"TrainingSet: x (N, D), internal and active (N, K) expected, got {x.shape}, {f.shape}, {a.shape}")
+        K = f.shape[1]
+        if x.shape[1] != 2 + 3 * K:
+            raise InputError(f"TrainingSet.x must have 2 + 3K = {2 + 3 * K} columns for K = {K} fingers, got {x.shape[1]}")
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(f))):
+            raise InputError("TrainingSet.x and .internal must be finite")
+        g = np.arange(x.shape[0]) if self.groups is None else np.asarray(self.groups)
+        if g.shape != (x.shape[0],):
+            raise InputError(f"TrainingSet.groups must have shape ({x.shape[0]},), got {g.shape}")
+        for k, v in dict(x=x, internal=np.where(a, f, 0.0), active=a, groups=g).items():
+            object.__setattr__(self, k, v)
+
+    def __len__(self) -> int:
+        return self.x.shape[0]
+
+    @property
+    def num_fingers(self) -> int:
+        return self.internal.shape[1]
+
+    def subset(self, index) -> "TrainingSet":
+        return TrainingSet(self.x[index], self.internal[index], self.active[index], self.groups[index])
+
+    @staticmethod
+    def from_features(features: Features, internal: np.ndarray, groups=None) -> "TrainingSet":
+        return TrainingSet(features.matrix(), internal, features.active, groups)
+
+
+def _targets(internal: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    f = np.where(active, internal, 0.0)
+    l2 = np.linalg.norm(f, axis=1)
+    shares = f / np.where(l2 > 0, l2, 1.0)[:, None]
+    return l2, shares
+
+
+def _mlp(n_in: int, hidden: tuple, n_out: int, gen: torch.Generator) -> torch.nn.Sequential:
+    layers, prev = [], n_in
+    for h in hidden:
+        layers += [torch.nn.utils.skip_init(torch.nn.Linear, prev, h, dtype=torch.float64), torch.nn.Sigmoid()]
+        prev = h
+    layers.append(torch.nn.utils.skip_init(torch.nn.Linear, prev, n_out, dtype=torch.float64))
+    with torch.no_grad():
+        for m in layers:
+            if isinstance(m, torch.nn.Linear):
+                b = 1.0 / np.sqrt(m.in_features)
+                torch.nn.init.uniform_(m.weight, -b, b, generator=gen)
+                torch.nn.init.uniform_(m.bias, -b, b, generator=gen)
+    return torch.nn.Sequential(*layers)
+
+
+def _rprop(net: torch.nn.Module, x: torch.Tensor, loss_fn, config: LearnConfig) -> float:
+    opt = torch.optim.Rprop(net.parameters(), lr=config.lr, etas=config.etas, step_sizes=config.step_sizes, foreach=False)
+    loss = None
+    for _ in range(config.epochs):
+        opt.zero_grad()
+        loss = loss_fn(net(x))
+        loss.backward()
+        opt.step()
+    with torch.no_grad():
+        return float(loss_fn(net(x)))
+
+
+class InternalForceModel:
+    """The trained pair of networks with their normalisation.
+
+    Attributes:
+        config: How they were built and trained.
+        finger_names: The K finger slots, thumb first.
+        x_mean, x_std: Input standardisation, shape (2 + 3K,).
+        l2_mean, l2_std: Standardisation of ANN_L2's target, [N].
+        net_l2, net_decomp: The networks (float64).
+        metadata: Free-form description (dataset, command, losses); JSON-like values only.
+    """
+
+    def __init__(self, config, finger_names, x_mean, x_std, l2_mean, l2_std, net_l2, net_decomp, metadata=None):
+        self.config = config
+        self.finger_names = tuple(str(n) for n in finger_names)
+        self.x_mean = np.asarray(x_mean, dtype=np.float64)
+        self.x_std = np.asarray(x_std, dtype=np.float64)
+        self.l2_mean = float(l2_mean)
+        self.l2_std = float(l2_std)
+        self.net_l2 = net_l2.eval()
+        self.net_decomp = net_decomp.eval()
+        self.metadata = dict(metadata or {})
+
+    @property
+    def num_fingers(self) -> int:
+        return len(self.finger_names)
+
+    def predict(self, x: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Predicts the internal forces of each finger in contact.
+
+        Args:
+            x: Network inputs, shape (N, 2 + 3K) (see :meth:`fsv.features.Features.matrix`).
+            active: Finger in contact, shape (N, K).
+
+        Returns:
+            ``(l2, shares, internal)``: the internal-force norm, shape (N,), [N] (clipped at 0);
+            the per-finger shares, shape (N, K), unit L2 norm over the active fingers and 0
+            elsewhere; and the internal normal forces l2 * shares, shape (N, K), [N].
+        """
+        x = np.asarray(x, dtype=np.float64)
+        a = np.asarray(active, dtype=bool)
+        K = self.num_fingers
+        if x.ndim != 2 or x.shape[1] != 2 + 3 * K or a.shape != (x.shape[0], K):
+            raise InputError(f"predict expects x of shape (N, {2 + 3 * K}) and active of shape (N, {K}), got {x.shape}, {a.shape}")
+        z = torch.from_numpy((x - self.x_mean) / self.x_std)
+        with torch.no_grad():
+            l2 = self.net_l2(z)[:, 0].numpy() * self.l2_std + self.l2_mean
+            s = np.where(a, self.net_decomp(z).numpy(), 0.0)
+        norm = np.linalg.norm(s, axis=1)
+        s = s / np.where(norm > 0, norm, 1.0)[:, None]
+        l2 = np.maximum(l2, 0.0)
+        return l2, s, l2[:, None] * s
+
+    def predict_features(self, features: Features) -> np.ndarray:
+        """Internal normal forces per finger, shape (T, K), [N], from :class:`Features`."""
+        if features.num_fingers != self.num_fingers:
+            raise InputError(f"features have {features.num_fingers} fingers, the model {self.num_fingers} ({self.finger_names})")
+        return self.predict(features.matrix(), features.active)[2]
+
+    def state(self) -> dict:
+        return {
+            "format": FORMAT,
+            "version": VERSION,
+            "config": asdict(self.config),
+            "finger_names": list(self.finger_names),
+            "x_mean": torch.from_numpy(self.x_mean.copy()),
+            "x_std": torch.from_numpy(self.x_std.copy()),
+            "l2_mean": self.l2_mean,
+            "l2_std": self.l2_std,
+            "net_l2": self.net_l2.state_dict(),
+            "net_decomp": self.net_decomp.state_dict(),
+            "metadata": self.metadata,
+        }
+
+    def save(self, path) -> None:
+        """Writes the model to ``path`` atomically (temporary file in the same folder, then rename)."""
+        path = os.fspath(path)
+        folder = os.path.dirname(os.path.abspath(path))
+        os.makedirs(folder, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-", suffix=".pt")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                torch.save(self.state(), fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+
+
+def load(path) -> InternalForceModel:
+    """Reads a model written by :meth:`InternalForceModel.save`.
+
+    Raises:
+        InputError: If the file is missing or is not an internal-force model of this version.
+    """
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise InputError(f"no internal-force model at {path!r}")
+    try:
+        st = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as e:  # a truncated or foreign file: report it as bad input
+        raise InputError(f"{path!r} is not a readable internal-force model: {e}") from e
+    if not isinstance(st, dict) or st.get("format") != FORMAT or st.get("version") != VERSION:
+        raise InputError(f"{path!r} is not an {FORMAT} file of version {VERSION}")
+    cfg = dict(st["config"])
+    config = LearnConfig(**cfg)
+    K = len(st["finger_names"])
+    gen = torch.Generator().manual_seed(0)
+    net_l2 = _mlp(2 + 3 * K, config.hidden_l2, 1, gen)
+    net_decomp = _mlp(2 + 3 * K, config.hidden_decomp, K, gen)
+    net_l2.load_state_dict(st["net_l2"])
+    net_decomp.load_state_dict(st["net_decomp"])
+    return InternalForceModel(
+        config, st["finger_names"], st["x_mean"].numpy(), st["x_std"].numpy(), st["l2_mean"], st["l2_std"],
+        net_l2, net_decomp, st["metadata"],
+    )
+
+
+def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_names=None, metadata=None) -> InternalForceModel:
+    """Trains ANN_L2 and ANN_decomp on all samples of ``data``.
+
+    Args:
+        data: Features and internal normal forces (from the decomposition SOCP, eq. 9).
+        config: Architecture and Rprop settings; ``config.seed`` fixes the initial weights.
+        finger_names: Names of the K finger slots (default ``finger0..``).
+        metadata: JSON-like description stored with the model.
+
+    Returns:
+        The trained :class:`InternalForceModel`; its metadata gains the final training losses.
+    """
+    if len(data) < 2:
+        raise InputError(f"training needs at least 2 samples, got {len(data)}")
+    K = data.num_fingers
+    names = tuple(finger_names) if finger_names is not None else tuple(f"finger{k}" for k in range(K))
+    if len(names) != K:
+        raise InputError(f"finger_names has {len(names)} names for K = {K} finger slots")
+    x_mean = data.x.mean(axis=0)
+    x_std = data.x.std(axis=0)
+    x_std = np.where(x_std > 1e-12, x_std, 1.0)
+    l2, shares = _targets(data.internal, data.active)
+    l2_mean, l2_std = float(l2.mean()), float(l2.std()) if l2.std() > 1e-12 else 1.0
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        gen = torch.Generator().manual_seed(config.seed)
+        z = torch.from_numpy((data.x - x_mean) / x_std)
+        net_l2 = _mlp(z.shape[1], config.hidden_l2, 1, gen)
+        net_decomp = _mlp(z.shape[1], config.hidden_decomp, K, gen)
+        y = torch.from_numpy((l2 - l2_mean) / l2_std)
+        loss_l2 = _rprop(net_l2, z, lambda out: torch.mean((out[:, 0] - y) ** 2), config)
+        w = torch.from_numpy((data.active & (l2 >= config.min_l2_n)[:, None]).astype(np.float64))
+        s = torch.from_numpy(shares)
+        n_w = max(float(w.sum()), 1.0)
+        loss_dec = _rprop(net_decomp, z, lambda out: torch.sum(w * (out - s) ** 2) / n_w, config)
+    finally:
+        torch.set_num_threads(threads)
+    meta = dict(metadata or {})
+    meta.update(samples=len(data), train_mse_l2_std=loss_l2, train_mse_shares=loss_dec)
+    return InternalForceModel(config, names, x_mean, x_std, l2_mean, l2_std, net_l2, net_decomp, meta)
+
+
+def relative_errors_pct(predicted: np.ndarray, truth: np.ndarray, active: np.ndarray, min_force_n: float = 1.0) -> np.ndarray:
+    """Relative force errors (Table 2): |f_hat - f| / f in percent for every finger in contact
+    whose true force f is at least ``min_force_n``.
+
+    Args:
+        predicted, truth: Forces per frame and finger, shape (N, K), [N].
+        active: Finger in contact, shape (N, K).
+        min_force_n: Smallest true force that is scored, [N].
+
+    Returns:
+        The errors of the scored (frame, finger) pairs, shape (M,), [%].
+    """
+    p, t, a = np.asarray(predicted, float), np.asarray(truth, float), np.asarray(active, bool)
+    if not (p.shape == t.shape == a.shape):
+        raise InputError(f"predicted, truth and active must share a shape, got {p.shape}, {t.shape}, {a.shape}")
+    m = a & (t >= min_force_n)
+    return 100.0 * np.abs(p[m] - t[m]) / t[m]
+
+
+@dataclass(frozen=True)
+class CrossValidation:
+    """k-fold cross-validation of the two networks.
+
+    Attributes:
+        fold_rel_err_pct: Mean relative error of the predicted internal normal forces per fold
+            (fingers with an internal force >= 1 N), shape (folds,), [%].
+        fold_l2_rel_err_pct: Mean relative error of the predicted internal-force norm per fold, [%].
+        fold_share_rmse: RMS error of the predicted shares (fingers in contact) per fold.
+    """
+
+    fold_rel_err_pct: np.ndarray
+    fold_l2_rel_err_pct: np.ndarray
+    fold_share_rmse: np.ndarray
+
+    def summary(self) -> dict:
+        return {
+            "folds": int(len(self.fold_rel_err_pct)),
+            "rel_err_pct_mean": float(np.mean(self.fold_rel_err_pct)),
+            "l2_rel_err_pct_mean": float(np.mean(self.fold_l2_rel_err_pct)),
+            "share_rmse_mean": float(np.mean(self.fold_share_rmse)),
+        }
+
+
+def cross_validate(data: TrainingSet, config: LearnConfig = LearnConfig()) -> CrossValidation:
+    """k-fold cross-validation (``config.folds``) with folds made of whole groups.
+
+    Groups are assigned to folds in a seeded random order (``config.seed``), so no group (episode)
+    contributes to both the training and the validation side of a fold.
+    """
+    groups = np.unique(data.groups)
+    if len(groups) < config.folds:
+        raise InputError(f"cross-validation with {config.folds} folds needs at least {config.folds} groups, got {len(groups)}")
+    order = np.random.default_rng(config.seed).permutation(len(groups))
+    fold_of_group = dict(zip(groups[order], np.arange(len(groups)) % config.folds))
+    fold = np.array([fold_of_group[g] for g in data.groups])
+    rel, l2e, srm = [], [], []
+    for k in range(config.folds):
+        model = train(data.subset(fold != k), config)
+        val = data.subset(fold == k)
+        l2, s, f = model.predict(val.x, val.active)
+        l2_true, s_true = _targets(val.internal, val.active)
+        rel.append(np.mean(relative_errors_pct(f, val.internal, val.active)))
+        ok = l2_true >= 1.0
+        l2e.append(np.mean(100 * np.abs(l2[ok] - l2_true[ok]) / l2_true[ok]))
+        srm.append(np.sqrt(np.mean((s - s_true)[val.active] ** 2)))
+    return CrossValidation(np.array(rel), np.array(l2e), np.array(srm))

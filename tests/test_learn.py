@@ -1,0 +1,99 @@
+import numpy as np
+import pytest
+
+from fsv import InputError
+from fsv.learn import LearnConfig, TrainingSet, cross_validate, load, relative_errors_pct, train
+
+K = 4
+BASE = np.array([0.6, 0.45, 0.45, 0.3])  # thumb carries the most, the little finger the least
+
+
+def synthetic(n, seed):
+    """A known internal-force rule: the norm grows with the load and the torque; shares depend on
+    the finger and on how its normal faces the load (p2)."""
+    rng = np.random.default_rng(seed)
+    active = rng.random((n, K)) < 0.85
+    active[:, 0] = True
+    active[active.sum(1) < 2, 1] = True
+    p1 = rng.uniform(2, 8, n)
+    p3 = rng.uniform(0, 0.3, n)
+    p2 = np.where(active, rng.uniform(-1, 1, (n, K)), 0)
+    p4 = np.where(active, rng.uniform(-0.08, 0.08, (n, K)), 0)
+    x = np.concatenate([p1[:, None], p3[:, None], p2, p4, active.astype(float)], axis=1)
+    l2 = 3.0 + 0.8 * p1 + 10 * p3
+    raw = np.where(active, BASE * (1 + 0.3 * p2), 0)
+    internal = l2[:, None] * raw / np.linalg.norm(raw, axis=1, keepdims=True)
+    return TrainingSet(x, internal, active, groups=np.arange(n) // 20)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return train(synthetic(1500, 0), LearnConfig(epochs=600, seed=1), finger_names=("thumb", "index", "middle", "ring"))
+
+
+def test_recovers_a_known_rule(model):
+    test = synthetic(1000, 7)
+    l2, shares, f = model.predict(test.x, test.active)
+    err = relative_errors_pct(f, test.internal, test.active)
+    assert err.size > 2000
+    assert np.mean(err) < 1.5, np.mean(err)  # the paper: ~10 % on real data
+    np.testing.assert_allclose(np.linalg.norm(shares, axis=1), 1.0)
+    assert np.all(shares[~test.active] == 0)
+
+
+def test_training_is_deterministic_and_leaves_global_rng_alone():
+    import torch
+
+    data = synthetic(300, 2)
+    cfg = LearnConfig(epochs=50, seed=5)
+    state = torch.random.get_rng_state()
+    a, b = train(data, cfg), train(data, cfg)
+    assert torch.equal(state, torch.random.get_rng_state())
+    for pa, pb in zip(a.state()["net_decomp"].values(), b.state()["net_decomp"].values()):
+        assert torch.equal(pa, pb)
+    c = train(data, LearnConfig(epochs=50, seed=6))
+    assert not torch.equal(a.state()["net_l2"]["0.weight"], c.state()["net_l2"]["0.weight"])
+
+
+def test_save_load_round_trip_is_bit_exact(model, tmp_path):
+    path = tmp_path / "m.pt"
+    model.metadata["dataset"] = "synthetic"
+    model.save(path)
+    back = load(path)
+    test = synthetic(200, 9)
+    for u, v in zip(model.predict(test.x, test.active), back.predict(test.x, test.active)):
+        np.testing.assert_array_equal(u, v)
+    assert back.finger_names == ("thumb", "index", "middle", "ring")
+    assert back.metadata["dataset"] == "synthetic" and back.config == model.config
+    assert [p.name for p in tmp_path.iterdir()] == ["m.pt"]  # no temporary left behind
+
+
+def test_load_rejects_foreign_files(tmp_path):
+    bad = tmp_path / "x.pt"
+    bad.write_bytes(b"not a model")
+    with pytest.raises(InputError, match="not a readable"):
+        load(bad)
+    with pytest.raises(InputError, match="no internal-force model"):
+        load(tmp_path / "missing.pt")
+
+
+def test_cross_validation_folds_hold_out_whole_groups():
+    cv = cross_validate(synthetic(400, 3), LearnConfig(epochs=150, folds=3))
+    assert cv.fold_rel_err_pct.shape == (3,)
+    assert np.all(cv.fold_rel_err_pct < 15)
+    with pytest.raises(InputError, match="at least 3 groups"):
+        cross_validate(synthetic(40, 3), LearnConfig(folds=3))
+
+
+def test_relative_error_scores_only_forces_of_at_least_one_newton():
+    err = relative_errors_pct([[1.1, 5.0, 0.2]], [[1.0, 4.0, 0.5]], [[True, True, True]])
+    np.testing.assert_allclose(err, [10.0, 25.0])
+
+
+def test_bad_inputs_are_named():
+    with pytest.raises(InputError, match="2 \\+ 3K = 14"):
+        TrainingSet(np.zeros((3, 5)), np.zeros((3, 4)), np.ones((3, 4), bool))
+    with pytest.raises(InputError, match="hidden_l2"):
+        LearnConfig(hidden_l2=())
+    with pytest.raises(InputError, match="folds"):
+        LearnConfig(folds=1)
