@@ -1,0 +1,4 @@
+"""The synthetic world of fsv-bench and its scorers (this package knows the truth)."""
+
+from benchmark.errors import BenchmarkError, EpisodeFileError, RenderError, ScenarioError, SimulationError
+from benchmark.scenario import Scenario
