@@ -1,0 +1,157 @@
+"""Object kinematics from a pose sequence (the paper's §3.2): poses -> velocities and accelerations.
+
+Translation: each world-frame coordinate of the centre of mass goes through the differentiator's
+stencils (``fsv.kinematics.stencils``).
+
+Rotation, on SO(3): for frame k let R_e be the orientation at the estimation time t_e = t_k - lag
+(the frame itself offline; in causal mode the frame ``lag`` earlier, or the geodesic interpolation
+between two frames when the lag is fractional). Every rotation of the stencil's window is expressed
+relative to it as a rotation vector, phi_j = log(R_e^T R_j), so that R(t) = R_e exp(phi(t)) with
+phi(t_e) = 0. Because the right Jacobian of SO(3) is the identity at phi = 0 (and its derivative
+contributes phi' x phi' = 0 there), the body-frame angular velocity and acceleration at t_e are
+exactly phi'(t_e) and phi''(t_e); the stencils estimate those, and R_e maps them to the world
+frame. A rotation at constant angular velocity has phi linear in time, so every differentiator
+returns that velocity exactly (rotation angles within a window must stay below pi).
+
+Frames whose stencil would reach outside the sequence are marked invalid in ``Kinematics.valid``
+and hold the estimate of the nearest valid frame (so arrays stay finite).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fsv.errors import InputError
+from fsv.kinematics import so3
+from fsv.kinematics.stencils import AlgebraicConfig, CentralConfig, GaussianConfig
+from fsv.types import Kinematics, Poses
+
+_CONFIGS = (AlgebraicConfig, CentralConfig, GaussianConfig)
+
+
+def sampling_period(t: np.ndarray) -> float:
+    """The common spacing of frame times, [s].
+
+    Raises:
+        InputError: If there are fewer than two frames or the spacing varies by more than 1e-6 of it.
+    """
+    t = np.asarray(t, dtype=float)
+    if t.size < 2:
+        raise InputError(f"need at least 2 frames to differentiate, got {t.size}")
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    steps = np.diff(t)
+    if not dt > 0 or np.max(np.abs(steps - dt)) > 1e-6 * dt:
+        raise InputError(
+            f"frame times must be evenly spaced and increasing; steps range over "
+            f"[{steps.min():.6g}, {steps.max():.6g}] s"
+        )
+    return float(dt)
+
+
+def differentiate_poses(poses: Poses, config: AlgebraicConfig | CentralConfig | GaussianConfig) -> Kinematics:
+    """Velocities and accelerations of a rigid body from its poses.
+
+    Args:
+        poses: Poses at evenly spaced frame times (world_R_object, centre of mass in the world).
+        config: Which differentiator and its parameters (``AlgebraicConfig``, ``CentralConfig``
+            or ``GaussianConfig``); ``config.causal`` selects real-time estimates.
+
+    Returns:
+        Kinematics in the world frame. Offline, values at frame k refer to t_k (``delay_s`` = 0);
+        causal, they refer to t_k - ``delay_s`` and use frames up to k only, and ``pos``/``rot``
+        are the pose at that time (linear / geodesic interpolation between frames).
+
+    Raises:
+        InputError: For an unknown config, uneven frame times, or a sequence shorter than the
+            stencil (the message gives the number of frames needed).
+    """
+    if not isinstance(config, _CONFIGS):
+        raise InputError(f"config must be one of {[c.__name__ for c in _CONFIGS]}, got {type(config).__name__}")
+    if not isinstance(poses, Poses):
+        raise InputError(f"poses must be fsv.Poses, got {type(poses).__name__}")
+    dt = sampling_period(poses.t)
+    stencils = [config.stencil(n, dt) for n in (0, 1, 2)]
+    lag = max(s.delay_s for s in stencils) if config.causal else 0.0
+    taps = [s.taps(lag) for s in stencils]
+    T = len(poses)
+    lo = max(-int(o.min()) for o, _ in taps)
+    hi = T - max(int(o.max()) for o, _ in taps)  # valid frames: lo <= k < hi
+    if hi <= lo:
+        need = T + lo - hi + 1
+        raise InputError(f"{config.name} ({config.describe()}) needs at least {need} frames, got {T}")
+    valid = np.zeros(T, bool)
+    valid[lo:hi] = True
+
+    pos, vel, acc = (_apply(poses.pos, o, c, lo, hi) for o, c in taps)
+    quats = so3.quat_from_matrix(poses.rot)
+    q_ref = _reference(quats, *taps[0], lo, hi)
+    rate, accel = _rotation_rates(quats, q_ref, taps[1:], lo, hi)
+    R_ref = so3.matrix_from_quat(q_ref)
+    omega = np.einsum("tij,tj->ti", R_ref, rate)
+    alpha = np.einsum("tij,tj->ti", R_ref, accel)
+    if config.causal:
+        pos, R_out = _hold(pos, lo, hi), _hold(R_ref, lo, hi)
+    else:
+        pos, R_out = poses.pos, poses.rot
+    return Kinematics(
+        t=poses.t,
+        pos=pos,
+        rot=R_out,
+        vel=_hold(vel, lo, hi),
+        acc=_hold(acc, lo, hi),
+        omega=_hold(omega, lo, hi),
+        alpha=_hold(alpha, lo, hi),
+        valid=valid,
+        method=config.name,
+        delay_s=float(lag),
+    )
+
+
+def _apply(x: np.ndarray, offsets: np.ndarray, coeffs: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """sum_j coeffs[j] * x[k + offsets[j]] for lo <= k < hi; other rows are zero. x: (T, d)."""
+    out = np.zeros_like(x, dtype=float)
+    for o, c in zip(offsets, coeffs):
+        out[lo:hi] += c * x[lo + o : hi + o]
+    return out
+
+
+def _hold(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """Copies row lo to the rows before it and row hi - 1 to the rows after it."""
+    x = np.array(x, dtype=float)
+    x[:lo] = x[lo]
+    x[hi:] = x[hi - 1]
+    return x
+
+
+def _reference(quats: np.ndarray, offsets: np.ndarray, coeffs: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """Orientation at the estimation time of each frame: one frame, or the geodesic blend of two."""
+    T = quats.shape[0]
+    k = np.clip(np.arange(T), lo, hi - 1)
+    if offsets.size == 1:
+        return quats[k + offsets[0]]
+    if offsets.size != 2 or not np.isclose(coeffs.sum(), 1.0):
+        raise InputError(f"pose interpolation needs two taps summing to 1, got {offsets} {coeffs}")
+    older, newer = np.argsort(offsets)
+    q_a, q_b = quats[k + offsets[older]], quats[k + offsets[newer]]
+    step = so3.quat_log(so3.quat_mul(so3.quat_conj(q_a), q_b))
+    return so3.quat_mul(q_a, so3.quat_exp(coeffs[newer] * step))
+
+
+def _rotation_rates(
+    quats: np.ndarray, q_ref: np.ndarray, taps: list[tuple[np.ndarray, np.ndarray]], lo: int, hi: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Body-frame angular velocity and acceleration: the stencils applied to log(R_ref^T R_j)."""
+    T = quats.shape[0]
+    offsets = np.unique(np.concatenate([o for o, _ in taps]))
+    k = np.arange(lo, hi)
+    rel = so3.quat_mul(so3.quat_conj(q_ref[lo:hi])[:, None, :], quats[k[:, None] + offsets[None, :]])
+    phi = so3.quat_log(rel)  # (n, len(offsets), 3)
+    out = []
+    for o, c in taps:
+        coeff = np.zeros(offsets.size)
+        coeff[np.searchsorted(offsets, o)] = c
+        full = np.zeros((T, 3))
+        full[lo:hi] = np.einsum("j,njd->nd", coeff, phi)
+        out.append(full)
+    return out[0], out[1]
+

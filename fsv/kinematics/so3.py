@@ -1,0 +1,102 @@
+"""Rotations as unit quaternions (w, x, y, z): conversions, products, exponential and log maps.
+
+Vectorised over leading axes; the kinematics stage differentiates rotation vectors of *relative*
+rotations (log map), never Euler angles.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def quat_from_matrix(R: np.ndarray) -> np.ndarray:
+    """Unit quaternions (w >= 0) of rotation matrices (Shepperd's method: divide by the largest term).
+
+    Args:
+        R: Rotation matrices, shape (..., 3, 3).
+
+    Returns:
+        Quaternions (w, x, y, z), shape (..., 4).
+    """
+    R = np.asarray(R, dtype=float)
+    r00, r11, r22 = R[..., 0, 0], R[..., 1, 1], R[..., 2, 2]
+    # 4 |q_c|^2 for c in (w, x, y, z), and the off-diagonal combinations.
+    four_sq = np.stack([1 + r00 + r11 + r22, 1 + r00 - r11 - r22, 1 - r00 + r11 - r22, 1 - r00 - r11 + r22], -1)
+    s21, s02, s10 = R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]
+    p10, p02, p21 = R[..., 1, 0] + R[..., 0, 1], R[..., 0, 2] + R[..., 2, 0], R[..., 2, 1] + R[..., 1, 2]
+    # Row c: 4 q_c * (w, x, y, z).
+    rows = np.stack(
+        [
+            np.stack([four_sq[..., 0], s21, s02, s10], -1),
+            np.stack([s21, four_sq[..., 1], p10, p02], -1),
+            np.stack([s02, p10, four_sq[..., 2], p21], -1),
+            np.stack([s10, p02, p21, four_sq[..., 3]], -1),
+        ],
+        -2,
+    )
+    best = np.argmax(four_sq, axis=-1)
+    q = np.take_along_axis(rows, best[..., None, None], axis=-2)[..., 0, :]
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0, -q, q)
+
+
+def matrix_from_quat(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices of (not necessarily unit) quaternions (w, x, y, z), shape (..., 4) -> (..., 3, 3)."""
+    q = np.asarray(q, dtype=float)
+    w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
+
+
+def quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Hamilton product p q (rotation q first, then p), broadcasting over leading axes."""
+    pw, px, py, pz = np.moveaxis(np.asarray(p, dtype=float), -1, 0)
+    qw, qx, qy, qz = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        -1,
+    )
+
+
+def quat_conj(q: np.ndarray) -> np.ndarray:
+    """Conjugate (the inverse of a unit quaternion), shape (..., 4)."""
+    return np.asarray(q, dtype=float) * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_log(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors (axis * angle, angle in [0, pi]) of unit quaternions, (..., 4) -> (..., 3).
+
+    q and -q give the same rotation vector (the shorter way round).
+    """
+    q = np.asarray(q, dtype=float)
+    q = np.where(q[..., :1] < 0, -q, q)
+    w, v = q[..., 0], q[..., 1:]
+    s = np.linalg.norm(v, axis=-1)
+    angle = 2 * np.arctan2(s, w)
+    small = s < 1e-8
+    # angle / s -> 2 / w (1 - s^2 / (3 w^2)) as s -> 0 (w ~ 1 there).
+    w_small = np.where(small, w, 1.0)  # w ~ 1 wherever s is small
+    scale = np.where(small, 2 / w_small * (1 - s**2 / (3 * w_small**2)), angle / np.where(small, 1.0, s))
+    return v * scale[..., None]
+
+
+def quat_exp(phi: np.ndarray) -> np.ndarray:
+    """Unit quaternions of rotation vectors, (..., 3) -> (..., 4)."""
+    phi = np.asarray(phi, dtype=float)
+    angle = np.linalg.norm(phi, axis=-1)
+    half = 0.5 * angle
+    small = angle < 1e-8
+    # sin(half) / angle -> 1/2 - angle^2 / 48.
+    sinc = np.where(small, 0.5 - angle**2 / 48, np.sin(half) / np.where(small, 1.0, angle))
+    return np.concatenate([np.cos(half)[..., None], phi * sinc[..., None]], -1)
