@@ -1,0 +1,298 @@
+"""The paper's Table 1: kinematics from vision against the AHRS, for three differentiators.
+
+Metric (DESIGN.md, "Metric definitions"): for each method, the error is the estimate minus the
+truth, per axis, pooled over the three axes and over the frames of the scored window; we report
+its mean and (population) standard deviation. Translational acceleration is compared with the
+simulated AHRS's specific force ``Truth.imu_acc`` = R^T (a - g) (box frame, gravity included, as
+the AHRS sees it) using ``Kinematics.imu``, rotational velocity with ``Truth.imu_gyro`` (box
+frame). The scored window is the set of frames where every method in the table has a defined
+estimate (``Kinematics.valid``), so all methods are scored on the same frames.
+
+Fairness: every method's parameters are either declared in advance or tuned on calibration
+episodes whose seeds are never scored (``benchmark.motion.DECLARED``, ``TUNING``); the table
+prints them and says which. ``python -m benchmark.table1 --calibrate`` re-runs the tuning.
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from benchmark.errors import ScenarioError
+from benchmark.motion import CALIBRATION_SEEDS, DECLARED, TUNING
+from benchmark.truth import Truth
+from fsv import Kinematics, Poses
+from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses
+
+METHODS = ("central", "gaussian", "algebraic")
+PAPER = {
+    "central": {"acc_mean": -0.029, "acc_std": 1.686, "gyro_mean": 0.084, "gyro_std": 1.559},
+    "gaussian": {"acc_mean": -0.022, "acc_std": 1.627, "gyro_mean": 0.070, "gyro_std": 1.294},
+    "algebraic": {"acc_mean": -0.024, "acc_std": 0.904, "gyro_mean": 0.052, "gyro_std": 1.241},
+}
+"""Table 1 of the paper (real AHRS, real tracker): m/s^2 and rad/s."""
+
+GAUSSIAN_GRID = tuple(GaussianConfig(sigma_frames=s) for s in (0.5, 0.75, 1.0, 1.25, 1.5, 2.0, 2.5, 3.0, 4.0))
+ALGEBRAIC_GRID = tuple(
+    AlgebraicConfig(window_frames=L, kappa=k, mu=k) for L in range(5, 30, 2) for k in (0.0, 0.5, 1.0, 2.0, 3.0)
+)
+
+
+def imu_errors(kin: Kinematics, truth: Truth) -> tuple[np.ndarray, np.ndarray]:
+    """Per-frame, per-axis errors of the AHRS readings implied by ``kin``: (acc (T,3), gyro (T,3))."""
+    if len(kin) != len(truth.t):
+        raise ScenarioError(f"kinematics have {len(kin)} frames but the truth has {len(truth.t)}")
+    acc, gyro = kin.imu(truth.gravity)
+    return acc - truth.imu_acc, gyro - truth.imu_gyro
+
+
+def error_stats(kin: Kinematics, truth: Truth, window: np.ndarray) -> dict:
+    """Table 1 statistics of one method on the frames selected by ``window`` (bool, (T,)).
+
+    Returns:
+        ``{acc_mean, acc_std, gyro_mean, gyro_std}``: mean and population standard deviation of
+        the errors pooled over axes and frames, m/s^2 and rad/s.
+    """
+    window = np.asarray(window, bool)
+    if not window.any():
+        raise ScenarioError("the scored window is empty: the episode is shorter than the differentiators' stencils")
+    e_acc, e_gyro = imu_errors(kin, truth)
+    a, g = e_acc[window].ravel(), e_gyro[window].ravel()
+    return {"acc_mean": float(a.mean()), "acc_std": float(a.std()), "gyro_mean": float(g.mean()), "gyro_std": float(g.std())}
+
+
+@dataclass(frozen=True)
+class Table1:
+    """Our Table 1.
+
+    Attributes:
+        stats: method -> {acc_mean, acc_std, gyro_mean, gyro_std}.
+        params: method -> its parameters, as text.
+        tuning: method -> how the parameters were chosen.
+        frames: Number of scored frames.
+        poses: Where the differentiated poses came from.
+    """
+
+    stats: dict
+    params: dict
+    tuning: dict
+    frames: int
+    poses: str
+
+    def summary(self) -> dict:
+        """The ``kinematics`` block of summary.json."""
+        return {m: dict(self.stats[m]) for m in self.stats}
+
+    def markdown(self) -> str:
+        methods = [m for m in METHODS if m in self.stats]
+        head = "| | " + " | ".join(f"{m.capitalize()} (ours / paper)" for m in methods) + " |"
+        lines = [head, "|---" * (len(methods) + 1) + "|"]
+        for key, label in (
+            ("acc_mean", "Trans. acc. [m/s^2] mean"),
+            ("acc_std", "Trans. acc. [m/s^2] std"),
+            ("gyro_mean", "Rot. vel. [rad/s] mean"),
+            ("gyro_std", "Rot. vel. [rad/s] std"),
+        ):
+            cells = [f"{self.stats[m][key]:.3f} / {PAPER[m][key]:.3f}" for m in methods]
+            lines.append(f"| {label} | " + " | ".join(cells) + " |")
+        lines.append("")
+        lines.append(f"Scored frames: {self.frames}. Poses: {self.poses}.")
+        for m in methods:
+            lines.append(f"- {m}: {self.params[m]} ({self.tuning[m]})")
+        return "\n".join(lines)
+
+    def csv(self) -> str:
+        rows = ["method,acc_mean,acc_std,gyro_mean,gyro_std,paper_acc_mean,paper_acc_std,paper_gyro_mean,paper_gyro_std,params,tuning"]
+        for m in (m for m in METHODS if m in self.stats):
+            s, p = self.stats[m], PAPER[m]
+            vals = [s[k] for k in ("acc_mean", "acc_std", "gyro_mean", "gyro_std")]
+            vals += [p[k] for k in ("acc_mean", "acc_std", "gyro_mean", "gyro_std")]
+            rows.append(",".join([m, *(f"{v:.6g}" for v in vals), f'"{self.params[m]}"', f'"{self.tuning[m]}"']))
+        return "\n".join(rows) + "\n"
+
+
+def score_table1(
+    truth: Truth,
+    poses: Poses,
+    configs: dict | None = None,
+    tuning: dict | None = None,
+    poses_label: str = "true poses with tracker-like correlated errors (benchmark.pose_error)",
+) -> tuple[Table1, dict]:
+    """Differentiates ``poses`` with each method and scores them against the AHRS truth.
+
+    Args:
+        truth: The episode's truth (``imu_acc``, ``imu_gyro``, ``gravity``).
+        poses: Observed poses at the truth's frame times.
+        configs: method -> config; defaults to ``benchmark.motion.DECLARED``.
+        tuning: method -> how its parameters were chosen; defaults to ``TUNING``.
+        poses_label: Printed provenance of the poses.
+
+    Returns:
+        ``(table, kinematics)`` with kinematics: method -> Kinematics.
+    """
+    configs = dict(DECLARED) if configs is None else dict(configs)
+    tuning = dict(TUNING) if tuning is None else dict(tuning)
+    if not np.allclose(poses.t, truth.t):
+        raise ScenarioError("poses and truth must share their frame times")
+    kins = {m: differentiate_poses(poses, configs[m]) for m in METHODS if m in configs}
+    window = np.logical_and.reduce([k.valid for k in kins.values()])
+    stats = {m: error_stats(k, truth, window) for m, k in kins.items()}
+    params = {m: configs[m].describe() for m in kins}
+    table = Table1(stats, params, {m: tuning.get(m, "given") for m in kins}, int(window.sum()), poses_label)
+    return table, kins
+
+
+def tune(calibration: list[tuple[Truth, Poses]], grids: dict | None = None) -> tuple[dict, dict]:
+    """Picks each method's parameters on calibration episodes (never the scored ones).
+
+    The objective, pooled over the calibration episodes on the frames where every candidate is
+    defined, is  RMS(acc error) / RMS_ref(acc) + RMS(gyro error) / RMS_ref(gyro),  with the
+    references from the declared central differences, so translation and rotation weigh alike.
+
+    Args:
+        calibration: (truth, observed poses) pairs.
+        grids: method -> candidate configs; defaults to the Gaussian and algebraic grids.
+
+    Returns:
+        ``(best, scores)``: method -> best config, and method -> list of (config, objective).
+    """
+    grids = {"gaussian": GAUSSIAN_GRID, "algebraic": ALGEBRAIC_GRID} if grids is None else grids
+    if not calibration:
+        raise ScenarioError("tuning needs at least one calibration episode")
+    ref = DECLARED["central"]
+    errors = []  # per episode: {config: (acc err, gyro err)}
+    for truth, poses in calibration:
+        cands = [ref] + [c for g in grids.values() for c in g]
+        kins = {c: differentiate_poses(poses, c) for c in cands}
+        window = np.logical_and.reduce([k.valid for k in kins.values()])
+        errors.append({c: tuple(e[window] for e in imu_errors(k, truth)) for c, k in kins.items()})
+
+    def rms(cfg):
+        acc = np.concatenate([e[cfg][0].ravel() for e in errors])
+        gyro = np.concatenate([e[cfg][1].ravel() for e in errors])
+        return np.sqrt(np.mean(acc**2)), np.sqrt(np.mean(gyro**2))
+
+    ref_acc, ref_gyro = rms(ref)
+    best, scores = {}, {}
+    for method, grid in grids.items():
+        scored = []
+        for cfg in grid:
+            a, g = rms(cfg)
+            scored.append((cfg, float(a / ref_acc + g / ref_gyro)))
+        scores[method] = scored
+        best[method] = min(scored, key=lambda s: s[1])[0]
+    return best, scores
+
+
+def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: str = "") -> Path:
+    """A figure like the paper's Fig. 4: vision kinematics against the AHRS, six axes.
+
+    Args:
+        truth: The truth (AHRS readings ``imu_acc``, ``imu_gyro``).
+        kinematics: label -> Kinematics to draw (e.g. the three methods).
+        path: Where to write the PNG (atomically).
+        title: Figure title.
+
+    Returns:
+        The written path.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(13, 6), sharex=True)
+    styles = {"algebraic": ("tab:blue", 1.6), "gaussian": ("tab:green", 0.9), "central": ("tab:red", 0.6)}
+    for row, (name, unit, key) in enumerate((("acc", "m/s$^2$", "imu_acc"), ("gyro", "rad/s", "imu_gyro"))):
+        for ax_i, axis in enumerate("xyz"):
+            ax = axes[row, ax_i]
+            for label, kin in kinematics.items():
+                acc, gyro = kin.imu(truth.gravity)
+                est = (acc if row == 0 else gyro)[:, ax_i]
+                color, width = styles.get(label, ("tab:purple", 1.0))
+                ax.plot(kin.t[kin.valid], est[kin.valid], color=color, lw=width, label=f"vision, {label}")
+            ax.plot(truth.t, getattr(truth, key)[:, ax_i], color="k", lw=1.2, ls="--", label="AHRS (truth)")
+            ax.set_title(f"{'Translational acceleration' if row == 0 else 'Rotational velocity'} {axis}")
+            ax.set_ylabel(unit)
+            if row == 1:
+                ax.set_xlabel("t [s]")
+    axes[0, 0].legend(fontsize=7)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    _write_atomic(path, buf.getvalue())
+    return path
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | os.PathLike) -> dict:
+    """Writes table1.md, table1.csv and fig4_kinematics.png into ``out_dir``; returns their paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"markdown": out / "table1.md", "csv": out / "table1.csv", "plot": out / "fig4_kinematics.png"}
+    _write_atomic(paths["markdown"], (table.markdown() + "\n").encode())
+    _write_atomic(paths["csv"], table.csv().encode())
+    plot_fig4(truth, kinematics, paths["plot"], title=f"Vision kinematics vs AHRS ({table.poses})")
+    return paths
+
+
+def calibrate(task: str = "lift", noise_m: float = 0.01, seeds=CALIBRATION_SEEDS, duration_s: float | None = None):
+    """Simulates the calibration episodes and tunes the Gaussian and algebraic parameters.
+
+    Returns:
+        ``(best, scores)`` as :func:`tune`.
+    """
+    from benchmark.pose_error import tracker_like_poses
+    from benchmark.scenario import Scenario
+    from benchmark.simulate import simulate
+
+    calibration = []
+    for seed in seeds:
+        sc = Scenario(task=task, noise_m=noise_m, seed=int(seed), duration_s=duration_s)
+        truth = simulate(sc).truth
+        calibration.append((truth, tracker_like_poses(truth, sc)))
+    return tune(calibration)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description="Table 1 tools: re-tune the differentiators on calibration episodes.")
+    parser.add_argument("--calibrate", action="store_true", help="tune on the calibration seeds and print the best parameters")
+    parser.add_argument("--task", default="lift")
+    parser.add_argument("--noise", type=float, default=0.01)
+    args = parser.parse_args(argv)
+    if not args.calibrate:
+        parser.print_help()
+        return 0
+    best, scores = calibrate(args.task, args.noise)
+    for method, scored in scores.items():
+        top = sorted(scored, key=lambda s: s[1])[:5]
+        print(f"{method}: best {best[method].describe()}")
+        for cfg, j in top:
+            print(f"    {j:.4f}  {cfg.describe()}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,60 @@
+"""Shared pytest fixtures."""
+
+import numpy as np
+import pytest
+
+# --- kinematics (issue 4): an analytic box trajectory with exact derivatives -------------------
+
+
+def _min_jerk(t, t0, dur):
+    tau = np.clip((t - t0) / dur, 0, 1)
+    inside = ((t >= t0) & (t <= t0 + dur)).astype(float)
+    s = 10 * tau**3 - 15 * tau**4 + 6 * tau**5
+    ds = (30 * tau**2 - 60 * tau**3 + 30 * tau**4) / dur * inside
+    dds = (60 * tau - 180 * tau**2 + 120 * tau**3) / dur**2 * inside
+    return s, ds, dds
+
+
+def make_analytic_truth(duration_s=4.0, fps=30.0, K=4):
+    """A Truth whose box lifts, slides and turns on min-jerk profiles; derivatives are analytic.
+
+    Orientation R(t) = Rz(a(t)) Rx(b(t)), so the body rate is (b', a' sin b, a' cos b). Contact
+    fields are zero (no fingers touch).
+    """
+    from benchmark.truth import Truth
+    from fsv.kinematics import so3
+
+    t = np.arange(int(round(duration_s * fps))) / fps
+    g = np.array([0, 0, -9.81])
+    z, dz, ddz = _min_jerk(t, 0.5, 1.0)
+    x, dx, ddx = _min_jerk(t, 1.5, 1.2)
+    pos = np.stack([0.1 + 0.3 * x, 0 * t, 0.03 + 0.2 * z], 1)
+    vel = np.stack([0.3 * dx, 0 * t, 0.2 * dz], 1)
+    acc = np.stack([0.3 * ddx, 0 * t, 0.2 * ddz], 1)
+    a, da, dda = (1.2 * v for v in _min_jerk(t, 1.0, 1.5))
+    b, db, ddb = (-0.8 * v for v in _min_jerk(t, 2.0, 1.0))
+    q = so3.quat_mul(so3.quat_exp(a[:, None] * [0, 0, 1]), so3.quat_exp(b[:, None] * [1, 0, 0]))
+    R = so3.matrix_from_quat(q)
+    w_body = np.stack([db, da * np.sin(b), da * np.cos(b)], 1)
+    w_dot = np.stack([ddb, dda * np.sin(b) + da * np.cos(b) * db, dda * np.cos(b) - da * np.sin(b) * db], 1)
+    T = t.size
+    z3, zk = np.zeros((T, 3)), np.zeros((T, K, 3))
+    return Truth(
+        t=t, box_pos=pos, box_quat=q, box_vel=vel, box_omega=np.einsum("tij,tj->ti", R, w_body),
+        box_acc=acc, box_alpha=np.einsum("tij,tj->ti", R, w_dot),
+        imu_acc=np.einsum("tji,tj->ti", R, acc - g), imu_gyro=w_body,
+        finger_names=np.array(["thumb", "index", "middle", "ring"][:K]),
+        contact_active=np.zeros((T, K), bool), contact_sliding=np.zeros((T, K), bool),
+        contact_point=zk, contact_normal=zk, contact_force=zk, env_force=z3, env_torque=z3,
+        fingertip_pos=zk, hand_qpos=np.zeros((T, 12)), mass=0.3, inertia=np.eye(3) * 1e-3, gravity=g,
+    )
+
+
+@pytest.fixture(scope="session")
+def analytic_truth():
+    return make_analytic_truth()
+
+
+@pytest.fixture(scope="session")
+def analytic_truth_factory():
+    return make_analytic_truth
