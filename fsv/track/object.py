@@ -1,0 +1,396 @@
+"""The box's 6-DoF pose from depth: render-and-compare against the known box model.
+
+For a pose hypothesis the tracker predicts the depth every pixel near the box should see: the
+box's visible faces (exact ray-plane depths, with a sub-pixel soft silhouette) in front of the
+known table plane z = 0. The residual of a pixel is observed minus predicted depth, and the pose
+minimises a robust sum of squared residuals by Gauss-Newton with the analytic Jacobian:
+
+* ``|r| <= k sigma``: the pixel sees the predicted surface (quadratic cost);
+* ``r > k sigma``: the pixel sees *behind* the predicted surface: free space the box cannot
+  occupy (Huber: linear cost, so silhouettes push the box where it is);
+* ``r < -occluder sigma``: something (the hand) occludes the prediction: the pixel is ignored.
+
+Each frame starts from a constant-velocity prediction from the previous two frames, which also
+acts as a weak prior. When few pixels agree with the result (the fit is lost), a small particle
+search around the prediction re-initialises it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fsv.errors import InputError, TrackingError
+from fsv.models import ObjectModel
+from fsv.track.camera import CameraRays
+from fsv.track.rotation import exp_so3, log_so3, project_to_so3
+from fsv.types import Calibration, DepthVideo, Poses
+
+_FAR_M = 1.0  # background depth behind the box where no table is seen, [m] past the box
+
+
+@dataclass(frozen=True)
+class BoxTrackerConfig:
+    """Parameters of the box tracker (fixed in advance, not tuned on scored episodes).
+
+    Attributes:
+        sigma_m: Depth noise standard deviation in [m]; None estimates it from the first frame.
+        huber_k: Residuals beyond ``huber_k * sigma`` cost linearly.
+        occluder_k: Residuals below ``-occluder_k * sigma`` are occlusions and are ignored.
+        iterations: Gauss-Newton iterations per frame (at most).
+        roi_margin_px: Pixels added around the predicted box's bounding rectangle.
+        max_pixels: The region of interest is subsampled on a regular grid to at most this many.
+        silhouette_px: Width of the soft silhouette in pixels.
+        prior_pos_m: Standard deviation of the constant-velocity prediction's position, [m].
+        prior_rot_rad: Standard deviation of its rotation, [rad].
+        lost_fraction: The fit is lost when fewer than this fraction of the predicted-visible
+            box pixels agree with it (and are not occluded).
+        particles: Hypotheses of the re-initialisation search.
+        search_pos_m: Standard deviation of the search's position hypotheses, [m].
+        search_rot_rad: Standard deviation of its rotation hypotheses, [rad].
+    """
+
+    sigma_m: float | None = None
+    huber_k: float = 1.5
+    occluder_k: float = 3.0
+    iterations: int = 8
+    roi_margin_px: int = 10
+    max_pixels: int = 5000
+    silhouette_px: float = 0.5
+    prior_pos_m: float = 0.01
+    prior_rot_rad: float = 0.05
+    lost_fraction: float = 0.3
+    particles: int = 32
+    search_pos_m: float = 0.03
+    search_rot_rad: float = 0.25
+
+    def __post_init__(self):
+        if self.sigma_m is not None and not (np.isfinite(self.sigma_m) and self.sigma_m > 0):
+            raise InputError(f"sigma_m must be None or > 0 metres, got {self.sigma_m!r}")
+        for name in ("huber_k", "occluder_k", "silhouette_px", "prior_pos_m", "prior_rot_rad",
+                     "search_pos_m", "search_rot_rad"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(f"BoxTrackerConfig.{name} must be > 0, got {v!r}")
+        for name in ("iterations", "max_pixels", "particles"):
+            if int(getattr(self, name)) < 1:
+                raise InputError(f"BoxTrackerConfig.{name} must be >= 1, got {getattr(self, name)!r}")
+        if int(self.roi_margin_px) < 0:
+            raise InputError(f"roi_margin_px must be >= 0, got {self.roi_margin_px!r}")
+        if not 0 <= self.lost_fraction < 1:
+            raise InputError(f"lost_fraction must be in [0, 1), got {self.lost_fraction!r}")
+
+
+@dataclass(frozen=True)
+class BoxFit:
+    """The box's pose in one frame and how well the depth supports it.
+
+    Attributes:
+        pos: Box centre in the world, shape (3,), [m].
+        rot: world_R_object, shape (3, 3).
+        inlier_fraction: Fraction of predicted-visible box pixels that agree with the fit.
+        sigma_m: Depth noise scale used, [m].
+        reinitialised: Whether the particle search had to re-initialise this frame.
+    """
+
+    pos: np.ndarray
+    rot: np.ndarray
+    inlier_fraction: float
+    sigma_m: float
+    reinitialised: bool = False
+
+
+def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot: np.ndarray,
+                      half: np.ndarray, fx: float, silhouette_px: float = 0.5, jacobian: bool = False):
+    """Depth of the scene (box in front of the table) predicted at some pixels.
+
+    Args:
+        rays: The camera's rays.
+        index: Flat pixel indices, shape (N,).
+        pos: Box centre in the world, shape (3,), [m].
+        rot: world_R_object, shape (3, 3).
+        half: Half edge lengths, shape (3,), [m].
+        fx: Focal length in pixels (sets the soft silhouette's width in metres).
+        silhouette_px: Width of the soft silhouette in pixels.
+        jacobian: Also return d(depth)/d(pose) for a pose update (dt, dw): position += dt,
+            rot = exp(dw) @ rot (rotation about the box centre, world frame).
+
+    Returns:
+        ``(depth, on_box, plane)``: depth (N,) in [m], on_box (N,) the soft box coverage in
+        [0, 1], plane (N,) the depth of the nearest visible face's plane extended past its edges
+        (+inf where no visible face is near); with ``jacobian=True`` also the Jacobian of depth,
+        shape (N, 6).
+    """
+    o, d = rays.origin, rays.ray[index]
+    bg = rays.table_depth[index]
+    N = index.shape[0]
+    # A face is visible when the camera is outside its plane; an edge of a visible face lies on
+    # the silhouette when the face across it is not visible.
+    dist = {(a, s): s * (rot[:, a] @ (o - pos)) - half[a] for a in range(3) for s in (1.0, -1.0)}
+    rect_best = np.full(N, -np.inf)
+    best_z = np.full(N, np.inf)
+    best_m = np.full(N, -np.inf)
+    best_face = np.full(N, -1)
+    cache = []
+    for (a, s), dist_f in dist.items():
+        if dist_f <= 0:
+            continue
+        n = s * rot[:, a]
+        nd = d @ n
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(nd < -1e-9, -dist_f / nd, np.inf)
+        hit = np.isfinite(z)
+        p = o + np.where(hit, z, 0.0)[:, None] * d
+        q = (p - pos) @ rot
+        rect = np.full(N, np.inf)  # margin inside the face's rectangle (all four edges)
+        sil = np.full(N, np.inf)  # margin inside its silhouette edges only
+        rect_edge = np.zeros((2, N))  # (axis, sign) of the edge setting each margin
+        sil_edge = np.zeros((2, N))
+        for b in range(3):
+            if b == a:
+                continue
+            for e in (1.0, -1.0):
+                m_edge = half[b] - e * q[:, b]  # distance inside the edge q_b = e * half_b
+                closer = m_edge < rect
+                rect = np.where(closer, m_edge, rect)
+                rect_edge[:, closer] = [[b], [-e]]
+                if dist[(b, e)] > 0:
+                    continue  # the face across this edge is visible: not a silhouette edge
+                closer = m_edge < sil
+                sil = np.where(closer, m_edge, sil)
+                sil_edge[:, closer] = [[b], [-e]]
+        rect = np.where(hit, rect, -np.inf)
+        better = rect > rect_best
+        rect_best = np.where(better, rect, rect_best)
+        best_z = np.where(better, z, best_z)
+        # Inside the face, the coverage margin is the distance to the silhouette; outside the box
+        # (every rectangle margin negative) it is the best face's (negative) rectangle margin.
+        inside = rect >= 0
+        best_m = np.where(better, np.where(inside, sil, rect), best_m)
+        best_face = np.where(better, len(cache), best_face)
+        edge = np.where(inside, sil_edge, rect_edge)
+        cache.append((n, nd, p, q, edge[0].astype(int), edge[1]))
+    no_face = best_face < 0
+    z_box = np.where(no_face, 0.0, best_z)
+    bg_eff = np.where(np.isfinite(bg), bg, z_box + _FAR_M)
+    tau = silhouette_px * np.maximum(z_box, 1e-3) / fx
+    w = np.where(no_face | (z_box >= bg_eff), 0.0, 1.0 / (1.0 + np.exp(-np.clip(best_m / tau, -50, 50))))
+    depth = w * z_box + (1 - w) * bg_eff
+    # The nearest face's plane, extended past its edges: the box's own pixels outside a slightly
+    # wrong silhouette lie on it, which tells them apart from occluders (the hand) in front.
+    plane = np.where(no_face, np.inf, z_box)
+    if not jacobian:
+        return depth, w, plane
+    J = np.zeros((N, 6))
+    for f, (n, nd, p, q, sil_axis, sil_sign) in enumerate(cache):
+        sel = (best_face == f) & (w > 0)
+        if not np.any(sel):
+            continue
+        nds, ps = nd[sel], p[sel]
+        dz_dt = np.broadcast_to(n / nds[:, None], (nds.shape[0], 3))
+        dz_dw = np.cross(ps - pos, n) / nds[:, None]
+        # m = half_b + sign * q_b on the nearest silhouette edge, q_b = R_b . (p - c):
+        # dq_b = dw . (R_b x (p - c)) + (R_b . d) dz - R_b . dt.
+        Rb = rot[:, sil_axis[sel]].T
+        sgn = sil_sign[sel]
+        Rb_d = np.einsum("ij,ij->i", Rb, d[sel])
+        dm_dt = sgn[:, None] * (Rb_d[:, None] * dz_dt - Rb)
+        dm_dw = sgn[:, None] * (np.cross(Rb, ps - pos) + Rb_d[:, None] * dz_dw)
+        ws, zs, ts = w[sel], z_box[sel], tau[sel]
+        gain = (zs - bg_eff[sel]) * ws * (1 - ws) / ts
+        # d(m / tau) with tau proportional to the depth: (dm - m dz / z) / tau.
+        mz = (np.where(np.isfinite(best_m[sel]), best_m[sel], 0.0) / zs)[:, None]
+        J[sel, :3] = ws[:, None] * dz_dt + gain[:, None] * (dm_dt - mz * dz_dt)
+        J[sel, 3:] = ws[:, None] * dz_dw + gain[:, None] * (dm_dw - mz * dz_dw)
+    return depth, w, plane, J
+
+
+class BoxTracker:
+    """Tracks the box frame by frame from depth images.
+
+    Args:
+        calib: Camera calibration.
+        object_model: The known box.
+        pos0: First-frame box centre estimate in the world, shape (3,), [m].
+        rot0: First-frame world_R_object estimate, shape (3, 3).
+        config: Tracker parameters.
+        rng: Generator of the re-initialisation search.
+        table_z: Height of the table plane in the world, [m].
+    """
+
+    def __init__(self, calib: Calibration, object_model: ObjectModel, pos0, rot0, *,
+                 config: BoxTrackerConfig | None = None, rng: np.random.Generator | None = None,
+                 table_z: float = 0.0):
+        if not isinstance(object_model, ObjectModel):
+            raise InputError(f"object_model must be an fsv.ObjectModel, got {type(object_model).__name__}")
+        pos0 = np.asarray(pos0, dtype=float)
+        rot0 = np.asarray(rot0, dtype=float)
+        if pos0.shape != (3,) or not np.all(np.isfinite(pos0)):
+            raise InputError(f"pos0 must be a finite position of shape (3,), got {pos0!r}")
+        if rot0.shape != (3, 3) or not np.allclose(rot0.T @ rot0, np.eye(3), atol=1e-4):
+            raise InputError("rot0 must be a (3, 3) rotation matrix")
+        self.calib = calib
+        self.rays = CameraRays.from_calibration(calib, table_z=table_z)
+        self.half = object_model.half_extents
+        self.config = config or BoxTrackerConfig()
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.fx = float(calib.K[0, 0])
+        self.sigma = self.config.sigma_m
+        self.history: list[tuple[np.ndarray, np.ndarray]] = []
+        self._init = (pos0, project_to_so3(rot0))
+
+    # -- prediction ---------------------------------------------------------------------------
+    def predict(self) -> tuple[np.ndarray, np.ndarray]:
+        """Constant-velocity prediction of the next pose from the last two fits."""
+        if not self.history:
+            return self._init
+        if len(self.history) == 1:
+            return self.history[-1]
+        (p1, R1), (p2, R2) = self.history[-2], self.history[-1]
+        return 2 * p2 - p1, exp_so3(log_so3(R2 @ R1.T)) @ R2
+
+    def roi(self, pos: np.ndarray, rot: np.ndarray, margin_px: int) -> np.ndarray:
+        """Flat indices of the pixels around the box's projection, subsampled to ``max_pixels``."""
+        corners = pos + (np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T * self.half) @ rot.T
+        uvz = self.rays.project(self.calib, corners)
+        if np.any(uvz[:, 2] <= 0.05):
+            raise TrackingError(f"the box at {np.round(pos, 3)} m is behind or at the camera")
+        W, H = self.rays.width, self.rays.height
+        u0, v0 = np.floor(uvz[:, :2].min(0)).astype(int) - margin_px
+        u1, v1 = np.ceil(uvz[:, :2].max(0)).astype(int) + margin_px
+        u0, v0, u1, v1 = max(u0, 0), max(v0, 0), min(u1, W - 1), min(v1, H - 1)
+        if u1 <= u0 or v1 <= v0:
+            raise TrackingError(f"the box at {np.round(pos, 3)} m projects outside the {W}x{H} image")
+        area = (u1 - u0 + 1) * (v1 - v0 + 1)
+        step = max(1, int(np.ceil(np.sqrt(area / self.config.max_pixels))))
+        vv, uu = np.mgrid[v0 : v1 + 1 : step, u0 : u1 + 1 : step]
+        return (vv * W + uu).reshape(-1)
+
+    # -- fitting ------------------------------------------------------------------------------
+    def _weights(self, r: np.ndarray, occluded: np.ndarray, valid: np.ndarray, sigma: float) -> np.ndarray:
+        c = self.config
+        w = 1.0 / (1.0 + (r / (c.huber_k * sigma)) ** 2)
+        return np.where(valid & ~occluded, w, 0.0)
+
+    def _occluded(self, z_obs: np.ndarray, zp: np.ndarray, plane: np.ndarray, sigma: float) -> np.ndarray:
+        """Pixels in front of both the prediction and the nearest face's extended plane."""
+        return z_obs - np.minimum(zp, plane) < -self.config.occluder_k * sigma
+
+    def cost(self, z_obs: np.ndarray, index: np.ndarray, pos, rot, sigma: float) -> float:
+        """Robust cost of a pose hypothesis on the given pixels (for the particle search)."""
+        zp, _, plane = predict_box_depth(self.rays, index, pos, rot, self.half, self.fx, self.config.silhouette_px)
+        r = z_obs - zp
+        valid = z_obs > 0
+        k = self.config.huber_k * sigma
+        rho = 0.5 * k**2 * np.log1p((r / k) ** 2)
+        occluded = self._occluded(z_obs, zp, plane, sigma)
+        rho = np.where(occluded, 0.5 * k**2 * np.log1p((self.config.occluder_k * sigma / k) ** 2), rho)
+        return float(np.sum(rho[valid]))
+
+    def fit(self, z_obs: np.ndarray, index: np.ndarray, pos, rot, sigma: float, prior=None):
+        """Gauss-Newton (IRLS) from ``(pos, rot)`` on the given pixels; returns the pose and inlier fraction."""
+        c = self.config
+        valid = z_obs > 0
+        pos, rot = np.array(pos, dtype=float), np.array(rot, dtype=float)
+        for _ in range(c.iterations):
+            zp, cover, plane, J = predict_box_depth(self.rays, index, pos, rot, self.half, self.fx, c.silhouette_px, True)
+            r = z_obs - zp
+            w = self._weights(r, self._occluded(z_obs, zp, plane, sigma), valid, sigma)
+            A = (J * w[:, None]).T @ J
+            g = (J * w[:, None]).T @ r
+            if prior is not None:
+                pp, Rp = prior
+                lt, lr = (sigma / c.prior_pos_m) ** 2, (sigma / c.prior_rot_rad) ** 2
+                A[:3, :3] += lt * np.eye(3)
+                A[3:, 3:] += lr * np.eye(3)
+                g[:3] -= lt * (pos - pp)
+                g[3:] -= lr * log_so3(rot @ Rp.T)
+            A += 1e-9 * np.eye(6) + 1e-3 * np.diag(np.diag(A))
+            step = np.linalg.solve(A, g)
+            step[:3] = np.clip(step[:3], -0.02, 0.02)
+            step[3:] = np.clip(step[3:], -0.2, 0.2)
+            pos = pos + step[:3]
+            rot = project_to_so3(exp_so3(step[3:]) @ rot)
+            if np.linalg.norm(step[:3]) < 1e-5 and np.linalg.norm(step[3:]) < 1e-4:
+                break
+        zp, cover, plane = predict_box_depth(self.rays, index, pos, rot, self.half, self.fx, c.silhouette_px)
+        r = z_obs - zp
+        on_box = valid & (cover > 0.5)
+        seen = on_box & ~self._occluded(z_obs, zp, plane, sigma)
+        agree = seen & (np.abs(r) <= c.occluder_k * sigma)
+        frac = float(agree.sum() / max(on_box.sum(), 1))
+        return pos, rot, frac, r[agree]
+
+    def update(self, depth_m: np.ndarray) -> BoxFit:
+        """Tracks one frame: prediction, robust fit, re-initialisation when lost."""
+        depth_m = np.asarray(depth_m)
+        if depth_m.shape != (self.rays.height, self.rays.width):
+            raise InputError(f"depth frame must have shape ({self.rays.height}, {self.rays.width}), got {depth_m.shape}")
+        c = self.config
+        z_all = depth_m.reshape(-1).astype(float)
+        first = not self.history
+        pos_p, rot_p = self.predict()
+        index = self.roi(pos_p, rot_p, c.roi_margin_px + (25 if first else 0))
+        z_obs = z_all[index]
+        sigma = self.sigma if self.sigma is not None else 0.01
+        prior = None if first else (pos_p, rot_p)
+        pos, rot, frac, r_in = self.fit(z_obs, index, pos_p, rot_p, sigma, prior)
+        reinit = False
+        if frac < c.lost_fraction or first:
+            pos, rot, frac, r_in, reinit = self._search(z_obs, index, pos_p, rot_p, sigma, prior, (pos, rot, frac, r_in), first)
+        if self.config.sigma_m is None and r_in.size > 50:
+            est = float(np.clip(1.4826 * np.median(np.abs(r_in - np.median(r_in))), 0.002, 0.03))
+            self.sigma = est if self.sigma is None else 0.8 * self.sigma + 0.2 * est
+        self.history = (self.history + [(pos, rot)])[-2:]
+        return BoxFit(pos=pos, rot=rot, inlier_fraction=frac, sigma_m=sigma, reinitialised=reinit)
+
+    def _search(self, z_obs, index, pos_p, rot_p, sigma, prior, best, first):
+        """Particle search around the prediction; keeps the fit with the most agreeing pixels."""
+        c = self.config
+        hyps = [(pos_p, rot_p), (best[0], best[1])]
+        for _ in range(c.particles):
+            dp = self.rng.normal(0.0, c.search_pos_m, 3)
+            dw = self.rng.normal(0.0, c.search_rot_rad, 3)
+            hyps.append((best[0] + dp, exp_so3(dw) @ best[1]))
+        costs = [self.cost(z_obs, index, p, R, sigma) for p, R in hyps]
+        reinit = False
+        best_cost = costs[1]
+        for i in np.argsort(costs)[:4]:
+            if i < 2:
+                continue  # already fitted
+            p, R = hyps[i]
+            cand = self.fit(z_obs, index, p, R, sigma, prior)
+            cand_cost = self.cost(z_obs, index, cand[0], cand[1], sigma)
+            if cand_cost < best_cost:
+                best, best_cost, reinit = cand, cand_cost, True
+        if reinit:
+            best = self.fit(z_obs, index, best[0], best[1], sigma, prior)
+        return (*best, reinit)
+
+
+def track_box(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, pos0, rot0, *,
+              config: BoxTrackerConfig | None = None, rng: np.random.Generator | None = None,
+              table_z: float = 0.0) -> tuple[Poses, np.ndarray]:
+    """Tracks the box through a depth video.
+
+    Args:
+        depth: The depth video.
+        calib: Camera calibration.
+        object_model: The known box.
+        pos0: First-frame box centre estimate, shape (3,), [m].
+        rot0: First-frame world_R_object estimate, shape (3, 3).
+        config: Tracker parameters.
+        rng: Generator of the re-initialisation search.
+        table_z: Height of the table plane, [m].
+
+    Returns:
+        ``(poses, inlier_fraction)``: the box poses (T frames) and the per-frame fraction of
+        predicted-visible box pixels that agree with the fit, shape (T,).
+    """
+    if not isinstance(depth, DepthVideo):
+        raise InputError(f"depth must be an fsv.DepthVideo, got {type(depth).__name__}")
+    tracker = BoxTracker(calib, object_model, pos0, rot0, config=config, rng=rng, table_z=table_z)
+    fits = [tracker.update(frame) for frame in depth.depth_m]
+    poses = Poses(t=depth.t, pos=np.array([f.pos for f in fits]), rot=np.array([f.rot for f in fits]))
+    return poses, np.array([f.inlier_fraction for f in fits])
