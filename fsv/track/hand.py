@@ -1,0 +1,456 @@
+"""The articulated hand fitted to the depth the box and the table leave unexplained.
+
+Articulated ICP with Levenberg-Marquardt, as in model-based hand trackers: the hand is the known
+capsule model (`fsv.HandModel`, palm pose plus n >= 20 hinge angles); every observed point in front
+of the predicted box-and-table depth is matched to its nearest capsule surface, and the residual is
+the signed point-to-surface distance (robust Cauchy weights). The Jacobian is analytic: a surface
+point x on segment s moves by dt + dw x (x - palm) + sum_j dq_j a_j x (x - pivot_j) over the hinges j
+of s and its ancestors. Extra residual rows keep the fit physical and coherent in time:
+
+* temporal smoothness: palm and joints stay near a constant-velocity prediction (a finger that
+  cannot be seen keeps its last pose: the paper's occlusion prior at the level of the hand);
+* no hand-box interpenetration: capsule samples are pushed out of the tracked box;
+* joint limits: every step is projected onto the model's joint ranges.
+
+When few observed points agree with the fit, a small particle search over the palm's pose
+re-initialises it (the paper's tracker is a particle swarm over the whole configuration).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fsv.errors import InputError
+from fsv.hand import axis_angle_to_rot, quat_to_rot
+from fsv.models import HandModel, ObjectModel
+from fsv.track.camera import CameraRays
+from fsv.track.rotation import exp_so3, log_so3, project_to_so3
+from fsv.types import Calibration
+
+
+@dataclass(frozen=True)
+class HandState:
+    """One hand configuration.
+
+    Attributes:
+        palm_pos: Palm origin in the world, shape (3,), [m].
+        palm_rot: world_R_palm, shape (3, 3).
+        joints: Hinge angles in ``HandModel.joint_names`` order, shape (n,), [rad].
+    """
+
+    palm_pos: np.ndarray
+    palm_rot: np.ndarray
+    joints: np.ndarray
+
+    def __post_init__(self):
+        pos = np.asarray(self.palm_pos, dtype=float)
+        rot = np.asarray(self.palm_rot, dtype=float)
+        q = np.asarray(self.joints, dtype=float)
+        if pos.shape != (3,) or not np.all(np.isfinite(pos)):
+            raise InputError(f"HandState.palm_pos must be a finite (3,) position, got {pos!r}")
+        if rot.shape != (3, 3) or not np.allclose(rot.T @ rot, np.eye(3), atol=1e-4):
+            raise InputError("HandState.palm_rot must be a (3, 3) rotation matrix")
+        if q.ndim != 1 or not np.all(np.isfinite(q)):
+            raise InputError(f"HandState.joints must be a finite (n,) vector, got shape {q.shape}")
+        object.__setattr__(self, "palm_pos", pos)
+        object.__setattr__(self, "palm_rot", project_to_so3(rot))
+        object.__setattr__(self, "joints", q)
+
+
+@dataclass(frozen=True)
+class HandTrackerConfig:
+    """Parameters of the hand tracker (fixed in advance).
+
+    Attributes:
+        iterations: Levenberg-Marquardt iterations per frame.
+        max_points: Observed points used per frame (a regular subsample).
+        roi_margin_px: Pixels around the predicted hand's projection.
+        scene_k: A pixel is a hand candidate when it lies this many noise sigmas in front of the
+            predicted box-and-table depth.
+        assign_max_m: Candidates farther than this from every capsule are ignored, [m].
+        cauchy_k: Scale of the Cauchy weights in noise sigmas.
+        smooth_pos_m: Standard deviation of the palm's position about its prediction, [m].
+        smooth_rot_rad: Same for its orientation, [rad].
+        smooth_joint_rad: Same for every hinge, [rad].
+        penetration_m: Tolerance of the no-interpenetration rows, [m] (smaller is stiffer).
+        visible_min_points: A finger is observed when at least this many agreeing points fall
+            on its two distal segments.
+        lost_fraction: Below this fraction of candidates explained, the fit is re-initialised.
+        particles: Hypotheses of the re-initialisation search.
+    """
+
+    iterations: int = 6
+    max_points: int = 1200
+    roi_margin_px: int = 12
+    scene_k: float = 1.0
+    assign_max_m: float = 0.03
+    cauchy_k: float = 1.5
+    smooth_pos_m: float = 0.01
+    smooth_rot_rad: float = 0.08
+    smooth_joint_rad: float = 0.12
+    penetration_m: float = 0.001
+    visible_min_points: int = 6
+    lost_fraction: float = 0.25
+    particles: int = 16
+
+    def __post_init__(self):
+        for name in ("iterations", "max_points", "visible_min_points", "particles"):
+            if int(getattr(self, name)) < 1:
+                raise InputError(f"HandTrackerConfig.{name} must be >= 1, got {getattr(self, name)!r}")
+        for name in ("scene_k", "assign_max_m", "cauchy_k", "smooth_pos_m", "smooth_rot_rad",
+                     "smooth_joint_rad", "penetration_m"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(f"HandTrackerConfig.{name} must be > 0, got {v!r}")
+        if int(self.roi_margin_px) < 0 or not 0 <= self.lost_fraction < 1:
+            raise InputError("HandTrackerConfig: roi_margin_px must be >= 0 and lost_fraction in [0, 1)")
+
+
+@dataclass(frozen=True)
+class HandFit:
+    """The hand in one frame.
+
+    Attributes:
+        state: The fitted configuration.
+        fingertips: Fingertip pad centres in the world, thumb first, shape (K, 3), [m].
+        observed: Whether each finger's distal segments were seen in this frame, shape (K,).
+        explained: Fraction of hand candidate points within 2 sigma of the fitted surface.
+        reinitialised: Whether the particle search re-initialised the fit.
+    """
+
+    state: HandState
+    fingertips: np.ndarray
+    observed: np.ndarray
+    explained: float
+    reinitialised: bool = False
+
+
+class HandKinematics:
+    """Forward kinematics of a hand model with the world axes and pivots of every hinge.
+
+    Args:
+        model: The known hand.
+    """
+
+    def __init__(self, model: HandModel):
+        if not isinstance(model, HandModel):
+            raise InputError(f"hand_model must be an fsv.HandModel, got {type(model).__name__}")
+        self.model = model
+        B, n = len(model.segment_names), model.num_joints
+        self.offset_rot = quat_to_rot(model.offset_quat)
+        self.joints_of = [np.flatnonzero(model.joint_segment == b) for b in range(B)]
+        # moves[s, j]: hinge j moves segment s (it sits on s or on one of its ancestors).
+        moves = np.zeros((B, n), dtype=bool)
+        for b in range(B):
+            p = model.parent[b]
+            if p >= 0:
+                moves[b] = moves[p]
+            moves[b, self.joints_of[b]] = True
+        self.moves = moves
+        self.finger_of_segment = np.full(B, -1)
+        for k, tip in enumerate(model.fingertip_segment):
+            b = int(tip)
+            while b > 0:
+                self.finger_of_segment[b] = k
+                b = int(model.parent[b])
+
+    def pose(self, state: HandState):
+        """Segment poses and hinge frames.
+
+        Returns:
+            ``(pos (B, 3), rot (B, 3, 3), axis (n, 3), pivot (n, 3))``: segment origins and
+            orientations, and each hinge's world axis and pivot, [m].
+        """
+        m = self.model
+        B = len(m.segment_names)
+        hinge = axis_angle_to_rot(m.joint_axis, state.joints)
+        pos = np.empty((B, 3))
+        rot = np.empty((B, 3, 3))
+        axis = np.empty((m.num_joints, 3))
+        pivot = np.empty((m.num_joints, 3))
+        for b in range(B):
+            if b == 0:
+                pos[0], R = state.palm_pos, state.palm_rot
+            else:
+                p = m.parent[b]
+                pos[b] = pos[p] + rot[p] @ m.offset_pos[b]
+                R = rot[p] @ self.offset_rot[b]
+            for j in self.joints_of[b]:
+                axis[j] = R @ m.joint_axis[j]
+                pivot[j] = pos[b]
+                R = R @ hinge[j]
+            rot[b] = R
+        return pos, rot, axis, pivot
+
+    def capsules(self, pos, rot) -> tuple[np.ndarray, np.ndarray]:
+        """Capsule end points in the world, each (G, 3), [m]."""
+        m = self.model
+        R = rot[m.geom_segment]
+        a = pos[m.geom_segment] + np.einsum("gij,gj->gi", R, m.geom_fromto[:, :3])
+        b = pos[m.geom_segment] + np.einsum("gij,gj->gi", R, m.geom_fromto[:, 3:])
+        return a, b
+
+    def fingertips(self, pos, rot) -> np.ndarray:
+        """Fingertip pad centres in the world, (K, 3), [m]."""
+        m = self.model
+        seg = m.fingertip_segment
+        return pos[seg] + np.einsum("kij,kj->ki", rot[seg], m.fingertip_offset)
+
+    def point_jacobian(self, x: np.ndarray, segment: np.ndarray, direction: np.ndarray, pose) -> np.ndarray:
+        """Rows d(direction . x)/d(state) for points x rigidly attached to segments.
+
+        Args:
+            x: World points, shape (P, 3).
+            segment: Segment carrying each point, shape (P,).
+            direction: A world direction per point, shape (P, 3).
+            pose: The output of :meth:`pose`.
+
+        Returns:
+            Shape (P, 6 + n): palm translation, palm rotation (world, about the palm origin),
+            then the hinges.
+        """
+        pos, _, axis, pivot = pose
+        n = self.model.num_joints
+        J = np.zeros((x.shape[0], 6 + n))
+        J[:, :3] = direction
+        J[:, 3:6] = np.cross(x - pos[0], direction)
+        moves = self.moves[segment]  # (P, n)
+        # d/dq_j (direction . x) = direction . (a_j x (x - pivot_j)) = a_j . ((x - pivot_j) x direction)
+        lever = x[:, None, :] - pivot[None, :, :]
+        J[:, 6:] = np.where(moves, np.einsum("jk,pjk->pj", axis, np.cross(lever, direction[:, None, :])), 0.0)
+        return J
+
+
+def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray):
+    """Nearest capsule of every point and the signed distance to its surface.
+
+    Args:
+        points: Shape (P, 3), [m].
+        a, b: Capsule end points, shape (G, 3), [m].
+        radius: Capsule radii, shape (G,), [m].
+
+    Returns:
+        ``(geom (P,), distance (P,), axis_point (P, 3), normal (P, 3))``: the nearest capsule, the
+        signed distance to its surface (negative inside), the closest point on its axis and the
+        unit outward direction from that point towards the observed point.
+    """
+    ab = b - a
+    L2 = np.maximum(np.einsum("gi,gi->g", ab, ab), 1e-12)
+    t = np.clip(np.einsum("pgi,gi->pg", points[:, None, :] - a[None], ab) / L2, 0.0, 1.0)
+    c = a[None] + t[..., None] * ab[None]
+    diff = points[:, None, :] - c
+    dist = np.linalg.norm(diff, axis=-1) - radius[None]
+    g = np.argmin(dist, axis=1)
+    rows = np.arange(points.shape[0])
+    cp = c[rows, g]
+    v = diff[rows, g]
+    nrm = np.linalg.norm(v, axis=1, keepdims=True)
+    normal = np.where(nrm > 1e-9, v / np.maximum(nrm, 1e-9), np.array([0.0, 0.0, 1.0]))
+    return g, dist[rows, g], cp, normal
+
+
+def box_signed_distance(points_obj: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distance to a box centred at the origin and its gradient (object frame).
+
+    Args:
+        points_obj: Shape (P, 3), [m].
+        half: Half edge lengths, shape (3,), [m].
+
+    Returns:
+        ``(distance (P,), gradient (P, 3))``: negative inside; the gradient is the outward unit
+        direction of steepest increase.
+    """
+    q = np.abs(points_obj) - half
+    outside = np.maximum(q, 0.0)
+    out_len = np.linalg.norm(outside, axis=1)
+    inside = np.minimum(q.max(axis=1), 0.0)
+    dist = out_len + inside
+    sgn = np.sign(points_obj)
+    sgn[sgn == 0] = 1.0
+    grad_out = sgn * outside / np.maximum(out_len, 1e-12)[:, None]
+    ax = np.argmax(q, axis=1)
+    grad_in = np.zeros_like(points_obj)
+    grad_in[np.arange(points_obj.shape[0]), ax] = sgn[np.arange(points_obj.shape[0]), ax]
+    grad = np.where((out_len > 0)[:, None], grad_out, grad_in)
+    return dist, grad
+
+
+class HandTracker:
+    """Tracks the articulated hand frame by frame.
+
+    Args:
+        calib: Camera calibration.
+        hand_model: The known hand.
+        object_model: The known box (for the no-interpenetration rows).
+        init: First-frame configuration estimate.
+        config: Tracker parameters.
+        rng: Generator of the re-initialisation search.
+        table_z: Height of the table plane, [m].
+    """
+
+    def __init__(self, calib: Calibration, hand_model: HandModel, object_model: ObjectModel, init: HandState, *,
+                 config: HandTrackerConfig | None = None, rng: np.random.Generator | None = None,
+                 table_z: float = 0.0):
+        if not isinstance(init, HandState):
+            raise InputError(f"init must be a HandState, got {type(init).__name__}")
+        if init.joints.shape != (hand_model.num_joints,):
+            raise InputError(f"init.joints must have {hand_model.num_joints} angles, got {init.joints.shape}")
+        self.calib = calib
+        self.kin = HandKinematics(hand_model)
+        self.model = hand_model
+        self.half = object_model.half_extents
+        self.rays = CameraRays.from_calibration(calib, table_z=table_z)
+        self.config = config or HandTrackerConfig()
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        lo, hi = hand_model.joint_range[:, 0], hand_model.joint_range[:, 1]
+        self.lo, self.hi = lo, hi
+        self.history = [HandState(init.palm_pos, init.palm_rot, np.clip(init.joints, lo, hi))]
+        self.first = True
+        # Capsule samples for the no-interpenetration rows: ends and middle of every capsule.
+        fromto = hand_model.geom_fromto
+        s = np.array([0.0, 0.5, 1.0])
+        self.pen_local = (fromto[:, None, :3] * (1 - s)[None, :, None] + fromto[:, None, 3:] * s[None, :, None]).reshape(-1, 3)
+        self.pen_segment = np.repeat(hand_model.geom_segment, 3)
+        self.pen_radius = np.repeat(hand_model.geom_radius, 3)
+
+    def predict(self) -> HandState:
+        """Constant-velocity prediction of the palm; joints keep their last values."""
+        last = self.history[-1]
+        if len(self.history) < 2:
+            return last
+        prev = self.history[-2]
+        rot = exp_so3(log_so3(last.palm_rot @ prev.palm_rot.T)) @ last.palm_rot
+        return HandState(2 * last.palm_pos - prev.palm_pos, rot, last.joints)
+
+    def _candidates(self, depth_m, scene_depth, state: HandState, sigma: float):
+        pose = self.kin.pose(state)
+        a, b = self.kin.capsules(pose[0], pose[1])
+        uvz = self.rays.project(self.calib, np.concatenate([a, b]))
+        uvz = uvz[uvz[:, 2] > 0.05]
+        W, H = self.rays.width, self.rays.height
+        if uvz.shape[0] == 0:
+            return np.zeros((0, 3))
+        m = self.config.roi_margin_px
+        u0, v0 = np.maximum(np.floor(uvz[:, :2].min(0)).astype(int) - m, 0)
+        u1, v1 = np.minimum(np.ceil(uvz[:, :2].max(0)).astype(int) + m, [W - 1, H - 1])
+        if u1 <= u0 or v1 <= v0:
+            return np.zeros((0, 3))
+        vv, uu = np.mgrid[v0 : v1 + 1, u0 : u1 + 1]
+        idx = (vv * W + uu).reshape(-1)
+        z = depth_m.reshape(-1)[idx].astype(float)
+        zs = scene_depth.reshape(-1)[idx]
+        keep = (z > 0) & (z < zs - self.config.scene_k * sigma)
+        idx = idx[keep]
+        if idx.size > self.config.max_points:
+            idx = idx[:: int(np.ceil(idx.size / self.config.max_points))]
+        return self.rays.points(depth_m, idx)
+
+    def _solve(self, pts, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):
+        c = self.config
+        n = self.model.num_joints
+        pos_w, rot_w = np.array(state.palm_pos), np.array(state.palm_rot)
+        q = np.array(state.joints)
+        lam = 1e-3
+        explained = 0.0
+        for _ in range(c.iterations):
+            st = HandState(pos_w, rot_w, q)
+            pose = self.kin.pose(st)
+            a, b = self.kin.capsules(pose[0], pose[1])
+            A = np.zeros((6 + n, 6 + n))
+            g = np.zeros(6 + n)
+            if pts.shape[0]:
+                geom, d, cp, nrm = closest_on_capsules(pts, a, b, self.model.geom_radius)
+                use = d < c.assign_max_m
+                k = c.cauchy_k * sigma
+                w = np.where(use, 1.0 / (1.0 + (d / k) ** 2), 0.0)
+                explained = float(np.mean(use & (np.abs(d) < 2 * sigma))) if use.size else 0.0
+                seg = self.model.geom_segment[geom]
+                # residual d = |p - c| - r; the surface point moving along +n lowers d.
+                J = -self.kin.point_jacobian(cp, seg, nrm, pose)
+                Jw = J * w[:, None]
+                A += Jw.T @ J
+                g -= Jw.T @ d
+            # No interpenetration with the box: capsule samples at least their radius outside.
+            Rl = pose[1][self.pen_segment]
+            xs = pose[0][self.pen_segment] + np.einsum("pij,pj->pi", Rl, self.pen_local)
+            sd, grad = box_signed_distance((xs - box_pos) @ box_rot, self.half)
+            pen = self.pen_radius - sd
+            hit = pen > 0
+            if np.any(hit):
+                gw = grad[hit] @ box_rot.T
+                Jp = -self.kin.point_jacobian(xs[hit], self.pen_segment[hit], gw, pose)
+                wp = (sigma / c.penetration_m) ** 2
+                A += wp * Jp.T @ Jp
+                g -= wp * Jp.T @ pen[hit]
+            # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
+            for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, pos_w - prior.palm_pos),
+                                 (slice(3, 6), c.smooth_rot_rad, log_so3(rot_w @ prior.palm_rot.T)),
+                                 (slice(6, 6 + n), c.smooth_joint_rad, q - prior.joints)):
+                ws = (sigma / sd_) ** 2
+                A[sl, sl] += ws * np.eye(res.shape[0])
+                g[sl] -= ws * res
+            A += lam * np.diag(np.diag(A)) + 1e-12 * np.eye(6 + n)
+            step = np.linalg.solve(A, g)
+            step[:3] = np.clip(step[:3], -0.02, 0.02)
+            step[3:] = np.clip(step[3:], -0.3, 0.3)
+            pos_w = pos_w + step[:3]
+            rot_w = project_to_so3(exp_so3(step[3:6]) @ rot_w)
+            q = np.clip(q + step[6:], self.lo, self.hi)
+            if np.max(np.abs(step)) < 1e-5:
+                break
+        return HandState(pos_w, rot_w, q), explained
+
+    def update(self, depth_m: np.ndarray, scene_depth: np.ndarray, box_pos, box_rot, sigma: float) -> HandFit:
+        """Tracks one frame.
+
+        Args:
+            depth_m: Observed depth image, shape (H, W), [m].
+            scene_depth: Depth of the tracked box in front of the table, shape (H, W), [m]
+                (+inf where nothing is predicted).
+            box_pos: Tracked box centre, shape (3,), [m].
+            box_rot: Tracked world_R_object, shape (3, 3).
+            sigma: Depth noise scale, [m].
+        """
+        depth_m = np.asarray(depth_m)
+        if depth_m.shape != (self.rays.height, self.rays.width) or np.shape(scene_depth) != depth_m.shape:
+            raise InputError(f"depth and scene depth must have shape ({self.rays.height}, {self.rays.width}), "
+                             f"got {depth_m.shape} and {np.shape(scene_depth)}")
+        c = self.config
+        prior = self.predict()
+        pts = self._candidates(depth_m, np.asarray(scene_depth), prior, sigma)
+        state, explained = self._solve(pts, prior, prior, box_pos, box_rot, sigma)
+        reinit = False
+        if explained < c.lost_fraction and pts.shape[0] >= 50:
+            state, explained, reinit = self._search(pts, state, explained, prior, box_pos, box_rot, sigma)
+        self.history = (self.history + [state])[-2:]
+        pose = self.kin.pose(state)
+        tips = self.kin.fingertips(pose[0], pose[1])
+        observed = self._observed(pts, pose, sigma)
+        return HandFit(state=state, fingertips=tips, observed=observed, explained=explained, reinitialised=reinit)
+
+    def _observed(self, pts, pose, sigma) -> np.ndarray:
+        K = len(self.model.finger_names)
+        if pts.shape[0] == 0:
+            return np.zeros(K, dtype=bool)
+        a, b = self.kin.capsules(pose[0], pose[1])
+        geom, d, _, _ = closest_on_capsules(pts, a, b, self.model.geom_radius)
+        seg = self.model.geom_segment[geom]
+        good = np.abs(d) < 1.5 * sigma
+        counts = np.zeros(K, dtype=int)
+        for k, tip in enumerate(self.model.fingertip_segment):
+            near_tip = (seg == tip) | (seg == self.model.parent[tip])
+            counts[k] = int(np.sum(good & near_tip))
+        return counts >= self.config.visible_min_points
+
+    def _search(self, pts, state, explained, prior, box_pos, box_rot, sigma):
+        """Particle search over the palm pose when the fit explains too few points."""
+        best, best_e, reinit = state, explained, False
+        for _ in range(self.config.particles):
+            cand = HandState(state.palm_pos + self.rng.normal(0.0, 0.02, 3),
+                             exp_so3(self.rng.normal(0.0, 0.2, 3)) @ state.palm_rot, state.joints)
+            fit, e = self._solve(pts, cand, cand, box_pos, box_rot, sigma)
+            if e > best_e + 0.05:
+                best, best_e, reinit = fit, e, True
+        return best, best_e, reinit
