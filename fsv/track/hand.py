@@ -87,9 +87,9 @@ class HandTrackerConfig:
     scene_k: float = 1.0
     assign_max_m: float = 0.03
     cauchy_k: float = 1.5
-    smooth_pos_m: float = 0.01
-    smooth_rot_rad: float = 0.08
-    smooth_joint_rad: float = 0.12
+    smooth_pos_m: float = 0.02
+    smooth_rot_rad: float = 0.2
+    smooth_joint_rad: float = 0.3
     penetration_m: float = 0.001
     visible_min_points: int = 6
     lost_fraction: float = 0.25

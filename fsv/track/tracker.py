@@ -1,0 +1,152 @@
+"""The joint hand-object tracker: box, then hand against the depth the box leaves unexplained, then contacts.
+
+>>> tracking = track(depth, calib, object_model, hand_model, TrackInit(...))
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsv._check import as_array
+from fsv.errors import InputError
+from fsv.hand import quat_to_rot
+from fsv.models import HandModel, ObjectModel
+from fsv.track.contacts import ContactConfig, detect_contacts
+from fsv.track.hand import HandState, HandTracker, HandTrackerConfig
+from fsv.track.object import BoxTracker, BoxTrackerConfig, predict_box_depth
+from fsv.track.rotation import rot_to_quat
+from fsv.types import Calibration, Contacts, DepthVideo, Poses
+
+
+@dataclass(frozen=True)
+class TrackInit:
+    """A coarse first-frame initialisation (the only non-visual input besides the models).
+
+    Attributes:
+        box_pos: Box centre in the world, shape (3,), [m].
+        box_rot: world_R_object, shape (3, 3).
+        palm_pos: Palm origin in the world, shape (3,), [m].
+        palm_rot: world_R_palm, shape (3, 3).
+        joints: Hinge angles in ``HandModel.joint_names`` order, shape (n,), [rad].
+    """
+
+    box_pos: np.ndarray
+    box_rot: np.ndarray
+    palm_pos: np.ndarray
+    palm_rot: np.ndarray
+    joints: np.ndarray
+
+    def __post_init__(self):
+        for name, shape in (("box_pos", (3,)), ("box_rot", (3, 3)), ("palm_pos", (3,)), ("palm_rot", (3, 3)),
+                            ("joints", (None,))):
+            arr = as_array(f"TrackInit.{name}", getattr(self, name), shape)
+            if not np.all(np.isfinite(arr)):
+                raise InputError(f"TrackInit.{name} must be finite")
+            object.__setattr__(self, name, arr)
+        for name in ("box_rot", "palm_rot"):
+            R = getattr(self, name)
+            if not np.allclose(R.T @ R, np.eye(3), atol=1e-4) or np.linalg.det(R) <= 0:
+                raise InputError(f"TrackInit.{name} must be a rotation matrix")
+
+    @classmethod
+    def from_qpos(cls, box_pos, box_quat, hand_qpos) -> "TrackInit":
+        """From a box position and quaternion (w, x, y, z) and a hand configuration (7 + n)."""
+        hand_qpos = np.asarray(hand_qpos, dtype=float)
+        if hand_qpos.ndim != 1 or hand_qpos.shape[0] < 8:
+            raise InputError(f"hand_qpos must be (7 + n,), got {hand_qpos.shape}")
+        return cls(box_pos=box_pos, box_rot=quat_to_rot(np.asarray(box_quat, dtype=float)),
+                   palm_pos=hand_qpos[:3], palm_rot=quat_to_rot(hand_qpos[3:7]), joints=hand_qpos[7:])
+
+
+@dataclass(frozen=True)
+class TrackerConfig:
+    """Parameters of every tracking stage."""
+
+    box: BoxTrackerConfig = field(default_factory=BoxTrackerConfig)
+    hand: HandTrackerConfig = field(default_factory=HandTrackerConfig)
+    contacts: ContactConfig = field(default_factory=ContactConfig)
+    table_z: float = 0.0
+
+
+@dataclass(frozen=True)
+class Tracking:
+    """Everything the tracker estimated, T frames, K fingers.
+
+    Attributes:
+        box: Box poses.
+        hand_qpos: Palm position, palm quaternion (w, x, y, z) and hinge angles, shape (T, 7 + n).
+        fingertips: Fingertip pad centres in the world, shape (T, K, 3), [m].
+        observed: Whether each finger was seen, shape (T, K).
+        box_inliers: Fraction of predicted-visible box pixels agreeing with the fit, shape (T,).
+        hand_explained: Fraction of hand candidate points near the fitted hand, shape (T,).
+        contacts: Contacts detected from the tracked fingertips (object frame).
+        timing_s: Seconds spent in each stage: ``box``, ``hand``, ``contacts``.
+    """
+
+    box: Poses
+    hand_qpos: np.ndarray
+    fingertips: np.ndarray
+    observed: np.ndarray
+    box_inliers: np.ndarray
+    hand_explained: np.ndarray
+    contacts: Contacts
+    timing_s: dict
+
+
+def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand_model: HandModel,
+          init: TrackInit, *, config: TrackerConfig | None = None,
+          rng: np.random.Generator | None = None) -> Tracking:
+    """Tracks the box and the hand through a depth video and detects their contacts.
+
+    Args:
+        depth: The depth video (T frames).
+        calib: Camera calibration.
+        object_model: The known box.
+        hand_model: The known hand.
+        init: First-frame initialisation.
+        config: Parameters of every stage.
+        rng: Generator of the trackers' re-initialisation searches.
+
+    Returns:
+        The tracking result.
+    """
+    if not isinstance(depth, DepthVideo):
+        raise InputError(f"depth must be an fsv.DepthVideo, got {type(depth).__name__}")
+    if not isinstance(init, TrackInit):
+        raise InputError(f"init must be an fsv.track.tracker.TrackInit, got {type(init).__name__}")
+    if init.joints.shape != (hand_model.num_joints,):
+        raise InputError(f"init.joints must have the hand's {hand_model.num_joints} angles, got {init.joints.shape}")
+    cfg = config or TrackerConfig()
+    rng = rng if rng is not None else np.random.default_rng(0)
+    box_rng, hand_rng = rng.spawn(2)
+    boxes = BoxTracker(calib, object_model, init.box_pos, init.box_rot, config=cfg.box, rng=box_rng, table_z=cfg.table_z)
+    hands = HandTracker(calib, hand_model, object_model, HandState(init.palm_pos, init.palm_rot, init.joints),
+                        config=cfg.hand, rng=hand_rng, table_z=cfg.table_z)
+    all_px = np.arange(calib.width * calib.height)
+    T, K = depth.num_frames, len(hand_model.finger_names)
+    box_pos, box_rot, inl = np.zeros((T, 3)), np.zeros((T, 3, 3)), np.zeros(T)
+    qpos = np.zeros((T, 7 + hand_model.num_joints))
+    tips, observed, explained = np.zeros((T, K, 3)), np.zeros((T, K), bool), np.zeros(T)
+    t_box = t_hand = 0.0
+    for i, frame in enumerate(depth.depth_m):
+        t0 = time.perf_counter()
+        fit = boxes.update(frame)
+        box_pos[i], box_rot[i], inl[i] = fit.pos, fit.rot, fit.inlier_fraction
+        t1 = time.perf_counter()
+        scene = predict_box_depth(boxes.rays, all_px, fit.pos, fit.rot, boxes.half, boxes.fx)[0]
+        hf = hands.update(frame, scene.reshape(frame.shape), fit.pos, fit.rot, boxes.sigma or fit.sigma_m)
+        s = hf.state
+        qpos[i] = np.concatenate([s.palm_pos, rot_to_quat(s.palm_rot), s.joints])
+        tips[i], observed[i], explained[i] = hf.fingertips, hf.observed, hf.explained
+        t_box += t1 - t0
+        t_hand += time.perf_counter() - t1
+    poses = Poses(t=depth.t, pos=box_pos, rot=box_rot)
+    t2 = time.perf_counter()
+    contacts = detect_contacts(tips, hand_model.fingertip_radius, observed, poses, object_model,
+                               hand_model.finger_names, cfg.contacts)
+    timing = {"box": t_box, "hand": t_hand, "contacts": time.perf_counter() - t2}
+    return Tracking(box=poses, hand_qpos=qpos, fingertips=tips, observed=observed, box_inliers=inl,
+                    hand_explained=explained, contacts=contacts, timing_s=timing)

@@ -1,0 +1,114 @@
+"""The articulated hand tracker: kinematics and Jacobians, and fitting synthetic depth."""
+
+import numpy as np
+import pytest
+
+from benchmark.hand import hand_model
+from fsv import InputError, ObjectModel
+from fsv.hand import forward_kinematics
+from fsv.track.camera import CameraRays
+from fsv.track.hand import HandKinematics, HandState, HandTracker, box_signed_distance
+from fsv.track.object import predict_box_depth
+from fsv.track.rotation import exp_so3
+from raycast import look_at_calibration, render_depth
+
+SIZE = np.array([0.171, 0.111, 0.060])
+BOX = ObjectModel(size_m=SIZE, mass_kg=0.4, inertia=ObjectModel.solid_box_inertia(SIZE, 0.4), friction=0.8)
+CALIB = look_at_calibration([0.20, -0.48, 0.36], [0.0, 0.0, 0.08])
+HAND = hand_model(1.0)
+
+
+def hover_state(seed=0):
+    """The palm facing down 9 cm above the table beside the box, fingers half bent."""
+    rng = np.random.default_rng(seed)
+    q = np.mean(HAND.joint_range, 1) + rng.normal(0.0, 0.1, HAND.num_joints)
+    return HandState(np.array([0.0, -0.01, 0.13]), exp_so3([np.pi, 0.0, 0.0]), np.clip(q, *HAND.joint_range.T))
+
+
+def test_kinematics_match_fsv_hand_and_point_jacobian_matches_differences():
+    kin = HandKinematics(HAND)
+    st = hover_state()
+    pose = kin.pose(st)
+    ref = forward_kinematics(HAND, st.palm_pos, st.palm_rot, st.joints)
+    np.testing.assert_allclose(pose[0], ref.pos, atol=1e-12)
+    np.testing.assert_allclose(pose[1], ref.rot, atol=1e-12)
+    seg, local, dirn = 9, np.array([0.004, 0.01, -0.003]), np.array([0.3, -0.5, 0.8])
+
+    def f(s):
+        p, r, _, _ = kin.pose(s)
+        return dirn @ (p[seg] + r[seg] @ local)
+
+    J = kin.point_jacobian((pose[0][seg] + pose[1][seg] @ local)[None], np.array([seg]), dirn[None], pose)[0]
+    h = 1e-6
+    for k in range(J.size):
+        d = np.zeros(J.size)
+        d[k] = h
+        plus = HandState(st.palm_pos + d[:3], exp_so3(d[3:6]) @ st.palm_rot, st.joints + d[6:])
+        minus = HandState(st.palm_pos - d[:3], exp_so3(-d[3:6]) @ st.palm_rot, st.joints - d[6:])
+        assert abs((f(plus) - f(minus)) / (2 * h) - J[k]) < 1e-7
+    assert np.count_nonzero(J[6:]) == 4  # the middle finger's four hinges up to its distal segment
+
+
+def test_box_signed_distance_and_gradient():
+    half = SIZE / 2
+    pts = np.array([[0.2, 0.0, 0.0], [0.0, 0.0, 0.02], [0.1, 0.07, 0.0]])
+    d, g = box_signed_distance(pts, half)
+    np.testing.assert_allclose(d, [0.2 - half[0], 0.02 - half[2], np.hypot(0.1 - half[0], 0.07 - half[1])])
+    h = 1e-7
+    for i, p in enumerate(pts):
+        num = [(box_signed_distance((p + h * e)[None], half)[0][0] - box_signed_distance((p - h * e)[None], half)[0][0]) / (2 * h)
+               for e in np.eye(3)]
+        np.testing.assert_allclose(g[i], num, atol=1e-6)
+
+
+def test_fit_recovers_a_perturbed_hand_from_noisy_depth():
+    rng = np.random.default_rng(2)
+    kin = HandKinematics(HAND)
+    truth = hover_state()
+    bp, bR = np.array([0.0, 0.0, 0.03]), np.eye(3)
+    p, r, _, _ = kin.pose(truth)
+    a, b = kin.capsules(p, r)
+    rays = CameraRays.from_calibration(CALIB)
+    scene = predict_box_depth(rays, np.arange(CALIB.width * CALIB.height), bp, bR, SIZE / 2, CALIB.K[0, 0])[0]
+    scene = scene.reshape(CALIB.height, CALIB.width)
+    tips_true = kin.fingertips(p, r)
+    init = HandState(truth.palm_pos + [0.008, -0.006, 0.005], exp_so3([0.04, -0.04, 0.06]) @ truth.palm_rot,
+                     np.clip(truth.joints + rng.normal(0.0, 0.12, HAND.num_joints), *HAND.joint_range.T))
+    p0, r0, _, _ = kin.pose(init)
+    err0 = np.linalg.norm(kin.fingertips(p0, r0) - tips_true, axis=1)
+    tracker = HandTracker(CALIB, HAND, BOX, init, rng=np.random.default_rng(0))
+    errs = []
+    for _ in range(12):
+        frame = render_depth(CALIB, bp, bR, SIZE / 2, list(zip(a, b, HAND.geom_radius)), 0.01, rng)
+        fit = tracker.update(frame, scene, bp, bR, 0.01)
+        errs.append(np.linalg.norm(fit.fingertips - tips_true, axis=1))
+    err = np.median(errs[6:])  # over the last 6 frames and the 5 fingers
+    assert err < 0.6 * np.median(err0), (err, err0)
+    assert err < 0.008, err
+    assert fit.explained > 0.5
+
+
+def test_fingers_do_not_enter_the_box():
+    # Start with the hand pushed 2 cm down into the box: the fit must lift every capsule out.
+    kin = HandKinematics(HAND)
+    st = hover_state()
+    bp, bR = np.array([0.0, 0.0, 0.03]), np.eye(3)
+    sunk = HandState(st.palm_pos - [0.0, 0.0, 0.06], st.palm_rot, st.joints)
+    tracker = HandTracker(CALIB, HAND, BOX, sunk)
+    empty = np.zeros((CALIB.height, CALIB.width), np.float32)
+    for _ in range(5):
+        fit = tracker.update(empty, np.full(empty.shape, np.inf), bp, bR, 0.01)
+    p, r, _, _ = kin.pose(fit.state)
+    a, b = kin.capsules(p, r)
+    s = np.linspace(0, 1, 5)[:, None, None]
+    pts = (a[None] * (1 - s) + b[None] * s).reshape(-1, 3)
+    rad = np.tile(HAND.geom_radius, 5)
+    d, _ = box_signed_distance(pts - bp, SIZE / 2)
+    assert np.min(d - rad) > -0.003
+
+
+def test_bad_inputs_are_named():
+    with pytest.raises(InputError, match="joints"):
+        HandTracker(CALIB, HAND, BOX, HandState(np.zeros(3), np.eye(3), np.zeros(3)))
+    with pytest.raises(InputError, match="palm_rot"):
+        HandState(np.zeros(3), np.ones((3, 3)), np.zeros(20))
