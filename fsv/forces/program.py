@@ -1,0 +1,289 @@
+"""The cone programs in Clarabel's standard form, assembled directly as sparse CSC matrices.
+
+Clarabel solves  min ½ xᵀPx + qᵀx  s.t.  Ax + s = b,  s ∈ 𝒦.  One program's structure (which
+fingers touch, which of them slide, which have a target, which table corners touch, and whether
+the wrench equality has a slack) is a :class:`Layout`; for a fixed layout only the wrench rows of
+A, the right-hand side b and the linear cost q change from frame to frame, so one solver per layout
+is built once and then updated in place (``solver.update``, which requires presolve to be off
+and structural zeros to be kept).
+
+Variables, in order (eq. 5 and 7):
+    nominal part of each contact: (f, g, h) for a static contact, f for a sliding one;
+    internal part of each finger (decomposition and reconstruction only), the same way;
+    slack σ (6) on the nominal wrench equality (least-violation programs only).
+A static contact's force is f n + g t_x + h t_y (eq. 2); a sliding one's is f (n + μ s), with s
+the unit sliding direction: its friction lies on the cone's surface (eq. 3 as an equality).
+
+Rows, in order:
+    zero cone: Σ_c W_c x_c^(n) + σ = w (6 rows, eq. 1 and 8); Σ_k W_k x_k^(i) = 0 (6 rows, eq. 8);
+    second-order cones: (μ f, g, h) of each static contact's nominal part, then of each static
+        finger's total force (nominal + internal);
+    non-negative cone: f of each sliding or frictionless contact, nominal part then total.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import clarabel
+import numpy as np
+import scipy.sparse as sp
+
+#: Slots of a contact's column bank: the directions n, t_x, t_y and the kinetic direction n + μ s.
+STATIC_SLOTS = (0, 1, 2)
+SLIDING_SLOTS = (3,)
+
+_OK = (clarabel.SolverStatus.Solved, clarabel.SolverStatus.AlmostSolved)
+_INFEASIBLE = (clarabel.SolverStatus.PrimalInfeasible, clarabel.SolverStatus.AlmostPrimalInfeasible)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The structure of one frame's program.
+
+    Attributes:
+        kind: "nominal", "decomposition" or "reconstruction".
+        fingers: Active finger indices.
+        sliding: Per active finger, whether it slides.
+        fitted: Per active finger, whether it has a target (measured or predicted normal force).
+        corners: Active table corner indices (0..7).
+        slack: Whether the nominal wrench equality has a (penalised) slack.
+    """
+
+    kind: str
+    fingers: tuple
+    sliding: tuple
+    fitted: tuple
+    corners: tuple
+    slack: bool
+
+
+@dataclass(frozen=True)
+class Weights:
+    """Coefficients of a program that are constant over a sequence.
+
+    Attributes:
+        finger_friction: μ between finger and object.
+        table_friction: μ between object and table.
+        table_weight: Weight of the table forces' squared norms in the cost.
+        slack_weight: Weight ρ of ||σ||² in least-violation programs.
+        regularization: Weight ε of the squared internal components that no target fixes.
+        max_iter: Interior-point iteration limit.
+    """
+
+    finger_friction: float
+    table_friction: float
+    table_weight: float
+    slack_weight: float
+    regularization: float
+    max_iter: int
+
+
+@dataclass
+class FrameResult:
+    """The raw outcome of one solve, per contact slot of the caller."""
+
+    ok: bool
+    infeasible: bool
+    nominal: np.ndarray  # (K, 3) nominal finger forces, zero for inactive fingers
+    internal: np.ndarray  # (K, 3)
+    corner: np.ndarray  # (8, 3) table corner forces
+    slack: np.ndarray  # (6,)
+    objective: float
+    iterations: int
+
+
+class Program:
+    """One layout's cone program and its Clarabel solver, re-used across frames by update."""
+
+    def __init__(self, layout: Layout, weights: Weights, num_fingers: int):
+        self.layout = layout
+        self.num_fingers = K = num_fingers
+        internal = layout.kind != "nominal"
+        # Contacts: fingers first, then table corners. Bank row: finger k -> k, corner j -> K + j.
+        rows = [k for k in layout.fingers] + [K + j for j in layout.corners]
+        slides = list(layout.sliding) + [False] * len(layout.corners)
+        mus = [weights.finger_friction] * len(layout.fingers) + [weights.table_friction] * len(layout.corners)
+        wts = [1.0] * len(layout.fingers) + [weights.table_weight] * len(layout.corners)
+
+        cols_n, cols_i = [], []  # per contact (per finger): its column indices
+        gather, owner = [], []  # per wrench column: flat bank index; contact index (internal: -1 - finger)
+        n = 0
+        for c, (r, sl) in enumerate(zip(rows, slides)):
+            slots = SLIDING_SLOTS if sl else STATIC_SLOTS
+            cols_n.append(list(range(n, n + len(slots))))
+            gather += [4 * r + s for s in slots]
+            owner += [c] * len(slots)
+            n += len(slots)
+        if internal:
+            for c, sl in enumerate(layout.sliding):
+                slots = SLIDING_SLOTS if sl else STATIC_SLOTS
+                cols_i.append(list(range(n, n + len(slots))))
+                gather += [4 * rows[c] + s for s in slots]
+                owner += [-1 - c] * len(slots)
+                n += len(slots)
+        num_w = n
+        slack_cols = list(range(n, n + 6)) if layout.slack else []
+        n += len(slack_cols)
+
+        # Constraint rows.
+        zero_rows = 12 if internal else 6
+        soc, nonneg = [], []  # lists of rows; each row is a list of (col, coef)
+        for c, cols in enumerate(cols_n):
+            if not slides[c]:
+                f, g, h = cols
+                soc.append([[(f, -mus[c])], [(g, -1.0)], [(h, -1.0)]])
+        if internal:
+            for c, cols in enumerate(cols_i):
+                if not slides[c]:
+                    (fn, gn, hn), (fi, gi, hi) = cols_n[c], cols
+                    soc.append([[(fn, -mus[c]), (fi, -mus[c])], [(gn, -1.0), (gi, -1.0)], [(hn, -1.0), (hi, -1.0)]])
+        for c, cols in enumerate(cols_n):
+            if slides[c] or mus[c] == 0:
+                nonneg.append([(cols[0], -1.0)])
+        if internal:
+            for c, cols in enumerate(cols_i):
+                if slides[c] or mus[c] == 0:
+                    nonneg.append([(cols_n[c][0], -1.0), (cols[0], -1.0)])
+        m = zero_rows + 3 * len(soc) + len(nonneg)
+        A = np.zeros((m, n))
+        mask = np.zeros((m, n), bool)
+        for j in range(num_w):
+            r0 = 0 if owner[j] >= 0 else 6
+            mask[r0 : r0 + 6, j] = True
+        for i, j in enumerate(slack_cols):
+            A[i, j] = 1.0
+            mask[i, j] = True
+        row = zero_rows
+        for block in soc:
+            for entries in block:
+                for j, v in entries:
+                    A[row, j] = v
+                    mask[row, j] = True
+                row += 1
+        for entries in nonneg:
+            for j, v in entries:
+                A[row, j] = v
+                mask[row, j] = True
+            row += 1
+        cj, ri = np.nonzero(mask.T)  # column-major order = CSC order
+        self._A_rows, self._A_cols = ri, cj
+        self._A_data0 = A[ri, cj]
+        indptr = np.searchsorted(cj, np.arange(n + 1))
+        self._A_indices, self._A_indptr = ri.astype(np.int64), indptr.astype(np.int64)
+        # The 6 wrench entries of each wrench column come first in that column.
+        self._wpos = (indptr[:num_w, None] + np.arange(6)).ravel()
+        self._gather = np.asarray(gather, dtype=np.int64)
+        self.cones = [clarabel.ZeroConeT(zero_rows)] + [clarabel.SecondOrderConeT(3)] * len(soc)
+        if nonneg:
+            self.cones.append(clarabel.NonnegativeConeT(len(nonneg)))
+        self.m, self.n = m, n
+
+        # Cost: ½ xᵀPx + qᵀx (+ constant). Σ w_c ||F_c^(n)||² for the nominal parts.
+        P = np.zeros((n, n))
+        for c, cols in enumerate(cols_n):
+            scale = 1.0 + mus[c] ** 2 if slides[c] else 1.0
+            for j in cols:
+                P[j, j] += 2.0 * wts[c] * scale
+        self._q_fit = []  # per fitted finger: (finger index, columns that carry -2 * target)
+        if internal:
+            eps = weights.regularization
+            for c, cols in enumerate(cols_i):
+                fn, fi = cols_n[c][0], cols[0]
+                for j in cols[1:]:
+                    P[j, j] += 2.0 * eps
+                if not layout.fitted[c]:
+                    P[fi, fi] += 2.0 * eps
+                elif layout.kind == "decomposition":  # (f_n + f_i - target)^2
+                    P[fn, fn] += 2.0
+                    P[fi, fi] += 2.0
+                    P[fn, fi] += 2.0
+                    P[fi, fn] += 2.0
+                    self._q_fit.append((layout.fingers[c], [fn, fi]))
+                else:  # reconstruction: (f_i - target)^2
+                    P[fi, fi] += 2.0
+                    self._q_fit.append((layout.fingers[c], [fi]))
+        for j in slack_cols:
+            P[j, j] = 2.0 * weights.slack_weight
+        self._P = sp.csc_matrix(np.triu(P))
+
+        # Unpacking: one matrix maps x * direction (per wrench column) to the K nominal finger
+        # forces, the K internal finger forces and the 8 corner forces.
+        S = np.zeros((2 * K + 8, num_w))
+        for j, o in enumerate(owner):
+            if o < 0:
+                S[K + layout.fingers[-1 - o], j] = 1.0
+            elif o < len(layout.fingers):
+                S[layout.fingers[o], j] = 1.0
+            else:
+                S[2 * K + layout.corners[o - len(layout.fingers)], j] = 1.0
+        self._S = S
+        self._num_w = num_w
+        self._slack_cols = np.asarray(slack_cols, dtype=np.int64)
+        self._b = np.zeros(m)
+        self._q = np.zeros(n)
+        self._settings = clarabel.DefaultSettings()
+        self._settings.verbose = False
+        self._settings.presolve_enable = False
+        self._settings.input_sparse_dropzeros = False
+        self._settings.max_iter = int(weights.max_iter)
+        # Iterative refinement costs a fifth of a solve and buys digits the exact programs do not
+        # need (their Newton–Euler residual stays near 1e-9 N); the heavily weighted slack of the
+        # least-violation programs makes their KKT systems worse conditioned, so they keep it.
+        self._settings.iterative_refinement_enable = bool(layout.slack) or internal
+        # Stop on the absolute duality gap only: the cost is strongly convex with modulus >= 1 in
+        # the forces (N^2), so a gap below 1e-8 N^2 puts the forces within 1e-4 N of the optimum;
+        # a relative gap would loosen that bound with the grip's magnitude.
+        self._settings.tol_gap_rel = 1e-12
+        if internal:
+            # The internal components that only the small regularisation fixes have a flat cost:
+            # a duality gap of g moves them by about sqrt(g / regularization), so close the gap further.
+            self._settings.tol_gap_abs = 1e-11
+            self._settings.tol_feas = 1e-10
+        self._solver = None
+
+    def solve(self, bank: np.ndarray, wrench: np.ndarray, target: np.ndarray) -> FrameResult:
+        """Solves the program for one frame.
+
+        Args:
+            bank: Direction columns of the frame, shape (K + 8, 4, 6): per contact and slot the
+                wrench [d, p x d] of a unit force along direction d at the contact point p.
+            wrench: Required wrench, object frame, shape (6,).
+            target: Per finger the target normal force (decomposition: measured total; reconstruction:
+                predicted internal), shape (K,); only the fitted fingers' entries are read.
+
+        Returns:
+            The forces per finger and corner, the slack, the cost and the solver's outcome.
+        """
+        cols = bank.reshape(-1, 6)[self._gather]  # (num_w, 6)
+        data = self._A_data0.copy()
+        data[self._wpos] = cols.ravel()
+        b = self._b
+        b[:6] = wrench
+        q = self._q
+        const = 0.0
+        for k, js in self._q_fit:
+            q[js] = -2.0 * target[k]
+            const += target[k] ** 2
+        if self._solver is None:
+            A = sp.csc_matrix((data, self._A_indices, self._A_indptr), shape=(self.m, self.n))
+            self._solver = clarabel.DefaultSolver(self._P, q, A, b, self.cones, self._settings)
+        elif self._q_fit:
+            self._solver.update(A=data, b=b, q=q)
+        else:
+            self._solver.update(A=data, b=b)
+        sol = self._solver.solve()
+        x = np.asarray(sol.x)
+        forces = self._S @ (x[: self._num_w, None] * cols[:, :3])
+        K = self.num_fingers
+        status = sol.status
+        return FrameResult(
+            ok=status in _OK,
+            infeasible=status in _INFEASIBLE,
+            nominal=forces[:K],
+            internal=forces[K : 2 * K],
+            corner=forces[2 * K :],
+            slack=x[self._slack_cols],
+            objective=float(sol.obj_val) + const,
+            iterations=int(sol.iterations),
+        )

@@ -1,0 +1,312 @@
+"""Contact forces per frame: nominal (eq. 4-6), decomposition (eq. 7-9), reconstruction (eq. 14).
+
+All three programs share the contacts (fingers from :class:`fsv.Contacts`, table corners from
+:mod:`fsv.forces.environment`), the Coulomb cones, and the Newton–Euler equality of eq. 1 on the
+nominal parts. They differ in the cost:
+
+    nominal          Σ_k ||F_k||²                                               (eq. 6)
+    decomposition    Σ_k ||F_k^(n)||² + (f_k^(n) + f_k^(i) - f̃_k)²             (eq. 9)
+    reconstruction   Σ_k ||F_k^(n)||² + (f_k^(i) - f̃_k^(i))²                   (eq. 14)
+
+plus ``table_weight`` Σ_j ||F_j||² over the table corners (their forces are part of the nominal
+wrench; the paper sums over fingers only, and a small weight keeps the problem strictly convex
+while letting the table carry what it can), and ``regularization`` times the squares of the
+internal components that no target fixes (the tangential ones, and the normal one of a finger
+without a target), which makes the decomposition unique without measurably moving it.
+
+In the decomposition and reconstruction, the nominal part of each contact lies in its friction
+cone and so does the total F_k^(n) + F_k^(i) ("the distribution still obeys Coulomb's law"); the
+internal parts alone need not (a finger may press less than its nominal share). The internal
+parts have zero net force and torque (eq. 8). Table corners carry nominal force only.
+
+A frame whose program is infeasible (e.g. a single contact that would have to pull) is solved
+again with a slack σ on the nominal wrench equality and ``slack_weight`` ||σ||² added to the cost:
+the least-violation answer, flagged :attr:`FrameStatus.LEAST_VIOLATION`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fsv._check import as_array, same_length
+from fsv.errors import InputError
+from fsv.forces.environment import TableContacts, table_contacts
+from fsv.forces.program import FrameResult, Layout, Program, Weights
+from fsv.forces.solution import FrameStatus, ForceSolution
+from fsv.forces.wrench import GRAVITY, required_wrench, tangent_basis, to_object_frame
+from fsv.models import ObjectModel
+from fsv.types import Contacts, Kinematics
+
+
+@dataclass(frozen=True)
+class ForceSettings:
+    """Modelling and solver choices of the force programs.
+
+    Attributes:
+        table: Model the table as an environment contact (see :mod:`fsv.forces.environment`).
+        table_height_tol_m: Corner height [m] below which a corner touches the table.
+        table_weight: Weight of the table forces' squared norms in the cost (fingers have 1).
+        slack_weight: Weight of the squared wrench violation in least-violation programs.
+        regularization: Weight of the squared internal components without a target.
+        max_iter: Interior-point iteration limit per solve.
+    """
+
+    table: bool = True
+    table_height_tol_m: float = 0.003
+    table_weight: float = 0.01
+    slack_weight: float = 1e6
+    regularization: float = 1e-3
+    max_iter: int = 100
+
+    def __post_init__(self):
+        for name in ("table_height_tol_m", "regularization"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v >= 0):
+                raise InputError(f"ForceSettings.{name} must be a finite number >= 0, got {v!r}")
+        for name in ("table_weight", "slack_weight"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(f"ForceSettings.{name} must be a finite number > 0, got {v!r}")
+        if isinstance(self.max_iter, bool) or not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 1:
+            raise InputError(f"ForceSettings.max_iter must be a positive integer, got {self.max_iter!r}")
+
+
+def nominal_forces(
+    kinematics: Kinematics,
+    contacts: Contacts,
+    model: ObjectModel,
+    *,
+    gravity=GRAVITY,
+    settings: ForceSettings | None = None,
+) -> ForceSolution:
+    """Minimal sum-of-squares contact forces that explain the motion (eq. 4-6).
+
+    Args:
+        kinematics: Object kinematics (world frame), T frames.
+        contacts: Finger contacts (object frame), the same T frames.
+        model: Known mass, inertia and friction coefficients.
+        gravity: Gravity, world frame, shape (3,), [m/s^2].
+        settings: Modelling and solver choices; defaults to ``ForceSettings()``.
+
+    Returns:
+        The forces per frame; ``internal`` is zero.
+    """
+    return _solve("nominal", kinematics, contacts, model, None, gravity, settings)
+
+
+def decompose_forces(
+    kinematics: Kinematics,
+    contacts: Contacts,
+    model: ObjectModel,
+    measured_normal,
+    *,
+    gravity=GRAVITY,
+    settings: ForceSettings | None = None,
+) -> ForceSolution:
+    """Nominal and internal parts that best match measured normal forces (eq. 7-9).
+
+    Args:
+        kinematics: Object kinematics (world frame), T frames.
+        contacts: Finger contacts (object frame), the same T frames.
+        model: Known mass, inertia and friction coefficients.
+        measured_normal: Tactile measurements f̃_k of the normal force per finger, shape (T, K),
+            [N]; NaN where a finger has no measurement (that finger's term drops from eq. 9).
+        gravity: Gravity, world frame, shape (3,), [m/s^2].
+        settings: Modelling and solver choices.
+
+    Returns:
+        ``nominal`` explains the motion with the table, ``internal`` has zero net wrench, and
+        ``force`` is their sum.
+    """
+    return _solve("decomposition", kinematics, contacts, model, measured_normal, gravity, settings)
+
+
+def reconstruct_forces(
+    kinematics: Kinematics,
+    contacts: Contacts,
+    model: ObjectModel,
+    internal_normal,
+    *,
+    gravity=GRAVITY,
+    settings: ForceSettings | None = None,
+) -> ForceSolution:
+    """Full forces whose internal normal components follow given values (eq. 14).
+
+    Args:
+        kinematics: Object kinematics (world frame), T frames.
+        contacts: Finger contacts (object frame), the same T frames.
+        model: Known mass, inertia and friction coefficients.
+        internal_normal: Predicted internal normal force f̃_k^(i) per finger, shape (T, K), [N]
+            (e.g. from the networks of :mod:`fsv.learn`); NaN where there is no prediction.
+        gravity: Gravity, world frame, shape (3,), [m/s^2].
+        settings: Modelling and solver choices.
+
+    Returns:
+        ``nominal`` explains the motion with the table, ``internal`` has zero net wrench and
+        normal components close to the predictions, and ``force`` is their sum.
+    """
+    return _solve("reconstruction", kinematics, contacts, model, internal_normal, gravity, settings)
+
+
+def _unit_rows(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    norm = np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / np.where(norm > 0, norm, 1.0), norm[..., 0]
+
+
+def _column_bank(contacts: Contacts, table: TableContacts, mu: float, use: np.ndarray) -> tuple:
+    """Unit-force wrenches per frame, contact and slot: (T, K + 8, 4, 6), plus the used normals."""
+    T, K = contacts.active.shape
+    n, norm = _unit_rows(np.where(use[..., None], contacts.normal, 0.0))
+    bad = use & ~(norm > 1e-9)
+    if bad.any():
+        t, k = np.argwhere(bad)[0]
+        raise InputError(f"Contacts.normal of active finger {k} at frame {t} is zero; a unit normal is required")
+    s = contacts.slide_dir - np.einsum("tki,tki->tk", contacts.slide_dir, n)[..., None] * n
+    s, snorm = _unit_rows(np.where((use & contacts.sliding)[..., None], s, 0.0))
+    bad = use & contacts.sliding & ~(snorm > 1e-9)
+    if bad.any():
+        t, k = np.argwhere(bad)[0]
+        raise InputError(
+            f"Contacts.slide_dir of sliding finger {k} at frame {t} has no component in the contact's "
+            "tangent plane; a sliding contact needs a tangential direction"
+        )
+    tx, ty = tangent_basis(np.where(use[..., None], n, (0.0, 0.0, 1.0)))
+    fdirs = np.stack([n, tx, ty, n + mu * s], axis=2)  # (T, K, 4, 3)
+    p = np.where(use[..., None], contacts.point, 0.0)
+    ctx, cty = tangent_basis(table.normal)
+    cdirs = np.stack([table.normal, ctx, cty, np.zeros_like(ctx)], axis=1)  # (T, 4, 3)
+    cdirs = np.broadcast_to(cdirs[:, None], (T, 8, 4, 3))
+    cp = np.broadcast_to(table.point[None, :, None, :], (T, 8, 4, 3))
+    dirs = np.concatenate([fdirs, cdirs], axis=1)
+    pts = np.concatenate([np.broadcast_to(p[:, :, None, :], fdirs.shape), cp], axis=1)
+    return np.concatenate([dirs, np.cross(pts, dirs)], axis=-1), n
+
+
+def _check_inputs(kind, kinematics, contacts, model, target, gravity, settings):
+    if not isinstance(kinematics, Kinematics):
+        raise InputError(f"kinematics must be fsv.Kinematics, got {type(kinematics).__name__}")
+    if not isinstance(contacts, Contacts):
+        raise InputError(f"contacts must be fsv.Contacts, got {type(contacts).__name__}")
+    if not isinstance(model, ObjectModel):
+        raise InputError(f"model must be fsv.ObjectModel, got {type(model).__name__}")
+    settings = ForceSettings() if settings is None else settings
+    if not isinstance(settings, ForceSettings):
+        raise InputError(f"settings must be fsv.forces.ForceSettings, got {type(settings).__name__}")
+    T = same_length("forces", kinematics=kinematics.t, contacts=contacts.active)
+    K = len(contacts.finger_names)
+    if target is None:
+        target = np.full((T, K), np.nan)
+    else:
+        name = "measured_normal" if kind == "decomposition" else "internal_normal"
+        target = as_array(name, target, (T, K))
+        if np.isinf(target).any():
+            raise InputError(f"{name} must be finite or NaN (no value), it holds inf")
+    valid = kinematics.valid.copy()
+    fields = (kinematics.pos, kinematics.acc, kinematics.omega, kinematics.alpha)
+    finite_kin = np.all([np.isfinite(a).reshape(T, -1).all(axis=1) for a in fields], axis=0)
+    finite_kin &= np.isfinite(kinematics.rot).reshape(T, -1).all(axis=1)
+    if np.any(valid & ~finite_kin):
+        t = int(np.argmax(valid & ~finite_kin))
+        raise InputError(f"Kinematics frame {t} is marked valid but holds NaN/inf; mark it invalid instead")
+    use = contacts.active & valid[:, None]
+    if not np.isfinite(np.where(use[..., None], contacts.point, 0.0)).all():
+        raise InputError("Contacts.point must be finite for active fingers")
+    return settings, target, valid, use
+
+
+def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> ForceSolution:
+    settings, target, valid, use = _check_inputs(kind, kinematics, contacts, model, target, gravity, settings)
+    T, K = contacts.active.shape
+    with np.errstate(invalid="ignore"):
+        required = to_object_frame(kinematics.rot, required_wrench(kinematics, model, gravity))
+    if settings.table:
+        table = table_contacts(kinematics, model, height_tol_m=settings.table_height_tol_m)
+    else:
+        table = TableContacts.none(T, model)
+    corners_on = table.active & valid[:, None]
+    bank, normals = _column_bank(contacts, table, model.friction, use)
+    weights = Weights(
+        finger_friction=model.friction,
+        table_friction=model.table_friction,
+        table_weight=settings.table_weight,
+        slack_weight=settings.slack_weight,
+        regularization=settings.regularization,
+        max_iter=settings.max_iter,
+    )
+    sliding = contacts.sliding & use
+    fitted = use & np.isfinite(target) & (kind != "nominal")
+    target = np.where(fitted, target, 0.0)
+
+    nominal = np.zeros((T, K, 3))
+    internal = np.zeros((T, K, 3))
+    corner = np.zeros((T, 8, 3))
+    status = np.full(T, int(FrameStatus.OPTIMAL), np.int8)
+    objective = np.zeros(T)
+    iterations = np.zeros(T, np.int64)
+    programs: dict = {}
+    keys = np.concatenate([use, sliding, fitted, corners_on], axis=1)
+    for t in range(T):
+        if not valid[t]:
+            status[t] = FrameStatus.NO_KINEMATICS
+            nominal[t] = internal[t] = corner[t] = objective[t] = np.nan
+            continue
+        if not (use[t].any() or corners_on[t].any()):
+            status[t] = FrameStatus.NO_CONTACTS
+            continue
+        key = keys[t].tobytes()
+        res = _program(programs, key, False, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K).solve(
+            bank[t], required[t], target[t]
+        )
+        if not res.ok:
+            retry = _program(programs, key, True, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K)
+            res2 = retry.solve(bank[t], required[t], target[t])
+            status[t] = FrameStatus.LEAST_VIOLATION if res2.ok else FrameStatus.FAILED
+            res = res2 if res2.ok else _failed(res2, K)
+        nominal[t], internal[t], corner[t] = res.nominal, res.internal, res.corner
+        objective[t], iterations[t] = res.objective, res.iterations
+    env = np.concatenate([corner.sum(axis=1), np.cross(table.point, corner).sum(axis=1)], axis=1)
+    point = np.where(use[..., None], contacts.point, 0.0)
+    achieved = np.concatenate([nominal.sum(axis=1), np.cross(point, nominal).sum(axis=1)], axis=1) + env
+    residual = np.where(status[:, None] == FrameStatus.NO_CONTACTS, required, required - achieved)
+    total = nominal + internal
+    return ForceSolution(
+        kind=kind,
+        finger_names=contacts.finger_names,
+        active=use,
+        sliding=sliding,
+        point=point,
+        normal=normals,
+        force=total,
+        nominal=nominal,
+        internal=internal,
+        env_active=corners_on.sum(axis=1),
+        env_wrench=env,
+        required=required,
+        residual=residual,
+        status=status,
+        objective=objective,
+        iterations=iterations,
+    )
+
+
+def _program(cache, key, slack, kind, use, sliding, fitted, corners, weights, K) -> Program:
+    prog = cache.get((key, slack))
+    if prog is None:
+        fingers = tuple(int(k) for k in np.flatnonzero(use))
+        layout = Layout(
+            kind=kind,
+            fingers=fingers,
+            sliding=tuple(bool(sliding[k]) for k in fingers),
+            fitted=tuple(bool(fitted[k]) for k in fingers),
+            corners=tuple(int(j) for j in np.flatnonzero(corners)),
+            slack=slack,
+        )
+        prog = cache[(key, slack)] = Program(layout, weights, K)
+    return prog
+
+
+def _failed(res: FrameResult, K: int) -> FrameResult:
+    nan3 = np.full((K, 3), np.nan)
+    return FrameResult(False, res.infeasible, nan3, nan3.copy(), np.full((8, 3), np.nan), np.full(6, np.nan), np.nan, res.iterations)
