@@ -1,0 +1,346 @@
+"""Depth rendering: what a DS325-like depth camera sees of the simulated scene.
+
+A pyrender scene mirrors the MuJoCo geoms one to one (the table, the box, every capsule and
+sphere of the hand): each geom's mesh is built once from the MjModel, and per frame only the
+nodes' poses are set from ``data.geom_xpos`` / ``data.geom_xmat``. One off-screen pass per frame
+gives the exact depth along the optical axis and a label image (which geom is seen where).
+The sensor model (:mod:`benchmark.sensor`) then turns the exact depth into a measurement.
+
+Camera conventions: `fsv` and :class:`fsv.Calibration` use OpenCV's pinhole camera (x right,
+y down, z forward; pixel centres at integer coordinates). pyrender uses OpenGL's (x right, y up,
+z backward; pixel centres at half-integers). The conversion happens once, here:
+``T_world_glcam = T_world_cam @ GL_FROM_CV`` and ``(cx, cy)_gl = (cx, cy)_cv + 0.5``.
+
+Rendering is headless through EGL (Mesa's llvmpipe on a CPU-only machine):
+``PYOPENGL_PLATFORM=egl`` is set here before pyrender is imported, unless the caller chose
+another platform.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.resources
+import os
+from dataclasses import dataclass
+
+import numpy as np
+import yaml
+
+from benchmark.errors import BenchmarkError, RenderError
+from fsv import Calibration
+
+os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+
+LABEL_NONE = 0
+LABEL_TABLE = 1
+LABEL_BOX = 2
+LABEL_PALM = 9
+LABEL_FINGER0 = 10
+"""Label image values: 0 nothing, 1 table, 2 box, 9 palm, 10 + k finger k (thumb first)."""
+
+GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
+"""Maps OpenCV camera coordinates to OpenGL camera coordinates (and back: it is its own inverse)."""
+
+PLANE_HALF_EXTENT_M = 5.0
+"""Half size of the rendered table when its MuJoCo plane is infinite (size 0)."""
+
+_DEBIAN_PACKAGES = "libegl1 libgl1-mesa-dri"
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A pinhole depth camera in the world.
+
+    Attributes:
+        width: Image width in pixels.
+        height: Image height in pixels.
+        K: OpenCV intrinsics, shape (3, 3), pixels.
+        T_world_cam: Camera pose in the world (OpenCV camera frame), shape (4, 4).
+        fps: Nominal frame rate in [Hz] (the scenario's fps is the one used).
+        znear: Near clipping plane of the renderer in [m].
+        zfar: Far clipping plane of the renderer in [m].
+    """
+
+    width: int
+    height: int
+    K: np.ndarray
+    T_world_cam: np.ndarray
+    fps: float
+    znear: float
+    zfar: float
+
+    def __post_init__(self):
+        calib = self.calibration()
+        if not 0 < self.znear < self.zfar:
+            raise BenchmarkError(f"camera clipping planes need 0 < znear < zfar, got {self.znear}, {self.zfar}")
+        object.__setattr__(self, "K", calib.K)
+        object.__setattr__(self, "T_world_cam", calib.T_world_cam)
+
+    def calibration(self) -> Calibration:
+        """The calibration handed to `fsv` (intrinsics, camera-to-world pose, image size)."""
+        return Calibration(K=self.K, T_world_cam=self.T_world_cam, width=self.width, height=self.height)
+
+
+def look_at(position, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    """Camera pose (OpenCV frame) at `position` whose optical axis points at `target`.
+
+    Args:
+        position: Camera centre in the world, shape (3,), [m].
+        target: A world point on the optical axis, shape (3,), [m].
+        up: World direction that appears "up" in the image, shape (3,).
+
+    Returns:
+        T_world_cam, shape (4, 4): x right, y down (towards -up), z forward.
+    """
+    p, t, u = (np.asarray(v, dtype=float).reshape(3) for v in (position, target, up))
+    z = t - p
+    if np.linalg.norm(z) < 1e-9:
+        raise BenchmarkError(f"camera position and look_at coincide: {p}")
+    z /= np.linalg.norm(z)
+    x = np.cross(z, u)
+    if np.linalg.norm(x) < 1e-9:
+        raise BenchmarkError(f"camera up {u} is parallel to the optical axis {z}")
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    T = np.eye(4)
+    T[:3, :3] = np.stack([x, y, z], axis=1)
+    T[:3, 3] = p
+    return T
+
+
+def load_camera(path=None) -> Camera:
+    """Reads the camera (intrinsics from the field of view, pose from position and look-at).
+
+    Args:
+        path: A YAML file like ``sim_assets/camera.yaml`` (the default).
+    """
+    if path is None:
+        text = importlib.resources.files("sim_assets").joinpath("camera.yaml").read_text()
+    else:
+        with open(path) as f:
+            text = f.read()
+    c = yaml.safe_load(text)
+    W, H = int(c["width"]), int(c["height"])
+    hfov, vfov = np.deg2rad(float(c["hfov_deg"])), np.deg2rad(float(c["vfov_deg"]))
+    if not (0 < hfov < np.pi and 0 < vfov < np.pi):
+        raise BenchmarkError(f"camera field of view must be in (0, 180) degrees, got {c['hfov_deg']} x {c['vfov_deg']}")
+    K = np.array(
+        [[(W / 2) / np.tan(hfov / 2), 0.0, (W - 1) / 2], [0.0, (H / 2) / np.tan(vfov / 2), (H - 1) / 2], [0, 0, 1]]
+    )
+    return Camera(
+        width=W,
+        height=H,
+        K=K,
+        T_world_cam=look_at(c["position"], c["look_at"], c.get("up", (0, 0, 1))),
+        fps=float(c["fps"]),
+        znear=float(c["znear"]),
+        zfar=float(c["zfar"]),
+    )
+
+
+def camera_calibration(path=None) -> Calibration:
+    """The :class:`fsv.Calibration` of the camera in ``sim_assets/camera.yaml`` (or `path`)."""
+    return load_camera(path).calibration()
+
+
+def geom_labels(model, finger_names) -> np.ndarray:
+    """Which label each MuJoCo geom gets in the label image (0: not rendered).
+
+    Geoms that cannot collide (``contype == conaffinity == 0``, e.g. markers and mocap targets)
+    are not matter a camera would see and are not rendered. Of the others: geoms of the world body
+    are the table (1); geoms of the body named "box" and its subtree are the box (2); geoms of a
+    body whose name starts with finger k's name are finger k (10 + k); any other geom is the palm
+    or the hand's base (9).
+
+    Args:
+        model: A compiled ``mujoco.MjModel``.
+        finger_names: Finger names, thumb first, shape (K,).
+
+    Returns:
+        Labels, shape (ngeom,), uint8.
+    """
+    import mujoco
+
+    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(model.nbody)]
+    box_ids = [b for b, n in enumerate(names) if n == "box"]
+    labels = np.zeros(model.ngeom, dtype=np.uint8)
+    for g in range(model.ngeom):
+        if model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0:
+            continue
+        body = int(model.geom_bodyid[g])
+        chain = [body]
+        while chain[-1] != 0:
+            chain.append(int(model.body_parentid[chain[-1]]))
+        if body == 0:
+            labels[g] = LABEL_TABLE
+        elif any(b in box_ids for b in chain):
+            labels[g] = LABEL_BOX
+        else:
+            labels[g] = LABEL_PALM
+            for k, finger in enumerate(finger_names):
+                if any(names[b].startswith(str(finger)) for b in chain):
+                    labels[g] = LABEL_FINGER0 + k
+                    break
+    return labels
+
+
+def geom_trimesh(model, geom: int):
+    """A triangle mesh of one MuJoCo geom in the geom's own frame.
+
+    Spheres and ellipsoids are icospheres (320 triangles), capsules 24-sided with 12 rings per
+    cap, cylinders 32-sided: the facets lie within 1.2 % of the radius of the true surface (0.1 mm
+    for a finger). Planes become a 2 cm thick slab whose top face is the plane (z = 0).
+
+    Args:
+        model: A compiled ``mujoco.MjModel``.
+        geom: Geom index.
+
+    Returns:
+        A ``trimesh.Trimesh``.
+    """
+    import mujoco
+    import trimesh
+
+    kind = int(model.geom_type[geom])
+    size = np.asarray(model.geom_size[geom], dtype=float)
+    G = mujoco.mjtGeom
+    if kind == G.mjGEOM_PLANE:
+        hx = size[0] if size[0] > 0 else PLANE_HALF_EXTENT_M
+        hy = size[1] if size[1] > 0 else PLANE_HALF_EXTENT_M
+        return trimesh.creation.box(
+            extents=(2 * hx, 2 * hy, 0.02), transform=trimesh.transformations.translation_matrix((0, 0, -0.01))
+        )
+    if kind == G.mjGEOM_BOX:
+        return trimesh.creation.box(extents=2 * size)
+    if kind == G.mjGEOM_SPHERE:
+        return trimesh.creation.icosphere(subdivisions=2, radius=size[0])
+    if kind == G.mjGEOM_ELLIPSOID:
+        mesh = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
+        mesh.apply_scale(size)
+        return mesh
+    if kind == G.mjGEOM_CAPSULE:
+        return trimesh.creation.capsule(height=2 * size[1], radius=size[0], count=(24, 12))
+    if kind == G.mjGEOM_CYLINDER:
+        return trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=32)
+    if kind == G.mjGEOM_MESH:
+        mid = int(model.geom_dataid[geom])
+        v0, nv = model.mesh_vertadr[mid], model.mesh_vertnum[mid]
+        f0, nf = model.mesh_faceadr[mid], model.mesh_facenum[mid]
+        return trimesh.Trimesh(vertices=model.mesh_vert[v0 : v0 + nv].copy(), faces=model.mesh_face[f0 : f0 + nf].copy())
+    raise BenchmarkError(
+        f"geom {geom} has MuJoCo type {kind}, which the depth renderer does not draw; "
+        "accepted: plane, sphere, capsule, ellipsoid, cylinder, box, mesh"
+    )
+
+
+def _missing_libraries() -> list[str]:
+    missing = []
+    for lib in ("libEGL.so.1", "libGL.so.1"):
+        try:
+            ctypes.CDLL(lib)
+        except OSError:
+            missing.append(lib)
+    return missing
+
+
+def render_error(cause: BaseException) -> RenderError:
+    """The error raised when no OpenGL context can be made, saying what to install."""
+    missing = _missing_libraries()
+    what = (
+        f"the system library {' and '.join(missing)} cannot be loaded"
+        if missing
+        else "EGL loaded but found no usable driver (Mesa's DRI drivers, e.g. swrast/llvmpipe, may be missing)"
+    )
+    return RenderError(
+        f"cannot create a headless OpenGL context through EGL (PYOPENGL_PLATFORM="
+        f"{os.environ.get('PYOPENGL_PLATFORM')}): {what}. On Debian/Ubuntu install them with "
+        f"`apt-get install {_DEBIAN_PACKAGES}`. ({type(cause).__name__}: {cause})"
+    )
+
+
+class DepthRenderer:
+    """Exact depth and label images of a MuJoCo model's geoms from one camera.
+
+    Build once per model, then call :meth:`render` per frame with the bodies' world poses. The
+    geoms of one body that share a label are merged into one mesh in the body's frame (uploaded
+    once; one draw call per body and label), so a frame costs one pose update per body. Use as a
+    context manager, or call :meth:`close`, to free the GL context.
+
+    Args:
+        model: A compiled ``mujoco.MjModel``.
+        camera: The camera.
+        labels: Label per geom, shape (ngeom,), uint8; geoms with label 0 are not drawn
+            (see :func:`geom_labels`).
+    """
+
+    def __init__(self, model, camera: Camera, labels: np.ndarray):
+        import mujoco
+        import trimesh
+
+        labels = np.asarray(labels)
+        if labels.shape != (model.ngeom,):
+            raise BenchmarkError(f"labels must have shape ({model.ngeom},), one per geom, got {labels.shape}")
+        try:
+            import pyrender
+
+            self._gl = pyrender.OffscreenRenderer(camera.width, camera.height)
+        except Exception as err:  # PyOpenGL raises ImportError, OSError, RuntimeError or EGL errors
+            raise render_error(err) from err
+        self.camera = camera
+        self.scene = pyrender.Scene(bg_color=(0, 0, 0, 0), ambient_light=(0, 0, 0))
+        K = camera.K
+        cam = pyrender.IntrinsicsCamera(
+            fx=K[0, 0], fy=K[1, 1], cx=K[0, 2] + 0.5, cy=K[1, 2] + 0.5, znear=camera.znear, zfar=camera.zfar
+        )
+        self.scene.add(cam, pose=camera.T_world_cam @ GL_FROM_CV)
+        parts: dict[tuple[int, int], list] = {}
+        for g in np.flatnonzero(labels):
+            T_body_geom = np.eye(4)
+            mat = np.zeros(9)
+            mujoco.mju_quat2Mat(mat, model.geom_quat[g])
+            T_body_geom[:3, :3] = mat.reshape(3, 3)
+            T_body_geom[:3, 3] = model.geom_pos[g]
+            mesh = geom_trimesh(model, int(g))
+            mesh.apply_transform(T_body_geom)
+            parts.setdefault((int(model.geom_bodyid[g]), int(labels[g])), []).append(mesh)
+        self.bodies = np.array([body for body, _ in parts], dtype=int)
+        self.nodes = []
+        self._seg = {}
+        for (_, label), meshes in parts.items():
+            node = self.scene.add(pyrender.Mesh.from_trimesh(trimesh.util.concatenate(meshes), smooth=False))
+            self.nodes.append(node)
+            self._seg[node] = (label,) * 3
+        self._flags = pyrender.RenderFlags.SEG
+
+    def render(self, xpos: np.ndarray, xmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Renders one frame.
+
+        Args:
+            xpos: World positions of all bodies, shape (nbody, 3), [m] (``data.xpos``).
+            xmat: World orientations of all bodies, shape (nbody, 9) or (nbody, 3, 3) (``data.xmat``).
+
+        Returns:
+            ``(depth, labels)``: exact depth along the optical axis, shape (H, W), float32 metres
+            (0 where nothing is seen), and the label of the geom seen at each pixel, (H, W) uint8
+            (sampled at pixel centres, no anti-aliasing).
+        """
+        xmat = np.asarray(xmat).reshape(-1, 3, 3)
+        for body, node in zip(self.bodies, self.nodes):
+            pose = np.eye(4)
+            pose[:3, :3] = xmat[body]
+            pose[:3, 3] = xpos[body]
+            self.scene.set_pose(node, pose)
+        color, depth = self._gl.render(self.scene, flags=self._flags, seg_node_map=self._seg)
+        return np.ascontiguousarray(depth, dtype=np.float32), np.ascontiguousarray(color[..., 0])
+
+    def close(self) -> None:
+        """Frees the GL context (idempotent)."""
+        if self._gl is not None:
+            self._gl.delete()
+            self._gl = None
+
+    def __enter__(self) -> "DepthRenderer":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,202 @@
+"""Depth rendering: camera conventions, exact depth of the box, labels, errors."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from benchmark import render as R
+from benchmark.errors import RenderError
+
+FINGERS = ("thumb", "index")
+BOX_HALF = np.array([0.0855, 0.0555, 0.03])
+
+
+def scene_xml():
+    fingers = ""
+    for k, name in enumerate(FINGERS):
+        fingers += f"""
+        <body name="{name}_1" pos="{-0.03 + 0.06 * k} 0.06 0"><joint type="hinge" axis="1 0 0"/>
+          <geom type="capsule" fromto="0 0 0 0 0 -0.04" size="0.009"/>
+          <body name="{name}_2" pos="0 0 -0.04"><joint type="hinge" axis="1 0 0"/>
+            <geom type="capsule" fromto="0 0 0 0 0 -0.03" size="0.008"/>
+            <geom type="sphere" pos="0 0 -0.03" size="0.0085"/>
+          </body>
+        </body>"""
+    return f"""<mujoco><worldbody>
+      <geom name="table" type="plane" size="0 0 1"/>
+      <body name="box" pos="0 0 0.03"><freejoint/><geom type="box" size="{BOX_HALF[0]} {BOX_HALF[1]} {BOX_HALF[2]}"/></body>
+      <body name="palm" pos="0 0.1 0.25"><freejoint/>
+        <geom type="box" size="0.045 0.03 0.01" pos="0 0.04 0"/>
+        {fingers}
+      </body>
+      <body name="marker" mocap="true" pos="0 0 0.2"><geom type="sphere" size="0.03" contype="0" conaffinity="0"/></body>
+      <body name="probe" mocap="true" pos="0 0 -1"><geom type="sphere" size="0.005"/></body>
+    </worldbody></mujoco>"""
+
+
+@pytest.fixture(scope="module")
+def world():
+    model = mujoco.MjModel.from_xml_string(scene_xml())
+    data = mujoco.MjData(model)
+    camera = R.load_camera()
+    with R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS)) as renderer:
+        yield model, data, camera, renderer
+
+
+def set_box(model, data, pos, quat):
+    data.qpos[0:3] = pos
+    data.qpos[3:7] = np.asarray(quat) / np.linalg.norm(quat)
+    mujoco.mj_kinematics(model, data)
+
+
+def rays_world(camera):
+    """Unit-depth rays (z_cam = 1) through every pixel centre, in the world frame, (H, W, 3)."""
+    v, u = np.mgrid[0 : camera.height, 0 : camera.width]
+    K = camera.K
+    d_cam = np.stack([(u - K[0, 2]) / K[0, 0], (v - K[1, 2]) / K[1, 1], np.ones(u.shape)], axis=-1)
+    return d_cam @ camera.T_world_cam[:3, :3].T
+
+
+def test_camera_from_yaml_has_the_ds325_field_of_view_and_looks_at_the_target():
+    cam = R.load_camera()
+    assert (cam.width, cam.height) == (320, 240)
+    assert np.rad2deg(2 * np.arctan(cam.width / 2 / cam.K[0, 0])) == pytest.approx(74.0)
+    assert np.rad2deg(2 * np.arctan(cam.height / 2 / cam.K[1, 1])) == pytest.approx(58.0)
+    # the look-at point projects to the principal point, in front of the camera
+    target = np.array([0.0, 0.0, 0.08])
+    p = np.linalg.inv(cam.T_world_cam) @ np.append(target, 1.0)
+    assert p[2] > 0.4
+    np.testing.assert_allclose(cam.K @ p[:3] / p[2], [cam.K[0, 2], cam.K[1, 2], 1.0], atol=1e-9)
+    # image "up" is world up: the camera's y axis (down in the image) points down in the world
+    assert cam.T_world_cam[2, 1] < 0
+    calib = R.camera_calibration()
+    np.testing.assert_array_equal(calib.K, cam.K)
+    np.testing.assert_array_equal(calib.T_world_cam, cam.T_world_cam)
+
+
+def test_gl_from_cv_flips_y_and_z():
+    np.testing.assert_array_equal(R.GL_FROM_CV @ [0.1, 0.2, 0.5, 1.0], [0.1, -0.2, -0.5, 1.0])
+    np.testing.assert_array_equal(R.GL_FROM_CV @ R.GL_FROM_CV, np.eye(4))
+
+
+@pytest.mark.parametrize("u, v", [(40, 200), (250, 30), (159, 119)])
+def test_a_point_appears_where_the_opencv_calibration_projects_it(world, u, v):
+    """A small sphere centred on the ray of pixel (u, v) is seen centred on that pixel."""
+    model, data, camera, renderer = world
+    set_box(model, data, [0, 0, -1], [1, 0, 0, 0])  # out of the way, under the table
+    probe = model.body("probe").mocapid[0]
+    z = 0.4
+    data.mocap_pos[probe] = camera.T_world_cam[:3, 3] + z * rays_world(camera)[v, u]
+    mujoco.mj_kinematics(model, data)
+    depth, labels = renderer.render(data.xpos, data.xmat)
+    data.mocap_pos[probe] = [0, 0, -1]
+    seen = labels == R.LABEL_PALM  # the probe is a collidable geom of a non-box body
+    seen &= depth < 0.45
+    vv, uu = np.nonzero(seen)
+    assert 20 < seen.sum() < 200
+    assert np.mean(uu) == pytest.approx(u, abs=0.05)
+    assert np.mean(vv) == pytest.approx(v, abs=0.05)
+    ray_len = np.linalg.norm(np.linalg.inv(camera.K) @ [u, v, 1.0])  # per unit of depth
+    assert depth[v, u] == pytest.approx(z - 0.005 / ray_len, abs=1e-4)  # front of the 5 mm sphere
+
+
+BOX_POSES = [
+    ([0.0, 0.0, 0.03], [1.0, 0.0, 0.0, 0.0]),
+    ([0.03, -0.02, 0.12], [np.cos(0.3), 0.1, -0.15, np.sin(0.3)]),  # lifted, tilted and turned
+]
+
+
+@pytest.mark.parametrize("pos, quat", BOX_POSES)
+def test_top_face_depth_equals_ray_plane_distance(world, pos, quat):
+    model, data, camera, renderer = world
+    set_box(model, data, pos, quat)
+    depth, labels = renderer.render(data.xpos, data.xmat)
+    c, Rb = data.xpos[model.body("box").id], data.xmat[model.body("box").id].reshape(3, 3)
+    n = Rb[:, 2]
+    o = camera.T_world_cam[:3, 3]
+    d = rays_world(camera)
+    t = ((c + BOX_HALF[2] * n - o) @ n) / (d @ n)  # depth along the optical axis: d has z_cam = 1
+    local = (o + t[..., None] * d - c) @ Rb
+    margin = 0.002  # keep away from the face's edges, where a pixel may see a side face
+    on_top = (np.abs(local[..., 0]) < BOX_HALF[0] - margin) & (np.abs(local[..., 1]) < BOX_HALF[1] - margin)
+    on_top &= (t > 0) & ((o - c) @ n > BOX_HALF[2])  # the top face faces the camera
+    assert on_top.sum() > 800
+    assert np.all(labels[on_top] == R.LABEL_BOX)
+    err = np.abs(depth[on_top] - t[on_top])
+    assert err.max() < 1e-3, err.max()
+    assert np.median(err) < 1e-4
+
+
+@pytest.mark.parametrize("pos, quat", BOX_POSES)
+def test_backprojected_box_pixels_lie_on_the_box_surface(world, pos, quat):
+    model, data, camera, renderer = world
+    set_box(model, data, pos, quat)
+    depth, labels = renderer.render(data.xpos, data.xmat)
+    calib = camera.calibration()
+    pts_cam = calib.backproject(depth)[labels == R.LABEL_BOX]
+    pts = pts_cam @ calib.T_world_cam[:3, :3].T + calib.T_world_cam[:3, 3]
+    c, Rb = data.xpos[model.body("box").id], data.xmat[model.body("box").id].reshape(3, 3)
+    local = np.abs((pts - c) @ Rb)
+    outside = np.linalg.norm(np.maximum(local - BOX_HALF, 0), axis=1)
+    inside = np.min(BOX_HALF - local, axis=1).clip(min=0)
+    dist = outside + inside  # distance to the box's surface
+    assert len(dist) > 1000
+    assert dist.mean() < 1e-3, dist.mean()
+    assert np.percentile(dist, 99) < 3e-3
+
+
+def test_labels_mark_table_box_palm_and_each_finger_and_skip_markers(world):
+    model, data, camera, renderer = world
+    labels = R.geom_labels(model, FINGERS)
+    marker = model.body("marker").id
+    assert labels[model.geom("table").id] == R.LABEL_TABLE
+    assert np.all(labels[model.body_geomadr[marker] : model.body_geomadr[marker] + 1] == R.LABEL_NONE)
+    finger_geoms = {int(labels[g]) for g in range(model.ngeom) if model.geom_bodyid[g] == model.body("index_2").id}
+    assert finger_geoms == {R.LABEL_FINGER0 + 1}
+    set_box(model, data, [0, 0, 0.03], [1, 0, 0, 0])
+    depth, image = renderer.render(data.xpos, data.xmat)
+    assert set(np.unique(image)) == {0, 1, 2, 9, 10, 11}
+    assert np.all((depth > 0) == (image > 0))
+    # the marker sphere (not collidable) hangs over the box in view but is not drawn
+    u, v, w = camera.K @ (np.linalg.inv(camera.T_world_cam) @ [0, 0, 0.2, 1])[:3]
+    assert 0 <= u / w < camera.width and 0 <= v / w < camera.height
+    data.mocap_pos[model.body("marker").mocapid[0]] = [5, 5, 5]
+    mujoco.mj_kinematics(model, data)
+    np.testing.assert_array_equal(renderer.render(data.xpos, data.xmat)[0], depth)
+    data.mocap_pos[model.body("marker").mocapid[0]] = [0, 0, 0.2]
+
+
+def test_rendering_is_deterministic(world):
+    model, data, camera, renderer = world
+    set_box(model, data, *BOX_POSES[1])
+    a = renderer.render(data.xpos, data.xmat)
+    b = renderer.render(data.xpos, data.xmat)
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+
+
+def test_labels_must_match_the_model(world):
+    model, _, camera, _ = world
+    with pytest.raises(Exception, match=f"shape \\({model.ngeom},\\)"):
+        R.DepthRenderer(model, camera, np.ones(3, dtype=np.uint8))
+
+
+def test_missing_gl_gives_a_render_error_naming_the_library_and_packages(monkeypatch):
+    import pyrender
+
+    def no_egl(*args, **kwargs):
+        raise OSError("libEGL.so.1: cannot open shared object file")
+
+    monkeypatch.setattr(pyrender, "OffscreenRenderer", no_egl)
+    monkeypatch.setattr(R, "_missing_libraries", lambda: ["libEGL.so.1"])
+    model = mujoco.MjModel.from_xml_string(scene_xml())
+    with pytest.raises(RenderError) as info:
+        R.DepthRenderer(model, R.load_camera(), R.geom_labels(model, FINGERS))
+    msg = str(info.value)
+    assert "libEGL.so.1 cannot be loaded" in msg
+    assert "apt-get install libegl1 libgl1-mesa-dri" in msg
+    assert "PYOPENGL_PLATFORM=egl" in msg
+
+
+def test_missing_libraries_is_empty_on_this_machine():
+    assert R._missing_libraries() == []
