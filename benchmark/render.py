@@ -258,13 +258,34 @@ def render_error(cause: BaseException) -> RenderError:
     )
 
 
+_OFFSCREEN: dict[tuple[int, int], object] = {}
+
+
+def _offscreen(width: int, height: int):
+    """The process's pyrender OffscreenRenderer for one image size, made on first use.
+
+    It is shared and never deleted: pyrender's ``delete()`` terminates the EGL display, which
+    would invalidate every other GL context of the process (other renderers', MuJoCo's).
+    Meshes of a scene that is no longer rendered are freed when the next scene is rendered.
+    """
+    key = (int(width), int(height))
+    if key not in _OFFSCREEN:
+        try:
+            import pyrender
+
+            _OFFSCREEN[key] = pyrender.OffscreenRenderer(*key)
+        except Exception as err:  # PyOpenGL raises ImportError, OSError, RuntimeError or EGL errors
+            raise render_error(err) from err
+    return _OFFSCREEN[key]
+
+
 class DepthRenderer:
     """Exact depth and label images of a MuJoCo model's geoms from one camera.
 
     Build once per model, then call :meth:`render` per frame with the bodies' world poses. The
     geoms of one body that share a label are merged into one mesh in the body's frame (uploaded
-    once; one draw call per body and label), so a frame costs one pose update per body. Use as a
-    context manager, or call :meth:`close`, to free the GL context.
+    once; one draw call per body and label), so a frame costs one pose update per body. The GL
+    context is the process's shared one (see :func:`_offscreen`).
 
     Args:
         model: A compiled ``mujoco.MjModel``.
@@ -280,12 +301,9 @@ class DepthRenderer:
         labels = np.asarray(labels)
         if labels.shape != (model.ngeom,):
             raise BenchmarkError(f"labels must have shape ({model.ngeom},), one per geom, got {labels.shape}")
-        try:
-            import pyrender
+        self._gl = _offscreen(camera.width, camera.height)
+        import pyrender
 
-            self._gl = pyrender.OffscreenRenderer(camera.width, camera.height)
-        except Exception as err:  # PyOpenGL raises ImportError, OSError, RuntimeError or EGL errors
-            raise render_error(err) from err
         self.camera = camera
         self.scene = pyrender.Scene(bg_color=(0, 0, 0, 0), ambient_light=(0, 0, 0))
         K = camera.K
@@ -333,14 +351,35 @@ class DepthRenderer:
         color, depth = self._gl.render(self.scene, flags=self._flags, seg_node_map=self._seg)
         return np.ascontiguousarray(depth, dtype=np.float32), np.ascontiguousarray(color[..., 0])
 
-    def close(self) -> None:
-        """Frees the GL context (idempotent)."""
-        if self._gl is not None:
-            self._gl.delete()
-            self._gl = None
 
-    def __enter__(self) -> "DepthRenderer":
-        return self
+def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: np.ndarray, sensor, rng):
+    """Renders and measures a depth video of a MuJoCo model.
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    Args:
+        model: A compiled ``mujoco.MjModel``.
+        set_frame: ``set_frame(data, k)`` puts frame k's kinematic state into ``data`` (qpos and
+            mocap poses) and runs ``mujoco.mj_kinematics``.
+        num_frames: Number of frames T.
+        camera: The camera.
+        labels: Label per geom, (ngeom,) uint8 (see :func:`geom_labels`).
+        sensor: A :class:`benchmark.sensor.SensorModel`.
+        rng: Generator of the sensor noise (the scenario's "depth" stream).
+
+    Returns:
+        ``(depth, label_images)``: measured depth (T, H, W) float32 metres (0 = no measurement)
+        and the exact label images (T, H, W) uint8 (from the noise-free render).
+    """
+    import mujoco
+
+    if int(num_frames) < 1:
+        raise BenchmarkError(f"num_frames must be >= 1, got {num_frames}")
+    data = mujoco.MjData(model)
+    shape = (int(num_frames), camera.height, camera.width)
+    depth = np.empty(shape, dtype=np.float32)
+    label_images = np.empty(shape, dtype=np.uint8)
+    renderer = DepthRenderer(model, camera, labels)
+    for k in range(shape[0]):
+        set_frame(data, k)
+        exact, label_images[k] = renderer.render(data.xpos, data.xmat)
+        depth[k] = sensor.measure(exact, camera.K, rng)
+    return depth, label_images

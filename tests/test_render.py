@@ -1,5 +1,9 @@
 """Depth rendering: camera conventions, exact depth of the box, labels, errors."""
 
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
 import mujoco
 import numpy as np
 import pytest
@@ -39,8 +43,7 @@ def world():
     model = mujoco.MjModel.from_xml_string(scene_xml())
     data = mujoco.MjData(model)
     camera = R.load_camera()
-    with R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS)) as renderer:
-        yield model, data, camera, renderer
+    return model, data, camera, R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS))
 
 
 def set_box(model, data, pos, quat):
@@ -166,6 +169,42 @@ def test_labels_mark_table_box_palm_and_each_finger_and_skip_markers(world):
     data.mocap_pos[model.body("marker").mocapid[0]] = [0, 0, 0.2]
 
 
+def test_depth_agrees_with_mujocos_own_renderer_from_the_same_camera(world):
+    """An independent peer: MuJoCo's renderer, given the calibration as a MuJoCo camera."""
+    from benchmark.perf_render import add_mujoco_camera
+
+    _, _, camera, _ = world
+    spec = mujoco.MjSpec.from_string(scene_xml())
+    add_mujoco_camera(spec, camera, "ds325")
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    data.qpos[0:7] = [0.03, -0.02, 0.12, np.cos(0.3), 0.1, -0.15, np.sin(0.3)]
+    data.qpos[3:7] /= np.linalg.norm(data.qpos[3:7])
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_camlight(model, data)  # MuJoCo's camera pose
+    ours, labels = R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS)).render(data.xpos, data.xmat)
+    with mujoco.Renderer(model, camera.height, camera.width) as peer:
+        peer.enable_depth_rendering()
+        peer.update_scene(data, camera="ds325")
+        theirs = peer.render()
+    both = (ours > 0) & (ours < 1.5) & (labels != R.LABEL_NONE)
+    diff = np.abs(ours - theirs)[both]
+    assert both.sum() > 30000
+    assert np.median(diff) < 1e-5
+    assert np.mean(diff < 1e-4) > 0.98  # the rest: silhouette pixels, where MuJoCo resolves 4 samples
+
+
+def test_renderers_share_one_gl_context_and_stay_usable(world):
+    model, data, camera, renderer = world
+    set_box(model, data, *BOX_POSES[0])
+    before = renderer.render(data.xpos, data.xmat)[0]
+    other = R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS))
+    assert other._gl is renderer._gl
+    other.render(data.xpos, data.xmat)
+    del other
+    np.testing.assert_array_equal(renderer.render(data.xpos, data.xmat)[0], before)
+
+
 def test_rendering_is_deterministic(world):
     model, data, camera, renderer = world
     set_box(model, data, *BOX_POSES[1])
@@ -188,6 +227,7 @@ def test_missing_gl_gives_a_render_error_naming_the_library_and_packages(monkeyp
         raise OSError("libEGL.so.1: cannot open shared object file")
 
     monkeypatch.setattr(pyrender, "OffscreenRenderer", no_egl)
+    monkeypatch.setattr(R, "_OFFSCREEN", {})
     monkeypatch.setattr(R, "_missing_libraries", lambda: ["libEGL.so.1"])
     model = mujoco.MjModel.from_xml_string(scene_xml())
     with pytest.raises(RenderError) as info:

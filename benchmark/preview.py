@@ -1,0 +1,112 @@
+"""Pictures of a depth video a person can look at: a PNG strip of frames and an animated GIF.
+
+Depth is shown with matplotlib's "turbo" colour map over the sensor's range (near = blue,
+far = red); pixels without a measurement are black.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import tempfile
+
+import numpy as np
+
+from benchmark.errors import BenchmarkError
+
+
+def colorize(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0) -> np.ndarray:
+    """Colour-maps depth images.
+
+    Args:
+        depth_m: Depth, shape (..., H, W), [m]; 0 = no measurement.
+        near_m: Depth shown at the blue end of the map, [m].
+        far_m: Depth shown at the red end, [m].
+
+    Returns:
+        RGB images, shape (..., H, W, 3), uint8; missing pixels black.
+    """
+    from matplotlib import colormaps
+
+    if not far_m > near_m:
+        raise BenchmarkError(f"preview range needs far_m > near_m, got {near_m}, {far_m}")
+    d = np.asarray(depth_m, dtype=np.float64)
+    rgb = colormaps["turbo"](np.clip((d - near_m) / (far_m - near_m), 0, 1))[..., :3]
+    rgb[d <= 0] = 0
+    return np.round(rgb * 255).astype(np.uint8)
+
+
+def strip(depth_m: np.ndarray, t: np.ndarray, num: int = 6, near_m: float = 0.15, far_m: float = 1.0) -> np.ndarray:
+    """A horizontal strip of `num` evenly spaced frames, each stamped with its time.
+
+    Args:
+        depth_m: Depth video, shape (T, H, W), [m].
+        t: Frame times, shape (T,), [s].
+        num: Number of frames shown (fewer if the video is shorter).
+        near_m, far_m: Colour-map range, [m].
+
+    Returns:
+        RGB image, shape (H, n * W + (n - 1) * 4, 3), uint8 (4-pixel white gaps).
+    """
+    depth_m = np.asarray(depth_m)
+    if depth_m.ndim != 3 or depth_m.shape[0] == 0:
+        raise BenchmarkError(f"a depth video of shape (T, H, W) with T >= 1 is needed, got {depth_m.shape}")
+    if num < 1:
+        raise BenchmarkError(f"num must be >= 1 frame, got {num}")
+    idx = np.unique(np.linspace(0, depth_m.shape[0] - 1, min(num, depth_m.shape[0])).round().astype(int))
+    frames = [_stamp(colorize(depth_m[k], near_m, far_m), f"{t[k]:.2f} s") for k in idx]
+    gap = np.full((depth_m.shape[1], 4, 3), 255, dtype=np.uint8)
+    out = [frames[0]]
+    for f in frames[1:]:
+        out += [gap, f]
+    return np.concatenate(out, axis=1)
+
+
+def write_preview(depth_m: np.ndarray, fps: float, out_dir, num: int = 6, gif: bool = True) -> list[pathlib.Path]:
+    """Writes ``depth_preview.png`` (a strip of frames) and ``depth.gif`` (every frame) to out_dir.
+
+    Args:
+        depth_m: Depth video, shape (T, H, W), [m].
+        fps: Frame rate of the video, [Hz].
+        out_dir: Directory (created if missing).
+        num: Frames in the strip.
+        gif: Also write the animation.
+
+    Returns:
+        Paths of the files written.
+    """
+    import imageio.v3 as iio
+
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    t = np.arange(len(depth_m)) / fps
+    paths = [out_dir / "depth_preview.png"]
+    _atomic(paths[0], lambda p: iio.imwrite(p, strip(depth_m, t, num), extension=".png"))
+    if gif:
+        paths.append(out_dir / "depth.gif")
+        frames = colorize(depth_m)
+        _atomic(paths[1], lambda p: iio.imwrite(p, frames, extension=".gif", duration=1000 / fps, loop=0))
+    return paths
+
+
+def _atomic(path: pathlib.Path, write) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def _stamp(img: np.ndarray, text: str) -> np.ndarray:
+    """Writes `text` in white on a black box at the top left of an RGB image."""
+    from PIL import Image, ImageDraw
+
+    pil = Image.fromarray(img)
+    draw = ImageDraw.Draw(pil)
+    box = draw.textbbox((4, 2), text)
+    draw.rectangle((box[0] - 2, box[1] - 2, box[2] + 2, box[3] + 2), fill=(0, 0, 0))
+    draw.text((4, 2), text, fill=(255, 255, 255))
+    return np.asarray(pil)
