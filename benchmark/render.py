@@ -26,8 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
+from benchmark.episode import Episode
 from benchmark.errors import BenchmarkError, RenderError
-from fsv import Calibration
+from benchmark.sensor import SensorModel
+from fsv import Calibration, DepthVideo
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
@@ -143,44 +145,23 @@ def camera_calibration(path=None) -> Calibration:
     return load_camera(path).calibration()
 
 
-def geom_labels(model, finger_names) -> np.ndarray:
-    """Which label each MuJoCo geom gets in the label image (0: not rendered).
+def world_labels(world) -> np.ndarray:
+    """Which label each geom of a :class:`benchmark.world.World` gets in the label image.
 
-    Geoms that cannot collide (``contype == conaffinity == 0``, e.g. markers and mocap targets)
-    are not matter a camera would see and are not rendered. Of the others: geoms of the world body
-    are the table (1); geoms of the body named "box" and its subtree are the box (2); geoms of a
-    body whose name starts with finger k's name are finger k (10 + k); any other geom is the palm
-    or the hand's base (9).
-
-    Args:
-        model: A compiled ``mujoco.MjModel``.
-        finger_names: Finger names, thumb first, shape (K,).
+    The table geom is 1, the box geom 2, hand geoms 10 + k on finger k (thumb first) and 9 on the
+    palm; any other geom that can collide is static environment and drawn as table (1); geoms
+    that cannot collide (``contype == conaffinity == 0``, e.g. markers) are not drawn (0).
 
     Returns:
         Labels, shape (ngeom,), uint8.
     """
-    import mujoco
-
-    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, b) or "" for b in range(model.nbody)]
-    box_ids = [b for b, n in enumerate(names) if n == "box"]
-    labels = np.zeros(model.ngeom, dtype=np.uint8)
-    for g in range(model.ngeom):
-        if model.geom_contype[g] == 0 and model.geom_conaffinity[g] == 0:
-            continue
-        body = int(model.geom_bodyid[g])
-        chain = [body]
-        while chain[-1] != 0:
-            chain.append(int(model.body_parentid[chain[-1]]))
-        if body == 0:
-            labels[g] = LABEL_TABLE
-        elif any(b in box_ids for b in chain):
-            labels[g] = LABEL_BOX
-        else:
-            labels[g] = LABEL_PALM
-            for k, finger in enumerate(finger_names):
-                if any(names[b].startswith(str(finger)) for b in chain):
-                    labels[g] = LABEL_FINGER0 + k
-                    break
+    m = world.model
+    labels = np.where((m.geom_contype != 0) | (m.geom_conaffinity != 0), LABEL_TABLE, LABEL_NONE).astype(np.uint8)
+    hand = np.asarray(world.geom_segment) >= 0
+    finger = np.asarray(world.geom_finger)
+    labels[hand] = np.where(finger[hand] >= 0, LABEL_FINGER0 + finger[hand], LABEL_PALM)
+    labels[world.table_geom] = LABEL_TABLE
+    labels[world.box_geom] = LABEL_BOX
     return labels
 
 
@@ -291,7 +272,7 @@ class DepthRenderer:
         model: A compiled ``mujoco.MjModel``.
         camera: The camera.
         labels: Label per geom, shape (ngeom,), uint8; geoms with label 0 are not drawn
-            (see :func:`geom_labels`).
+            (see :func:`world_labels`).
     """
 
     def __init__(self, model, camera: Camera, labels: np.ndarray):
@@ -361,7 +342,7 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
             mocap poses) and runs ``mujoco.mj_kinematics``.
         num_frames: Number of frames T.
         camera: The camera.
-        labels: Label per geom, (ngeom,) uint8 (see :func:`geom_labels`).
+        labels: Label per geom, (ngeom,) uint8 (see :func:`world_labels`).
         sensor: A :class:`benchmark.sensor.SensorModel`.
         rng: Generator of the sensor noise (the scenario's "depth" stream).
 
@@ -383,3 +364,39 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
         exact, label_images[k] = renderer.render(data.xpos, data.xmat)
         depth[k] = sensor.measure(exact, camera.K, rng)
     return depth, label_images
+
+
+def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camera | None = None) -> Episode:
+    """Renders the depth video a DS325-like camera would record of a simulated episode.
+
+    Args:
+        episode: A simulated episode (its truth gives the box and hand pose per frame).
+        sensor: The sensor model; default ``SensorModel(noise_m=scenario.noise_m)`` (the README's
+            defaults). Its ``noise_m`` must equal the scenario's.
+        camera: The camera; default ``sim_assets/camera.yaml``.
+
+    Returns:
+        The episode with ``depth`` (T frames at the scenario's fps, T = len(truth.t)),
+        ``calib`` and the truth-side ``labels`` (T, H, W) uint8 (never handed to `fsv`).
+        The noise comes from the scenario's "depth" random stream: same scenario, same bits.
+    """
+    from benchmark.world import build_world, set_frame
+
+    sc = episode.scenario
+    sensor = SensorModel(noise_m=sc.noise_m) if sensor is None else sensor
+    if sensor.noise_m != sc.noise_m:
+        raise BenchmarkError(
+            f"sensor.noise_m = {sensor.noise_m} differs from the scenario's noise_m = {sc.noise_m}; "
+            "the scenario sets the noise"
+        )
+    camera = load_camera() if camera is None else camera
+    world = build_world(sc)
+    truth = episode.truth
+
+    def set_k(data, k):
+        set_frame(world, data, truth.box_pos[k], truth.box_quat[k], truth.hand_qpos[k])
+
+    depth, labels = render_video(
+        world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth")
+    )
+    return episode.with_depth(DepthVideo(depth_m=depth, fps=sc.fps), camera.calibration(), labels)

@@ -38,12 +38,25 @@ def scene_xml():
     </worldbody></mujoco>"""
 
 
+def scene_labels(model):
+    """Labels of the test scene's geoms: table 1, box 2, finger k 10 + k, palm and probe 9, marker 0."""
+    labels = np.zeros(model.ngeom, dtype=np.uint8)
+    for g in range(model.ngeom):
+        name = model.body(model.geom_bodyid[g]).name
+        fingers = [k for k, f in enumerate(FINGERS) if name.startswith(f)]
+        labels[g] = (
+            R.LABEL_TABLE if name == "world" else R.LABEL_BOX if name == "box" else 0 if name == "marker"
+            else R.LABEL_FINGER0 + fingers[0] if fingers else R.LABEL_PALM
+        )
+    return labels
+
+
 @pytest.fixture(scope="module")
 def world():
     model = mujoco.MjModel.from_xml_string(scene_xml())
     data = mujoco.MjData(model)
     camera = R.load_camera()
-    return model, data, camera, R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS))
+    return model, data, camera, R.DepthRenderer(model, camera, scene_labels(model))
 
 
 def set_box(model, data, pos, quat):
@@ -148,14 +161,24 @@ def test_backprojected_box_pixels_lie_on_the_box_surface(world, pos, quat):
     assert np.percentile(dist, 99) < 3e-3
 
 
-def test_labels_mark_table_box_palm_and_each_finger_and_skip_markers(world):
+def test_world_labels_mark_table_box_palm_and_each_finger():
+    from benchmark.scenario import Scenario
+    from benchmark.world import build_world
+
+    w = build_world(Scenario())
+    labels = R.world_labels(w)
+    assert labels[w.table_geom] == R.LABEL_TABLE and labels[w.box_geom] == R.LABEL_BOX
+    palm = w.model.body_geomadr[w.palm_body]
+    assert labels[palm] == R.LABEL_PALM
+    for k, finger in enumerate(w.hand.finger_names):
+        tip = w.model.site_bodyid[w.tip_site[k]]
+        tip_geoms = np.flatnonzero(w.model.geom_bodyid == tip)
+        assert len(tip_geoms) > 0 and np.all(labels[tip_geoms] == R.LABEL_FINGER0 + k), finger
+    assert sorted(np.unique(labels)) == [1, 2, 9, 10, 11, 12, 13, 14]
+
+
+def test_each_label_is_drawn_and_undrawn_geoms_are_invisible(world):
     model, data, camera, renderer = world
-    labels = R.geom_labels(model, FINGERS)
-    marker = model.body("marker").id
-    assert labels[model.geom("table").id] == R.LABEL_TABLE
-    assert np.all(labels[model.body_geomadr[marker] : model.body_geomadr[marker] + 1] == R.LABEL_NONE)
-    finger_geoms = {int(labels[g]) for g in range(model.ngeom) if model.geom_bodyid[g] == model.body("index_2").id}
-    assert finger_geoms == {R.LABEL_FINGER0 + 1}
     set_box(model, data, [0, 0, 0.03], [1, 0, 0, 0])
     depth, image = renderer.render(data.xpos, data.xmat)
     assert set(np.unique(image)) == {0, 1, 2, 9, 10, 11}
@@ -182,7 +205,7 @@ def test_depth_agrees_with_mujocos_own_renderer_from_the_same_camera(world):
     data.qpos[3:7] /= np.linalg.norm(data.qpos[3:7])
     mujoco.mj_kinematics(model, data)
     mujoco.mj_camlight(model, data)  # MuJoCo's camera pose
-    ours, labels = R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS)).render(data.xpos, data.xmat)
+    ours, labels = R.DepthRenderer(model, camera, scene_labels(model)).render(data.xpos, data.xmat)
     with mujoco.Renderer(model, camera.height, camera.width) as peer:
         peer.enable_depth_rendering()
         peer.update_scene(data, camera="ds325")
@@ -198,7 +221,7 @@ def test_renderers_share_one_gl_context_and_stay_usable(world):
     model, data, camera, renderer = world
     set_box(model, data, *BOX_POSES[0])
     before = renderer.render(data.xpos, data.xmat)[0]
-    other = R.DepthRenderer(model, camera, R.geom_labels(model, FINGERS))
+    other = R.DepthRenderer(model, camera, scene_labels(model))
     assert other._gl is renderer._gl
     other.render(data.xpos, data.xmat)
     del other
@@ -231,7 +254,7 @@ def test_missing_gl_gives_a_render_error_naming_the_library_and_packages(monkeyp
     monkeypatch.setattr(R, "_missing_libraries", lambda: ["libEGL.so.1"])
     model = mujoco.MjModel.from_xml_string(scene_xml())
     with pytest.raises(RenderError) as info:
-        R.DepthRenderer(model, R.load_camera(), R.geom_labels(model, FINGERS))
+        R.DepthRenderer(model, R.load_camera(), scene_labels(model))
     msg = str(info.value)
     assert "libEGL.so.1 cannot be loaded" in msg
     assert "apt-get install libegl1 libgl1-mesa-dri" in msg
@@ -240,3 +263,67 @@ def test_missing_gl_gives_a_render_error_naming_the_library_and_packages(monkeyp
 
 def test_missing_libraries_is_empty_on_this_machine():
     assert R._missing_libraries() == []
+
+
+# --- render(episode): the whole stage on the benchmark's world ---------------------------------
+
+
+def synthetic_episode(noise_m=0.01, seed=0, duration_s=1.0):
+    """An episode of the real world whose truth is an analytic box lift with a still hand above it."""
+    import dataclasses
+
+    from benchmark.episode import Episode
+    from benchmark.scenario import Scenario
+    from benchmark.world import build_world
+    from conftest import make_analytic_truth
+
+    sc = Scenario(noise_m=noise_m, seed=seed, duration_s=duration_s)
+    w = build_world(sc)
+    truth = make_analytic_truth(duration_s=duration_s, fps=sc.fps)
+    hand = np.zeros(7 + len(w.hand.joint_names))
+    hand[:7] = [0.0, -0.12, 0.16, 1.0, 0.0, 0.0, 0.0]
+    truth = dataclasses.replace(truth, hand_qpos=np.tile(hand, (len(truth.t), 1)))
+    return Episode(scenario=sc, truth=truth, object_model=w.obj, hand_model=w.hand)
+
+
+@pytest.fixture(scope="module")
+def rendered():
+    return {(noise, seed): R.render(synthetic_episode(noise, seed)) for noise, seed in ((0.01, 0), (0.01, 1), (0.0, 0))}
+
+
+def test_render_gives_one_frame_per_truth_frame_with_calibration_and_labels(rendered):
+    ep = rendered[(0.01, 0)]
+    assert ep.depth.depth_m.shape == (30, 240, 320) == ep.labels.shape  # 1 s at 30 fps
+    assert ep.depth.depth_m.dtype == np.float32 and ep.labels.dtype == np.uint8
+    assert ep.depth.fps == 30.0
+    np.testing.assert_allclose(ep.depth.t, ep.truth.t)
+    np.testing.assert_array_equal(ep.calib.K, R.camera_calibration().K)
+    seen = set(np.unique(ep.labels).tolist())
+    assert {1, 2, 9}.issubset(seen) and len(seen & {10, 11, 12, 13, 14}) >= 3
+    valid = ep.depth.depth_m > 0
+    assert 0.5 < valid.mean() < 0.98
+    assert ep.depth.depth_m[valid].min() >= 0.15 and ep.depth.depth_m.max() <= 1.0
+
+
+def test_render_same_seed_same_bits_other_seed_other_noise(rendered):
+    again = R.render(synthetic_episode(0.01, 0))
+    np.testing.assert_array_equal(again.depth.depth_m, rendered[(0.01, 0)].depth.depth_m)
+    other = rendered[(0.01, 1)]
+    assert not np.array_equal(other.depth.depth_m, again.depth.depth_m)
+    np.testing.assert_array_equal(other.labels, again.labels)  # labels are exact, noise-free
+
+
+def test_render_noise_has_the_scenario_std_on_valid_pixels(rendered):
+    noisy, clean = rendered[(0.01, 0)].depth.depth_m, rendered[(0.0, 0)].depth.depth_m
+    both = (noisy > 0) & (clean > 0)
+    assert both.sum() > 1e6
+    assert np.std(noisy[both] - clean[both]) == pytest.approx(0.01, rel=0.05)
+    assert np.array_equal(noisy > 0, clean > 0)  # which pixels are missing does not depend on the noise
+
+
+def test_render_rejects_a_sensor_with_another_noise():
+    from benchmark.errors import BenchmarkError
+    from benchmark.sensor import SensorModel
+
+    with pytest.raises(BenchmarkError, match="scenario's noise_m = 0.01"):
+        R.render(synthetic_episode(0.01, 0), sensor=SensorModel(noise_m=0.02))
