@@ -2,3 +2,7 @@
 
 from benchmark.errors import BenchmarkError, EpisodeFileError, RenderError, ScenarioError, SimulationError
 from benchmark.scenario import Scenario
+
+# Depth rendering (issue 3)
+from benchmark.render import render  # noqa: E402
+from benchmark.sensor import SensorModel  # noqa: E402

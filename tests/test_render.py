@@ -1,15 +1,18 @@
 """Depth rendering: camera conventions, exact depth of the box, labels, errors."""
 
+import importlib
 import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import mujoco
-import numpy as np
-import pytest
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
-from benchmark import render as R
-from benchmark.errors import RenderError
+from benchmark.errors import RenderError  # noqa: E402
+
+# The module: the attribute `benchmark.render` is the function render() of the public API.
+R = importlib.import_module("benchmark.render")
 
 FINGERS = ("thumb", "index")
 BOX_HALF = np.array([0.0855, 0.0555, 0.03])
