@@ -23,3 +23,7 @@ class RenderError(BenchmarkError):
 
 class SimulationError(BenchmarkError):
     """The simulation diverged or the task failed (e.g. the box was dropped)."""
+
+
+class DatasetError(BenchmarkError, ValueError):
+    """A dataset folder or specification is invalid (e.g. resuming with other arguments)."""

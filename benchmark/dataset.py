@@ -1,0 +1,500 @@
+"""Training data for the internal-force networks without tactile hardware (the paper's §3.6).
+
+Each episode of a grid of scenarios (tasks x users x grasps x masses x seeds) is simulated; per
+frame we compute the features p1, p2_k, p3, p4_k (eq. 10-13, :mod:`fsv.features`) from the object's
+kinematics and the contacts, and the targets from the decomposition SOCP (eq. 9,
+:func:`fsv.forces.decompose_forces`) fed with the "tactile measurements": the truth's normal force of each
+finger. As in the paper, samples whose vision and tactile net forces differ by more than
+``max_gap_n`` (1.5 N) are dropped. The vision net force is F_c = m (a - g) from the kinematics the
+features use; the tactile net force is the resultant of the truth's finger forces (so frames where
+the table still carries the box are dropped too). Frames with fewer than ``min_fingers`` fingers in
+contact (no internal force is possible) or invalid kinematics are dropped as well.
+
+Sources. Until the tracker lands, kinematics and contacts are *oracle* (taken from the truth); the
+dataset records its sources in ``dataset.json`` and in every file, and every report labels them.
+
+Layout of a dataset folder::
+
+    dataset.json              spec, sources, format version (a resumed run must match it)
+    episodes/<id>.parquet     one table per episode (one row per kept frame), written atomically
+    manifest.parquet          one row per episode (counts, timing, status), rebuilt from the files
+
+Columns of an episode table: ``episode, task, user, grasp, mass, seed, frame, t``; the world-frame
+kinematics ``pos_*, rot_00..rot_22, vel_*, acc_*, omega_*, alpha_*``; the features ``p1, p3,
+p2_<finger>, p4_<finger>``; per finger ``active_, sliding_, point_{x,y,z}_, normal_{x,y,z}_,
+slide_{x,y,z}_`` (object frame), ``f_meas_`` (tactile normal force, [N]), ``f_nom_`` and ``f_int_``
+(nominal and internal normal components from eq. 9, [N]); ``net_gap_n``. Read them with pandas
+(``pd.read_parquet``) or :func:`load_dataset`.
+
+Running. A local process pool over all cores by default, with a progress bar; or Ray
+(``ray_address``; ``pip install 'fsv-bench[ray]'``), whose workers return tables to this process.
+Either way only this process writes files: each episode goes to a temporary file that is renamed
+into place, so an interrupted run (crash, Ctrl-C) leaves only complete episodes, and running the
+same command again does the missing ones. A failed episode (e.g. the box was dropped) is written
+as an empty table whose metadata holds the error, so it is neither lost nor retried forever.
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import os
+import sys
+import tempfile
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import asdict, dataclass, fields
+import multiprocessing
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from benchmark.errors import BenchmarkError, DatasetError
+from benchmark.scenario import Scenario
+from fsv import Contacts, Kinematics
+from fsv.features import grasp_features
+from fsv.learn import TrainingSet
+
+FORMAT = "fsv-bench-dataset"
+VERSION = 1
+SOURCES = ("oracle",)
+_AX = "xyz"
+
+
+@dataclass(frozen=True)
+class DatasetSpec:
+    """Which episodes a dataset holds and how its samples are made.
+
+    Attributes:
+        tasks: Task names (see ``benchmark.TASKS``).
+        users, grasps, masses: Indices into ``sim_assets`` lists.
+        seeds: Scenario seeds.
+        duration_s: Episode length in [s]; None takes each task's default.
+        fps: Frame rate in [Hz].
+        kinematics: Source of the kinematics behind the features: "oracle" (the truth).
+        contacts: Source of the contacts: "oracle" (the truth).
+        max_gap_n: Samples whose vision and tactile net forces differ by more than this are dropped, [N].
+        min_fingers: Frames with fewer fingers in contact are dropped.
+    """
+
+    tasks: tuple = ("lift",)
+    users: tuple = (0,)
+    grasps: tuple = (0,)
+    masses: tuple = (0,)
+    seeds: tuple = (0,)
+    duration_s: float | None = None
+    fps: float = 30.0
+    kinematics: str = "oracle"
+    contacts: str = "oracle"
+    max_gap_n: float = 1.5
+    min_fingers: int = 2
+
+    def __post_init__(self):
+        object.__setattr__(self, "tasks", tuple(str(t) for t in self.tasks))
+        for name in ("users", "grasps", "masses", "seeds"):
+            vals = tuple(getattr(self, name))
+            if not vals or any(isinstance(v, bool) or int(v) != v or v < 0 for v in vals):
+                raise DatasetError(f"{name} must be a non-empty list of non-negative integers, got {vals!r}")
+            object.__setattr__(self, name, tuple(int(v) for v in vals))
+        if not self.tasks:
+            raise DatasetError("tasks must name at least one task")
+        for name in ("kinematics", "contacts"):
+            if getattr(self, name) not in SOURCES:
+                raise DatasetError(f"{name} source must be one of {SOURCES}, got {getattr(self, name)!r}")
+        if not (np.isfinite(self.max_gap_n) and self.max_gap_n > 0):
+            raise DatasetError(f"max_gap_n must be > 0 N, got {self.max_gap_n!r}")
+        if int(self.min_fingers) < 2:
+            raise DatasetError(f"min_fingers must be >= 2 (internal forces need two fingers), got {self.min_fingers!r}")
+
+    def scenarios(self) -> list[Scenario]:
+        """Every scenario of the grid, in a fixed order."""
+        return [
+            Scenario(task=t, user=u, grasp=g, mass=m, seed=s, duration_s=self.duration_s, fps=self.fps)
+            for t in self.tasks for u in self.users for g in self.grasps for m in self.masses for s in self.seeds
+        ]
+
+    def as_dict(self) -> dict:
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+
+
+def episode_id(sc: Scenario) -> str:
+    """File stem of a scenario's table, e.g. ``lift_u0_g1_m2_s3``."""
+    return f"{sc.task}_u{sc.user}_g{sc.grasp}_m{sc.mass}_s{sc.seed}"
+
+
+def oracle_kinematics(truth) -> Kinematics:
+    """The truth's box kinematics as an *oracle* :class:`fsv.Kinematics` (world frame)."""
+    T = len(truth.t)
+    return Kinematics(
+        t=truth.t, pos=truth.box_pos, rot=truth.box_rot, vel=truth.box_vel, acc=truth.box_acc,
+        omega=truth.box_omega, alpha=truth.box_alpha, valid=np.ones(T, bool), method="oracle",
+    )
+
+
+def oracle_contacts(truth) -> Contacts:
+    """The truth's finger contacts as *oracle* :class:`fsv.Contacts` (object frame).
+
+    The sliding direction of a sliding contact is the direction of the truth's tangential force
+    (kinetic friction on the object points along it).
+    """
+    F = np.asarray(truth.contact_force, float)
+    n = np.asarray(truth.contact_normal, float)
+    tang = F - np.sum(F * n, axis=-1, keepdims=True) * n
+    norm = np.linalg.norm(tang, axis=-1, keepdims=True)
+    sliding = np.asarray(truth.contact_sliding, bool) & (norm[..., 0] > 1e-9)
+    slide = np.where(sliding[..., None], tang / np.where(norm > 0, norm, 1.0), 0.0)
+    active = np.asarray(truth.contact_active, bool)
+    return Contacts(
+        tuple(truth.finger_names), active=active, sliding=sliding & active,
+        point=truth.contact_point, normal=np.where(active[..., None], n, 0.0), slide_dir=slide,
+    )
+
+
+def measured_normal_forces(truth) -> np.ndarray:
+    """The "tactile sensors": each finger's true normal force n_k . F_k, shape (T, K), [N]; 0 off contact."""
+    f = np.sum(np.asarray(truth.contact_force) * np.asarray(truth.contact_normal), axis=-1)
+    return np.where(truth.contact_active, f, 0.0)
+
+
+def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
+    """Simulates one scenario and returns its kept samples as a table (see the module docstring)."""
+    from benchmark.simulate import simulate
+    from fsv.forces import FrameStatus, decompose_forces
+
+    ep = simulate(scenario)
+    tr, model = ep.truth, ep.object_model
+    kin, con = oracle_kinematics(tr), oracle_contacts(tr)
+    feats = grasp_features(kin, con, model, gravity=tr.gravity)
+    measured = measured_normal_forces(tr)
+    tactile_net = np.sum(np.asarray(tr.contact_force), axis=1)  # object frame, like features.net_force
+    gap = np.linalg.norm(feats.net_force - tactile_net, axis=1)
+    n_active = con.active.sum(axis=1)
+    keep_contacts = kin.valid & (n_active >= spec.min_fingers)
+    keep = keep_contacts & (gap <= spec.max_gap_n)
+    idx = np.flatnonzero(keep)
+    dec = decompose_forces(_take_kin(kin, idx), _take_con(con, idx), model, measured[idx], gravity=tr.gravity)
+    ok = dec.status == int(FrameStatus.OPTIMAL)
+    rows = idx[ok]
+    stats = dict(
+        frames=len(tr.t), rows=int(len(rows)), dropped_contacts=int(np.sum(~keep_contacts)),
+        dropped_gap=int(np.sum(keep_contacts & ~keep)), dropped_solver=int(np.sum(~ok)),
+    )
+    cols = _columns(scenario, tr, kin, con, feats, measured, gap, rows)
+    names = tuple(tr.finger_names)
+    for k, name in enumerate(names):
+        cols[f"f_nom_{name}"] = dec.nominal_normal[ok, k]
+        cols[f"f_int_{name}"] = dec.internal_normal[ok, k]
+    return _with_meta(pa.table(cols), scenario, spec, names, stats, status="ok")
+
+
+def _take_kin(kin: Kinematics, idx) -> Kinematics:
+    return Kinematics(kin.t[idx], kin.pos[idx], kin.rot[idx], kin.vel[idx], kin.acc[idx], kin.omega[idx],
+                      kin.alpha[idx], kin.valid[idx], kin.method, kin.delay_s)
+
+
+def _take_con(con: Contacts, idx) -> Contacts:
+    return Contacts(con.finger_names, con.active[idx], con.sliding[idx], con.point[idx], con.normal[idx], con.slide_dir[idx])
+
+
+def _columns(sc, tr, kin, con, feats, measured, gap, rows) -> dict:
+    n = len(rows)
+    cols = dict(
+        episode=np.full(n, episode_id(sc)), task=np.full(n, sc.task), user=np.full(n, sc.user),
+        grasp=np.full(n, sc.grasp), mass=np.full(n, sc.mass), seed=np.full(n, sc.seed),
+        frame=rows.astype(np.int64), t=kin.t[rows],
+    )
+    for name in ("pos", "vel", "acc", "omega", "alpha"):
+        for a in range(3):
+            cols[f"{name}_{_AX[a]}"] = getattr(kin, name)[rows, a]
+    for i in range(3):
+        for j in range(3):
+            cols[f"rot_{i}{j}"] = kin.rot[rows, i, j]
+    cols["p1"], cols["p3"] = feats.p1[rows], feats.p3[rows]
+    for k, name in enumerate(con.finger_names):
+        cols[f"p2_{name}"] = feats.p2[rows, k]
+        cols[f"p4_{name}"] = feats.p4[rows, k]
+        cols[f"active_{name}"] = con.active[rows, k]
+        cols[f"sliding_{name}"] = con.sliding[rows, k]
+        for a in range(3):
+            cols[f"point_{_AX[a]}_{name}"] = con.point[rows, k, a]
+            cols[f"normal_{_AX[a]}_{name}"] = con.normal[rows, k, a]
+            cols[f"slide_{_AX[a]}_{name}"] = con.slide_dir[rows, k, a]
+        cols[f"f_meas_{name}"] = measured[rows, k]
+    cols["net_gap_n"] = gap[rows]
+    return cols
+
+
+def _with_meta(table: pa.Table, sc: Scenario, spec: DatasetSpec, finger_names, stats: dict, status: str) -> pa.Table:
+    meta = dict(
+        format=FORMAT, version=VERSION, episode=episode_id(sc), scenario=asdict(sc), finger_names=list(finger_names),
+        kinematics=spec.kinematics, contacts=spec.contacts, status=status, **stats,
+    )
+    return table.replace_schema_metadata({b"fsv": json.dumps(meta).encode()})
+
+
+def _run_one(scenario: Scenario, spec: DatasetSpec, build) -> pa.Table:
+    """Builds one episode's table in a worker; a world failure becomes an empty table with the error."""
+    t0 = time.perf_counter()
+    try:
+        table = build(scenario, spec)
+    except BenchmarkError as e:
+        table = _with_meta(pa.table({"episode": pa.array([], pa.string())}), scenario, spec, [], dict(frames=0, rows=0),
+                           status=f"failed: {type(e).__name__}: {e}")
+    meta = json.loads(table.schema.metadata[b"fsv"])
+    meta["seconds"] = time.perf_counter() - t0
+    return table.replace_schema_metadata({b"fsv": json.dumps(meta).encode()})
+
+
+def _atomic_write_table(table: pa.Table, path: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".tmp-", suffix=".parquet")
+    os.close(fd)
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _atomic_write_text(text: str, path: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".tmp-", suffix=".json")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _prepare(spec: DatasetSpec, out: str) -> str:
+    episodes = os.path.join(out, "episodes")
+    os.makedirs(episodes, exist_ok=True)
+    for tmp in glob.glob(os.path.join(out, ".tmp-*")) + glob.glob(os.path.join(episodes, ".tmp-*")):
+        os.unlink(tmp)  # debris of a killed run: never a complete file
+    header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict())
+    path = os.path.join(out, "dataset.json")
+    if os.path.exists(path):
+        with open(path) as fh:
+            old = json.load(fh)
+        if old != header:
+            raise DatasetError(
+                f"{out!r} holds a dataset made with another spec ({old.get('spec')}); "
+                f"use a new folder or the same arguments ({header['spec']})"
+            )
+    else:
+        _atomic_write_text(json.dumps(header, indent=1), path)
+    return episodes
+
+
+def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address: str | None = None,
+             progress: bool = True, build=build_episode) -> pd.DataFrame:
+    """Generates (or completes) the dataset ``spec`` in folder ``out``.
+
+    Args:
+        spec: The grid of scenarios and the sample rules.
+        out: Dataset folder; created if missing. An existing folder must hold the same spec.
+        workers: Local worker processes (default: all cores); 1 builds in this process.
+        ray_address: Address of a running Ray cluster (e.g. "auto" or "ray://host:10001"); the
+            episodes then run as Ray tasks instead of the local pool.
+        progress: Show a tqdm progress bar on stderr.
+        build: Function ``(Scenario, DatasetSpec) -> pyarrow.Table`` making one episode's table.
+
+    Returns:
+        The manifest (one row per episode), also written to ``out/manifest.parquet``.
+    """
+    out = os.fspath(out)
+    episodes = _prepare(spec, out)
+    todo = [sc for sc in spec.scenarios() if not os.path.exists(os.path.join(episodes, episode_id(sc) + ".parquet"))]
+    total = len(spec.scenarios())
+    if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
+        raise DatasetError(f"workers must be a positive integer, got {workers!r}")
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=total, initial=total - len(todo), unit="episode", desc="generate", disable=not progress, file=sys.stderr)
+
+    def done(table: pa.Table) -> None:
+        meta = json.loads(table.schema.metadata[b"fsv"])
+        _atomic_write_table(table, os.path.join(episodes, meta["episode"] + ".parquet"))
+        bar.update(1)
+
+    try:
+        if ray_address is not None:
+            _run_ray(todo, spec, build, ray_address, done)
+        elif (workers or os.cpu_count() or 1) == 1 or len(todo) <= 1:
+            for sc in todo:
+                done(_run_one(sc, spec, build))
+        else:
+            _run_pool(todo, spec, build, min(int(workers or os.cpu_count() or 1), len(todo)), done)
+    finally:
+        bar.close()
+    return write_manifest(out)
+
+
+def _run_pool(todo, spec, build, workers, done) -> None:
+    ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+    try:
+        pending = {pool.submit(_run_one, sc, spec, build) for sc in todo}
+        while pending:
+            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for f in finished:
+                done(f.result())
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+
+
+def _run_ray(todo, spec, build, address, done) -> None:
+    try:
+        import ray
+    except ImportError as e:
+        raise DatasetError(
+            f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
+            "(or run without --ray-address to use the local process pool)"
+        ) from e
+    ray.init(address=address, ignore_reinit_error=True, log_to_driver=False)
+    remote = ray.remote(_run_one)
+    refs = [remote.remote(sc, spec, build) for sc in todo]
+    try:
+        while refs:
+            ready, refs = ray.wait(refs, num_returns=1)
+            done(ray.get(ready[0]))
+    except BaseException:
+        for r in refs:
+            ray.cancel(r)
+        raise
+
+
+def write_manifest(out) -> pd.DataFrame:
+    """Rebuilds ``out/manifest.parquet`` from the episode files present (atomically) and returns it."""
+    out = os.fspath(out)
+    rows = []
+    for path in sorted(glob.glob(os.path.join(out, "episodes", "*.parquet"))):
+        meta = json.loads(pq.read_schema(path).metadata[b"fsv"])
+        sc = meta.pop("scenario")
+        rows.append(dict(
+            episode=meta["episode"], file=os.path.relpath(path, out), task=sc["task"], user=sc["user"],
+            grasp=sc["grasp"], mass=sc["mass"], seed=sc["seed"], status=meta["status"],
+            frames=meta.get("frames", 0), rows=meta.get("rows", 0), dropped_contacts=meta.get("dropped_contacts", 0),
+            dropped_gap=meta.get("dropped_gap", 0), dropped_solver=meta.get("dropped_solver", 0),
+            seconds=meta.get("seconds", float("nan")), kinematics=meta["kinematics"], contacts=meta["contacts"],
+        ))
+    manifest = pd.DataFrame(rows, columns=[
+        "episode", "file", "task", "user", "grasp", "mass", "seed", "status", "frames", "rows", "dropped_contacts",
+        "dropped_gap", "dropped_solver", "seconds", "kinematics", "contacts",
+    ])
+    _atomic_write_table(pa.Table.from_pandas(manifest, preserve_index=False), os.path.join(out, "manifest.parquet"))
+    return manifest
+
+
+def load_dataset(out, **where) -> pd.DataFrame:
+    """All kept samples of a dataset as one DataFrame, optionally filtered by scenario fields.
+
+    Args:
+        out: Dataset folder.
+        **where: Column filters, e.g. ``user=[0]`` or ``grasp=1`` (a value or a list of values).
+    """
+    out = os.fspath(out)
+    path = os.path.join(out, "manifest.parquet")
+    if not os.path.exists(path):
+        raise DatasetError(f"{out!r} is not a dataset folder (no manifest.parquet); make one with `fsv-bench generate`")
+    man = pd.read_parquet(path)
+    man = man[man["status"] == "ok"]
+    for key, val in where.items():
+        if key not in ("task", "user", "grasp", "mass", "seed"):
+            raise DatasetError(f"cannot filter on {key!r}; accepted: task, user, grasp, mass, seed")
+        man = man[man[key].isin(val if isinstance(val, (list, tuple, set)) else [val])]
+    frames = [pd.read_parquet(os.path.join(out, f)) for f in man["file"]]
+    frames = [f for f in frames if len(f)]
+    if not frames:
+        raise DatasetError(f"no samples in {out!r} for {where or 'the whole dataset'}")
+    return pd.concat(frames, ignore_index=True)
+
+
+def finger_names_of(df: pd.DataFrame) -> tuple:
+    """The finger slots of a dataset table, in column order (thumb first)."""
+    return tuple(c[len("active_"):] for c in df.columns if c.startswith("active_"))
+
+
+def training_set(df: pd.DataFrame) -> TrainingSet:
+    """The networks' samples of a dataset table: features, decomposition targets, episode groups."""
+    names = finger_names_of(df)
+    x = np.concatenate([
+        df[["p1", "p3"]].to_numpy(float), df[[f"p2_{n}" for n in names]].to_numpy(float),
+        df[[f"p4_{n}" for n in names]].to_numpy(float), df[[f"active_{n}" for n in names]].to_numpy(float),
+    ], axis=1)
+    return TrainingSet(
+        x, df[[f"f_int_{n}" for n in names]].to_numpy(float), df[[f"active_{n}" for n in names]].to_numpy(bool),
+        groups=pd.factorize(df["episode"])[0],
+    )
+
+
+def frames_of(df: pd.DataFrame) -> tuple[Kinematics, Contacts]:
+    """Rebuilds the kinematics and contacts of a dataset table's rows (in row order)."""
+    names = finger_names_of(df)
+    v = {name: df[[f"{name}_{a}" for a in _AX]].to_numpy(float) for name in ("pos", "vel", "acc", "omega", "alpha")}
+    rot = df[[f"rot_{i}{j}" for i in range(3) for j in range(3)]].to_numpy(float).reshape(-1, 3, 3)
+    kin = Kinematics(df["t"].to_numpy(float), v["pos"], rot, v["vel"], v["acc"], v["omega"], v["alpha"],
+                     np.ones(len(df), bool), method="oracle")
+    per = lambda fmt: np.stack([df[[fmt.format(a, n) for a in _AX]].to_numpy(float) for n in names], axis=1)
+    con = Contacts(
+        names, df[[f"active_{n}" for n in names]].to_numpy(bool), df[[f"sliding_{n}" for n in names]].to_numpy(bool),
+        per("point_{}_{}"), per("normal_{}_{}"), per("slide_{}_{}"),
+    )
+    return kin, con
+
+
+def _ints(text: str) -> tuple:
+    """Parses "0,2,5-7" into (0, 2, 5, 6, 7)."""
+    out = []
+    for part in str(text).split(","):
+        part = part.strip()
+        try:
+            if "-" in part:
+                a, b = part.split("-")
+                out += range(int(a), int(b) + 1)
+            else:
+                out.append(int(part))
+        except ValueError:
+            raise DatasetError(f"expected integers like '0,2,5-7', got {text!r}") from None
+    return tuple(out)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The arguments of ``fsv-bench generate``."""
+    p.add_argument("--out", required=True, help="dataset folder (created, or resumed if it exists)")
+    p.add_argument("--tasks", default="lift", help="comma-separated task names (default: lift)")
+    p.add_argument("--users", default="0", help="user indices, e.g. 0,1 or 0-3")
+    p.add_argument("--grasps", default="0", help="grasp indices")
+    p.add_argument("--masses", default="0", help="mass indices")
+    p.add_argument("--seeds", default="0", help="seeds, e.g. 0-9")
+    p.add_argument("--duration", type=float, default=None, help="episode length in seconds (default: the task's)")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    p.add_argument("--ray-address", default=None, help="run on a Ray cluster at this address (needs the 'ray' extra)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> pd.DataFrame:
+    """Runs ``fsv-bench generate`` with parsed arguments; prints a one-paragraph summary."""
+    spec = DatasetSpec(
+        tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()), users=_ints(args.users),
+        grasps=_ints(args.grasps), masses=_ints(args.masses), seeds=_ints(args.seeds), duration_s=args.duration,
+    )
+    t0 = time.perf_counter()
+    man = generate(spec, args.out, workers=args.workers, ray_address=args.ray_address, progress=not args.no_progress)
+    failed = int((man["status"] != "ok").sum())
+    print(
+        f"dataset {args.out}: {len(man)} episodes ({failed} failed), {int(man['rows'].sum())} samples kept; "
+        f"dropped {int(man['dropped_gap'].sum())} for |vision - tactile net force| > {spec.max_gap_n} N, "
+        f"{int(man['dropped_contacts'].sum())} with < {spec.min_fingers} fingers, "
+        f"{int(man['dropped_solver'].sum())} unsolved; kinematics={spec.kinematics}, contacts={spec.contacts} "
+        f"(oracle = from the truth); {time.perf_counter() - t0:.1f} s"
+    )
+    return man
