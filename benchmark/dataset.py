@@ -187,6 +187,11 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     for k, name in enumerate(names):
         cols[f"f_nom_{name}"] = dec.nominal_normal[ok, k]
         cols[f"f_int_{name}"] = dec.internal_normal[ok, k]
+    stats["object_model"] = dict(
+        size_m=model.size_m.tolist(), mass_kg=model.mass_kg, inertia=model.inertia.tolist(),
+        friction=model.friction, table_friction=model.table_friction,
+    )
+    stats["gravity"] = np.asarray(tr.gravity, float).tolist()
     return _with_meta(pa.table(cols), scenario, spec, names, stats, status="ok")
 
 

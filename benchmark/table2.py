@@ -1,0 +1,291 @@
+"""The paper's Table 2 and Fig. 6: how well learned internal forces generalise (§4.3-4.4).
+
+Two instances of the networks (:mod:`fsv.learn`) are trained on a dataset made by
+:mod:`benchmark.dataset`:
+
+* *partial training*: one user, one grasp, one mass (``Table2Protocol.user/grasp/mass``);
+* *full training*: every user, grasp and mass of the dataset.
+
+Both train on the training seeds only and are evaluated on new episodes (the test seeds) of five
+combinations, the paper's five rows (○ = the partial training set has it, × = it does not):
+
+    user mass grasp
+     ○    ○    ○      the training combination itself
+     ×    ○    ○      another user
+     ○    ×    ○      the box 10 % heavier
+     ○    ○    ×      another grasp
+     ×    ×    ×      all three changed
+
+For each evaluation frame, the networks' predicted internal normal forces go into the
+reconstruction SOCP (eq. 14, :func:`fsv.forces.reconstruct_forces`), whose total normal force per
+finger is compared with the tactile measurement (the truth's normal force):
+the relative error of finger k at frame i with true normal force f >= 1 N is |f̂ - f| / f, in percent;
+the table reports its mean and standard deviation over the scored (frame, finger) pairs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pandas as pd
+
+from benchmark.dataset import finger_names_of, frames_of, load_dataset, training_set
+from benchmark.errors import DatasetError
+from fsv import ObjectModel
+from fsv.forces import FrameStatus, reconstruct_forces
+from fsv.learn import InternalForceModel, LearnConfig, relative_errors_pct, train
+
+#: The paper's Table 2: (user, mass, grasp seen in partial training; partial avg, std; full avg, std) [%].
+PAPER = (
+    (True, True, True, 10.7, 12.4, 9.71, 12.0),
+    (False, True, True, 10.9, 12.3, 10.3, 11.8),
+    (True, False, True, 10.8, 11.3, 10.4, 12.4),
+    (True, True, False, 14.6, 14.5, 10.9, 11.3),
+    (False, False, False, 14.9, 14.8, 9.94, 12.6),
+)
+
+
+@dataclass(frozen=True)
+class Table2Protocol:
+    """Which dataset slices train and evaluate.
+
+    Attributes:
+        user, grasp, mass: The partial training combination (indices into sim_assets lists).
+        other_user, other_grasp: The held-out user and grasp of rows 2, 4 and 5.
+        heavier_mass: The +10 % variant of ``mass`` (rows 3 and 5).
+        train_seeds: Seeds of the training episodes.
+        test_seeds: Seeds of the evaluation episodes (never trained on).
+    """
+
+    user: int = 0
+    grasp: int = 0
+    mass: int = 1
+    other_user: int = 1
+    other_grasp: int = 1
+    heavier_mass: int = 4
+    train_seeds: tuple = (0, 1, 2)
+    test_seeds: tuple = (3,)
+
+    def rows(self) -> list[dict]:
+        """The five evaluation combinations, in the paper's order."""
+        out = []
+        for seen_user, seen_mass, seen_grasp, *_ in PAPER:
+            out.append(dict(
+                user=self.user if seen_user else self.other_user,
+                mass=self.mass if seen_mass else self.heavier_mass,
+                grasp=self.grasp if seen_grasp else self.other_grasp,
+            ))
+        return out
+
+
+def object_models(out) -> dict:
+    """The object model and gravity of each episode of a dataset: ``{episode: (ObjectModel, gravity)}``."""
+    import pyarrow.parquet as pq
+
+    man = pd.read_parquet(os.path.join(os.fspath(out), "manifest.parquet"))
+    models = {}
+    for ep, f in zip(man["episode"], man["file"]):
+        meta = json.loads(pq.read_schema(os.path.join(os.fspath(out), f)).metadata[b"fsv"])
+        if "object_model" in meta:
+            om = meta["object_model"]
+            models[ep] = (ObjectModel(**om), np.asarray(meta["gravity"], float))
+    return models
+
+
+def evaluate(model: InternalForceModel, df: pd.DataFrame, models: dict) -> dict:
+    """Reconstructs full forces (eq. 14) from the model's predictions on the frames of ``df``.
+
+    Args:
+        model: Trained networks.
+        df: Dataset rows (any number of episodes).
+        models: ``{episode: (ObjectModel, gravity)}`` (see :func:`object_models`).
+
+    Returns:
+        A dict with ``errors`` (relative errors in %, shape (M,)), per-row arrays ``t``,
+        ``episode``, ``predicted_internal``, ``normal`` (reconstructed total normal force),
+        ``measured`` (truth), ``status``, and ``residual_rel`` (max relative Newton-Euler
+        residual of the reconstruction over OPTIMAL frames).
+    """
+    names = finger_names_of(df)
+    if tuple(names) != tuple(model.finger_names):
+        raise DatasetError(f"the dataset's fingers {names} differ from the model's {model.finger_names}")
+    ts = training_set(df)
+    _, _, pred = model.predict(ts.x, ts.active)
+    normal = np.zeros_like(pred)
+    status = np.zeros(len(df), np.int8)
+    resid = 0.0
+    for ep, idx in df.groupby("episode", sort=False).indices.items():
+        obj, gravity = models[ep]
+        kin, con = frames_of(df.iloc[idx])
+        sol = reconstruct_forces(kin, con, obj, np.where(con.active, pred[idx], np.nan), gravity=gravity)
+        normal[idx] = sol.normal_force
+        status[idx] = sol.status
+        ok = sol.status == int(FrameStatus.OPTIMAL)
+        if ok.any():
+            scale = np.maximum(np.linalg.norm(sol.required[ok], axis=1), 1.0)
+            resid = max(resid, float(np.max(np.linalg.norm(sol.residual[ok], axis=1) / scale)))
+    measured = df[[f"f_meas_{n}" for n in names]].to_numpy(float)
+    scored = ts.active & (status == int(FrameStatus.OPTIMAL))[:, None]
+    return dict(
+        errors=relative_errors_pct(normal, measured, scored), t=df["t"].to_numpy(), episode=df["episode"].to_numpy(),
+        predicted_internal=pred, normal=normal, measured=measured, active=ts.active, status=status,
+        residual_rel=resid, finger_names=names,
+    )
+
+
+def score(data, protocol: Table2Protocol = Table2Protocol(), config: LearnConfig = LearnConfig()) -> dict:
+    """Trains the partial and full networks on ``data`` and fills the five rows of Table 2.
+
+    Returns:
+        ``{"rows": [...], "protocol": ..., "config": ..., "samples": ..., "fig6": ..., ...}``.
+    """
+    data = os.fspath(data)
+    models = object_models(data)
+    seeds = list(protocol.train_seeds)
+    part_df = load_dataset(data, user=protocol.user, grasp=protocol.grasp, mass=protocol.mass, seed=seeds)
+    full_df = load_dataset(data, seed=seeds)
+    names = finger_names_of(full_df)
+    t0 = time.perf_counter()
+    nets = {
+        "partial": train(training_set(part_df), config, finger_names=names, metadata=dict(training="partial")),
+        "full": train(training_set(full_df), config, finger_names=names, metadata=dict(training="full")),
+    }
+    train_s = time.perf_counter() - t0
+    rows, fig6 = [], {}
+    for paper, combo in zip(PAPER, protocol.rows()):
+        test_df = load_dataset(data, seed=list(protocol.test_seeds), **combo)
+        row = dict(combo, seen_user=paper[0], seen_mass=paper[1], seen_grasp=paper[2],
+                   paper_partial_avg=paper[3], paper_partial_std=paper[4], paper_full_avg=paper[5], paper_full_std=paper[6])
+        for which, net in nets.items():
+            ev = evaluate(net, test_df, models)
+            row[f"{which}_avg"] = float(np.mean(ev["errors"]))
+            row[f"{which}_std"] = float(np.std(ev["errors"]))
+            row[f"{which}_n"] = int(ev["errors"].size)
+            row[f"{which}_residual_rel"] = ev["residual_rel"]
+            if paper[:3] == (False, False, False):
+                fig6[which] = ev
+        rows.append(row)
+    return dict(
+        rows=rows, protocol=asdict(protocol), config=asdict(config), train_seconds=train_s,
+        samples=dict(partial=len(part_df), full=len(full_df)), fig6=fig6, sources=_sources(data),
+    )
+
+
+def _sources(data: str) -> dict:
+    with open(os.path.join(data, "dataset.json")) as fh:
+        spec = json.load(fh)["spec"]
+    return dict(kinematics=spec["kinematics"], contacts=spec["contacts"])
+
+
+def markdown(result: dict) -> str:
+    """Table 2 as Markdown, ours beside the paper's."""
+    mark = lambda b: "○" if b else "×"
+    lines = [
+        "| User | Mass | Grasp | Part. avg [%] | Part. std [%] | Full avg [%] | Full std [%] | Paper part. avg / std | Paper full avg / std |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in result["rows"]:
+        lines.append(
+            f"| {mark(r['seen_user'])} | {mark(r['seen_mass'])} | {mark(r['seen_grasp'])} | {r['partial_avg']:.1f} | "
+            f"{r['partial_std']:.1f} | {r['full_avg']:.1f} | {r['full_std']:.1f} | {r['paper_partial_avg']} / "
+            f"{r['paper_partial_std']} | {r['paper_full_avg']} / {r['paper_full_std']} |"
+        )
+    s = result["samples"]
+    lines.append("")
+    lines.append(
+        f"Training samples: partial {s['partial']}, full {s['full']}; kinematics: {result['sources']['kinematics']}, "
+        f"contacts: {result['sources']['contacts']} (oracle = from the truth). Relative error of the reconstructed "
+        "(eq. 14) normal force per finger with true normal force ≥ 1 N."
+    )
+    return "\n".join(lines) + "\n"
+
+
+def plot_fig6(result: dict, path: str) -> None:
+    """A plot like the paper's Fig. 6: reconstructed per-finger normal forces against the truth over time
+    for the first evaluation episode of the all-changed row (×××)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    full, part = result["fig6"]["full"], result["fig6"]["partial"]
+    ep = full["episode"][0]
+    m = full["episode"] == ep
+    names = full["finger_names"]
+    fig, axes = plt.subplots(len(names), 1, figsize=(8, 1.8 * len(names)), sharex=True)
+    for k, (ax, name) in enumerate(zip(np.atleast_1d(axes), names)):
+        a = full["active"][m, k]
+        t = full["t"][m]
+        ax.plot(t, np.where(a, full["measured"][m, k], np.nan), "k.", ms=3, label="truth (tactile)")
+        ax.plot(t, np.where(a, full["normal"][m, k], np.nan), "-", color="tab:blue", label="ANN + SOCP, full training")
+        ax.plot(t, np.where(a, part["normal"][m, k], np.nan), "-", color="tab:orange", lw=0.8, label="ANN + SOCP, partial")
+        ax.set_ylabel(f"{name} [N]")
+    np.atleast_1d(axes)[0].legend(fontsize=7, loc="upper right")
+    np.atleast_1d(axes)[-1].set_xlabel("t [s]")
+    fig.suptitle(f"Normal force per finger, episode {ep} (other user, +10 % mass, other grasp)", fontsize=9)
+    fig.tight_layout()
+    _atomic_savefig(fig, path)
+    plt.close(fig)
+
+
+def _atomic_savefig(fig, path: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".tmp-", suffix=".png")
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=110)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _atomic_text(text: str, path: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".tmp-")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def write(result: dict, out) -> None:
+    """Writes table2.md, table2.csv, table2.json and fig6.png to folder ``out``."""
+    out = os.fspath(out)
+    os.makedirs(out, exist_ok=True)
+    _atomic_text(markdown(result), os.path.join(out, "table2.md"))
+    _atomic_text(pd.DataFrame(result["rows"]).to_csv(index=False), os.path.join(out, "table2.csv"))
+    slim = {k: v for k, v in result.items() if k != "fig6"}
+    _atomic_text(json.dumps(slim, indent=1), os.path.join(out, "table2.json"))
+    plot_fig6(result, os.path.join(out, "fig6.png"))
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The arguments of ``fsv-bench table2``."""
+    p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
+    p.add_argument("--out", default="results/table2", help="output folder (default: results/table2)")
+    p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
+    p.add_argument("--seed", type=int, default=0, help="seed of the networks' initial weights")
+    p.add_argument("--train-seeds", default="0-2", help="episode seeds to train on")
+    p.add_argument("--test-seeds", default="3", help="episode seeds to evaluate on")
+
+
+def run(args: argparse.Namespace) -> dict:
+    """Runs ``fsv-bench table2``: prints the table and writes it to ``--out``."""
+    from benchmark.dataset import _ints
+
+    protocol = Table2Protocol(train_seeds=_ints(args.train_seeds), test_seeds=_ints(args.test_seeds))
+    result = score(args.data, protocol, LearnConfig(epochs=args.epochs, seed=args.seed))
+    write(result, args.out)
+    print(markdown(result))
+    print(f"written to {args.out}/ (table2.md, table2.csv, table2.json, fig6.png)")
+    return result

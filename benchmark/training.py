@@ -1,0 +1,51 @@
+"""``fsv-bench train``: fit the internal-force networks on a generated dataset and save them.
+
+    fsv-bench train --data DIR --out model.pt [--seeds 0-2] [--epochs 1500] [--folds 5]
+
+Runs k-fold cross-validation (folds made of whole episodes) to report the expected error, then
+trains on every selected sample and saves the model with its normalisation and a description of
+the data and command (:meth:`fsv.learn.InternalForceModel.save`, atomic).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+from benchmark.dataset import _ints, finger_names_of, load_dataset, training_set
+from fsv.learn import LearnConfig, cross_validate, train
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
+    p.add_argument("--out", required=True, help="model file to write (.pt)")
+    p.add_argument("--seeds", default=None, help="episode seeds to train on (default: all)")
+    p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
+    p.add_argument("--folds", type=int, default=LearnConfig.folds, help="cross-validation folds (0: skip)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the initial weights")
+
+
+def run(args: argparse.Namespace):
+    where = {} if args.seeds is None else dict(seed=list(_ints(args.seeds)))
+    df = load_dataset(args.data, **where)
+    data = training_set(df)
+    config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed)
+    t0 = time.perf_counter()
+    cv = cross_validate(data, config).summary() if args.folds else None
+    with open(os.path.join(args.data, "dataset.json")) as fh:
+        header = json.load(fh)
+    meta = dict(
+        command="fsv-bench train " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train"] else "fsv.learn.train",
+        dataset=header["spec"], selection=where, episodes=int(df["episode"].nunique()), cross_validation=cv,
+    )
+    model = train(data, config, finger_names=finger_names_of(df), metadata=meta)
+    model.save(args.out)
+    msg = f"trained on {len(data)} samples from {meta['episodes']} episodes in {time.perf_counter() - t0:.1f} s"
+    if cv:
+        msg += (f"; {cv['folds']}-fold CV: internal-force rel. error {cv['rel_err_pct_mean']:.1f} %, "
+                f"L2 norm rel. error {cv['l2_rel_err_pct_mean']:.1f} %, share RMSE {cv['share_rmse_mean']:.3f}")
+    print(msg + f"; saved {args.out}")
+    return model
