@@ -10,8 +10,11 @@ features use; the tactile net force is the resultant of the truth's finger force
 the table still carries the box are dropped too). Frames with fewer than ``min_fingers`` fingers in
 contact (no internal force is possible) or invalid kinematics are dropped as well.
 
-Sources. Until the tracker lands, kinematics and contacts are *oracle* (taken from the truth); the
-dataset records its sources in ``dataset.json`` and in every file, and every report labels them.
+Sources. The kinematics are estimated by default: the algebraic differentiator of
+``benchmark.motion`` on the observed poses (tracker-like errors on the true poses until the
+tracker lands), as the paper's vision kinematics. The contacts are *oracle* (from the truth) until
+the tracker lands. The dataset records its sources in ``dataset.json`` and in every file, and
+every report labels them.
 
 Layout of a dataset folder::
 
@@ -60,7 +63,8 @@ from fsv.learn import TrainingSet
 
 FORMAT = "fsv-bench-dataset"
 VERSION = 1
-SOURCES = ("oracle",)
+KINEMATICS = ("algebraic", "central", "gaussian", "oracle")
+CONTACTS = ("oracle",)
 _AX = "xyz"
 
 
@@ -74,7 +78,11 @@ class DatasetSpec:
         seeds: Scenario seeds.
         duration_s: Episode length in [s]; None takes each task's default.
         fps: Frame rate in [Hz].
-        kinematics: Source of the kinematics behind the features: "oracle" (the truth).
+        noise_m: Depth noise of the scenarios [m]; it sets the tracker-like pose errors that the
+            kinematics are differentiated from (``benchmark.pose_error``).
+        kinematics: Kinematics behind the features and the decomposition: a differentiator of
+            ``benchmark.motion`` ("algebraic", "central", "gaussian") on the observed poses, or
+            "oracle" (the truth).
         contacts: Source of the contacts: "oracle" (the truth).
         max_gap_n: Samples whose vision and tactile net forces differ by more than this are dropped, [N].
         min_fingers: Frames with fewer fingers in contact are dropped.
@@ -87,7 +95,8 @@ class DatasetSpec:
     seeds: tuple = (0,)
     duration_s: float | None = None
     fps: float = 30.0
-    kinematics: str = "oracle"
+    noise_m: float = 0.01
+    kinematics: str = "algebraic"
     contacts: str = "oracle"
     max_gap_n: float = 1.5
     min_fingers: int = 2
@@ -101,9 +110,11 @@ class DatasetSpec:
             object.__setattr__(self, name, tuple(int(v) for v in vals))
         if not self.tasks:
             raise DatasetError("tasks must name at least one task")
-        for name in ("kinematics", "contacts"):
-            if getattr(self, name) not in SOURCES:
-                raise DatasetError(f"{name} source must be one of {SOURCES}, got {getattr(self, name)!r}")
+        for name, accepted in (("kinematics", KINEMATICS), ("contacts", CONTACTS)):
+            if getattr(self, name) not in accepted:
+                raise DatasetError(f"{name} source must be one of {accepted}, got {getattr(self, name)!r}")
+        if not (np.isfinite(self.noise_m) and self.noise_m >= 0):
+            raise DatasetError(f"noise_m must be >= 0 m, got {self.noise_m!r}")
         if not (np.isfinite(self.max_gap_n) and self.max_gap_n > 0):
             raise DatasetError(f"max_gap_n must be > 0 N, got {self.max_gap_n!r}")
         if int(self.min_fingers) < 2:
@@ -112,7 +123,7 @@ class DatasetSpec:
     def scenarios(self) -> list[Scenario]:
         """Every scenario of the grid, in a fixed order."""
         return [
-            Scenario(task=t, user=u, grasp=g, mass=m, seed=s, duration_s=self.duration_s, fps=self.fps)
+            Scenario(task=t, user=u, grasp=g, mass=m, seed=s, noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)
             for t in self.tasks for u in self.users for g in self.grasps for m in self.masses for s in self.seeds
         ]
 
@@ -123,15 +134,6 @@ class DatasetSpec:
 def episode_id(sc: Scenario) -> str:
     """File stem of a scenario's table, e.g. ``lift_u0_g1_m2_s3``."""
     return f"{sc.task}_u{sc.user}_g{sc.grasp}_m{sc.mass}_s{sc.seed}"
-
-
-def oracle_kinematics(truth) -> Kinematics:
-    """The truth's box kinematics as an *oracle* :class:`fsv.Kinematics` (world frame)."""
-    T = len(truth.t)
-    return Kinematics(
-        t=truth.t, pos=truth.box_pos, rot=truth.box_rot, vel=truth.box_vel, acc=truth.box_acc,
-        omega=truth.box_omega, alpha=truth.box_alpha, valid=np.ones(T, bool), method="oracle",
-    )
 
 
 def oracle_contacts(truth) -> Contacts:
@@ -161,12 +163,13 @@ def measured_normal_forces(truth) -> np.ndarray:
 
 def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     """Simulates one scenario and returns its kept samples as a table (see the module docstring)."""
+    from benchmark.motion import episode_kinematics
     from benchmark.simulate import simulate
     from fsv.forces import FrameStatus, decompose_forces
 
     ep = simulate(scenario)
     tr, model = ep.truth, ep.object_model
-    kin, con = oracle_kinematics(tr), oracle_contacts(tr)
+    kin, con = episode_kinematics(ep, spec.kinematics), oracle_contacts(tr)
     feats = grasp_features(kin, con, model, gravity=tr.gravity)
     measured = measured_normal_forces(tr)
     tactile_net = np.sum(np.asarray(tr.contact_force), axis=1)  # object frame, like features.net_force
@@ -447,7 +450,7 @@ def frames_of(df: pd.DataFrame) -> tuple[Kinematics, Contacts]:
     v = {name: df[[f"{name}_{a}" for a in _AX]].to_numpy(float) for name in ("pos", "vel", "acc", "omega", "alpha")}
     rot = df[[f"rot_{i}{j}" for i in range(3) for j in range(3)]].to_numpy(float).reshape(-1, 3, 3)
     kin = Kinematics(df["t"].to_numpy(float), v["pos"], rot, v["vel"], v["acc"], v["omega"], v["alpha"],
-                     np.ones(len(df), bool), method="oracle")
+                     np.ones(len(df), bool), method="dataset")
     per = lambda fmt: np.stack([df[[fmt.format(a, n) for a in _AX]].to_numpy(float) for n in names], axis=1)
     con = Contacts(
         names, df[[f"active_{n}" for n in names]].to_numpy(bool), df[[f"sliding_{n}" for n in names]].to_numpy(bool),
@@ -481,6 +484,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--masses", default="0", help="mass indices")
     p.add_argument("--seeds", default="0", help="seeds, e.g. 0-9")
     p.add_argument("--duration", type=float, default=None, help="episode length in seconds (default: the task's)")
+    p.add_argument("--noise", type=float, default=0.01, help="depth noise in metres (sets the pose errors; default 0.01)")
+    p.add_argument("--kinematics", default="algebraic", choices=KINEMATICS, help="kinematics source (default: algebraic)")
     p.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
     p.add_argument("--ray-address", default=None, help="run on a Ray cluster at this address (needs the 'ray' extra)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -491,6 +496,7 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
     spec = DatasetSpec(
         tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()), users=_ints(args.users),
         grasps=_ints(args.grasps), masses=_ints(args.masses), seeds=_ints(args.seeds), duration_s=args.duration,
+        noise_m=args.noise, kinematics=args.kinematics,
     )
     t0 = time.perf_counter()
     man = generate(spec, args.out, workers=args.workers, ray_address=args.ray_address, progress=not args.no_progress)
