@@ -161,6 +161,26 @@ def measured_normal_forces(truth) -> np.ndarray:
     return np.where(truth.contact_active, f, 0.0)
 
 
+def sample_mask(kin: Kinematics, con: Contacts, feats, truth, min_fingers: int = 2, max_gap_n: float = 1.5):
+    """The paper's sample rule, per frame.
+
+    Args:
+        kin, con: The kinematics and contacts behind ``feats``.
+        feats: :class:`fsv.features.Features` (its ``net_force`` is the vision net force, object frame).
+        truth: The episode's truth (its finger forces are the tactile net force).
+        min_fingers: Fewest fingers in contact for an internal force to exist.
+        max_gap_n: Largest accepted |vision - tactile net force|, [N].
+
+    Returns:
+        ``(usable, keep, gap)``: frames with valid kinematics and enough fingers, shape (T,);
+        those of them whose net forces agree within ``max_gap_n``, shape (T,); and the gap, (T,), [N].
+    """
+    tactile_net = np.sum(np.asarray(truth.contact_force), axis=1)  # object frame, like feats.net_force
+    gap = np.linalg.norm(feats.net_force - tactile_net, axis=1)
+    usable = kin.valid & (con.active.sum(axis=1) >= min_fingers)
+    return usable, usable & (gap <= max_gap_n), gap
+
+
 def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     """Simulates one scenario and returns its kept samples as a table (see the module docstring)."""
     from benchmark.motion import episode_kinematics
@@ -172,11 +192,7 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     kin, con = episode_kinematics(ep, spec.kinematics), oracle_contacts(tr)
     feats = grasp_features(kin, con, model, gravity=tr.gravity)
     measured = measured_normal_forces(tr)
-    tactile_net = np.sum(np.asarray(tr.contact_force), axis=1)  # object frame, like features.net_force
-    gap = np.linalg.norm(feats.net_force - tactile_net, axis=1)
-    n_active = con.active.sum(axis=1)
-    keep_contacts = kin.valid & (n_active >= spec.min_fingers)
-    keep = keep_contacts & (gap <= spec.max_gap_n)
+    keep_contacts, keep, gap = sample_mask(kin, con, feats, tr, spec.min_fingers, spec.max_gap_n)
     idx = np.flatnonzero(keep)
     dec = decompose_forces(_take_kin(kin, idx), _take_con(con, idx), model, measured[idx], gravity=tr.gravity)
     ok = dec.status == int(FrameStatus.OPTIMAL)
@@ -504,7 +520,7 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
     print(
         f"dataset {args.out}: {len(man)} episodes ({failed} failed), {int(man['rows'].sum())} samples kept; "
         f"dropped {int(man['dropped_gap'].sum())} for |vision - tactile net force| > {spec.max_gap_n} N, "
-        f"{int(man['dropped_contacts'].sum())} with < {spec.min_fingers} fingers, "
+        f"{int(man['dropped_contacts'].sum())} with < {spec.min_fingers} fingers or invalid kinematics, "
         f"{int(man['dropped_solver'].sum())} unsolved; kinematics={spec.kinematics}, contacts={spec.contacts} "
         f"(oracle = from the truth); {time.perf_counter() - t0:.1f} s"
     )

@@ -21,6 +21,10 @@ training runs single-threaded (the thread count is restored afterwards) so that 
 reductions happen in one order: the same data and config give bit-identical weights. Everything
 is float64.
 
+Forces. :func:`learned_forces` chains the features, the networks and the reconstruction SOCP
+(eq. 14, :func:`fsv.forces.reconstruct_forces`): full contact forces that explain the motion and
+whose internal normal components follow the predictions.
+
 Files. :meth:`InternalForceModel.save` writes one ``torch.save`` archive (weights, input and
 target normalisation, config, finger names, free-form metadata) atomically; :func:`load` reads it
 back with ``weights_only=True`` and predicts bit-identically.
@@ -36,7 +40,10 @@ import numpy as np
 import torch
 
 from fsv.errors import InputError
-from fsv.features import Features
+from fsv.features import GRAVITY, Features, grasp_features
+from fsv.forces import ForceSettings, ForceSolution, reconstruct_forces
+from fsv.models import ObjectModel
+from fsv.types import Contacts, Kinematics
 
 FORMAT = "fsv-internal-forces"
 VERSION = 1
@@ -400,3 +407,45 @@ def cross_validate(data: TrainingSet, config: LearnConfig = LearnConfig()) -> Cr
         l2e.append(np.mean(100 * np.abs(l2[ok] - l2_true[ok]) / l2_true[ok]))
         srm.append(np.sqrt(np.mean((s - s_true)[val.active] ** 2)))
     return CrossValidation(np.array(rel), np.array(l2e), np.array(srm))
+
+
+def learned_forces(
+    model: InternalForceModel,
+    kinematics: Kinematics,
+    contacts: Contacts,
+    object_model: ObjectModel,
+    *,
+    gravity=GRAVITY,
+    settings: ForceSettings | None = None,
+) -> tuple[ForceSolution, np.ndarray]:
+    """Full contact forces from vision with human-like internal forces (the paper's Fig. 2b).
+
+    Args:
+        model: Trained networks whose finger slots match ``contacts.finger_names``.
+        kinematics: Object kinematics (world frame), T frames.
+        contacts: Finger contacts (object frame), T frames.
+        object_model: The known object (mass, inertia, friction).
+        gravity: Gravity, world frame, shape (3,), [m/s^2].
+        settings: Settings of the cone program.
+
+    Returns:
+        ``(solution, predicted)``: the reconstruction (eq. 14) and the predicted internal normal
+        forces fed to it, shape (T, K), [N] (0 for fingers not in contact).
+    """
+    if tuple(contacts.finger_names) != model.finger_names:
+        raise InputError(f"contacts have fingers {contacts.finger_names}, the model {model.finger_names}")
+    features = grasp_features(kinematics, contacts, object_model, gravity=gravity)
+    ok = kinematics.valid[:, None] & contacts.active
+    x = np.where(np.isfinite(features.matrix()), features.matrix(), 0.0)
+    predicted = np.where(ok, model.predict(x, contacts.active)[2], 0.0)
+    target = np.where(ok, predicted, np.nan)
+    solution = reconstruct_forces(kinematics, contacts, object_model, target, gravity=gravity, settings=settings)
+    return solution, predicted
+
+
+def default_model() -> InternalForceModel:
+    """The small model shipped with the package (``fsv/data/internal_forces.pt``); see the README
+    for the command that trained it and the data it was trained on."""
+    from importlib.resources import files
+
+    return load(files("fsv").joinpath("data", "internal_forces.pt"))

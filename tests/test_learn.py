@@ -97,3 +97,35 @@ def test_bad_inputs_are_named():
         LearnConfig(hidden_l2=())
     with pytest.raises(InputError, match="folds"):
         LearnConfig(folds=1)
+
+
+def test_learned_forces_explain_the_motion_and_follow_the_predictions():
+    from fsv import Contacts, Kinematics, ObjectModel
+    from fsv.forces import FrameStatus
+    from fsv.learn import learned_forces
+
+    rng = np.random.default_rng(4)
+    T, names = 12, ("thumb", "index", "middle")
+    point = np.array([[0.0, -0.0555, 0.0], [-0.03, 0.0555, 0.0], [0.03, 0.0555, 0.0]])
+    normal = np.array([[0.0, 1, 0], [0.0, -1, 0], [0.0, -1, 0]])
+    con = Contacts(names, np.ones((T, 3), bool), np.zeros((T, 3), bool), np.tile(point, (T, 1, 1)),
+                   np.tile(normal, (T, 1, 1)), np.zeros((T, 3, 3)))
+    obj = ObjectModel(size_m=[0.171, 0.111, 0.06], mass_kg=0.45,
+                      inertia=ObjectModel.solid_box_inertia([0.171, 0.111, 0.06], 0.45), friction=0.8)
+    kin = Kinematics(np.arange(T) / 30, np.tile([0, 0, 0.2], (T, 1)), np.tile(np.eye(3), (T, 1, 1)), np.zeros((T, 3)),
+                     rng.normal(0, 1.0, (T, 3)), rng.normal(0, 0.5, (T, 3)), rng.normal(0, 2.0, (T, 3)), np.ones(T, bool))
+    n = 300  # a rule on these three fingers: thumb opposes the two others, grip grows with the load
+    x = np.concatenate([rng.uniform(2, 8, (n, 1)), rng.uniform(0, 0.05, (n, 1)), rng.uniform(-1, 1, (n, 6)), np.ones((n, 3))], 1)
+    l2 = 2 + x[:, 0]
+    internal = l2[:, None] * np.array([2.0, 1.0, 1.0]) / np.sqrt(6)
+    model = train(TrainingSet(x, internal, np.ones((n, 3), bool)), LearnConfig(epochs=60), finger_names=names)
+    sol, pred = learned_forces(model, kin, con, obj)
+    assert np.all(sol.status == int(FrameStatus.OPTIMAL))
+    scale = np.linalg.norm(sol.required, axis=1)
+    assert np.max(np.linalg.norm(sol.residual, axis=1) / scale) <= 1e-6
+    np.testing.assert_allclose(sol.finger_wrench + sol.env_wrench, sol.required, atol=1e-6 * scale.max())
+    np.testing.assert_allclose(sol.internal_wrench, 0, atol=1e-6)
+    assert pred.min() > 1.0  # the predictions are real grip forces ...
+    np.testing.assert_allclose(sol.internal_normal, pred, atol=1e-3)  # ... and the internal parts follow them
+    with pytest.raises(InputError, match="fingers"):
+        learned_forces(model, kin, Contacts(("a", "b", "c"), con.active, con.sliding, con.point, con.normal, con.slide_dir), obj)
