@@ -1,0 +1,131 @@
+"""Speed of the nominal force program: ours (Clarabel, direct API) against cvxpy with parameters.
+
+    python -m benchmark.perf_forces [--frames N] [--repeats R] [--seed S]
+
+Frames: a simulated lift with the truth's contacts and kinematics (an oracle input: speed does not
+depend on where the contacts come from), restricted to the frames where 4-5 fingers touch, none
+slides and the box is off the table, and to the most frequent set of touching fingers, so cvxpy
+compiles one parametrised problem (DPP: the wrench matrix and the required wrench are parameters)
+and then only re-solves. Both sides solve the same frames with Clarabel; ours includes validation,
+assembly of the cone program and unpacking of the forces, cvxpy only ``problem.solve``.
+
+Ours is timed over the whole sequence, ``repeats`` times; the per-frame time is the sequence time
+divided by the number of frames, median over the repeats. cvxpy is timed per frame; median over the
+frames. The machine is shared, so read the ratio, not the absolute times.
+Targets (issue 5): <= 0.15 ms per frame and >= 10x faster than cvxpy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+TARGET_MS = 0.15
+TARGET_RATIO = 10.0
+
+
+def _frames(seed: int):
+    from benchmark.contact_error import contacts_from_truth
+    from benchmark.motion import oracle_kinematics
+    from benchmark.scenario import Scenario
+    from benchmark.simulate import simulate
+    from fsv.forces import table_contacts
+
+    ep = simulate(Scenario(task="lift", seed=seed))
+    tr = ep.truth
+    kin, con = oracle_kinematics(tr), contacts_from_truth(tr)
+    n = con.active.sum(axis=1)
+    ok = (n >= 4) & (n <= 5) & ~con.sliding.any(axis=1) & ~table_contacts(kin, ep.object_model).active.any(axis=1)
+    keys = [row.tobytes() for row in con.active]
+    counts = {}
+    for t in np.flatnonzero(ok):
+        counts[keys[t]] = counts.get(keys[t], 0) + 1
+    if not counts:
+        raise SystemExit("perf_forces: the lift has no frame with 4-5 static fingers off the table")
+    best = max(counts, key=counts.get)
+    idx = np.array([t for t in np.flatnonzero(ok) if keys[t] == best])
+    return ep, kin, con, idx
+
+
+def _subset(kin, con, idx):
+    from fsv import Contacts, Kinematics
+
+    k = Kinematics(kin.t[idx], kin.pos[idx], kin.rot[idx], kin.vel[idx], kin.acc[idx], kin.omega[idx],
+                   kin.alpha[idx], kin.valid[idx], kin.method)
+    c = Contacts(con.finger_names, con.active[idx], con.sliding[idx], con.point[idx], con.normal[idx],
+                 con.slide_dir[idx])
+    return k, c
+
+
+def _cvxpy_solver(K: int, mu: float):
+    import cvxpy as cp
+
+    W = cp.Parameter((6, 3 * K))
+    w = cp.Parameter(6)
+    x = cp.Variable(3 * K)
+    cons = [W @ x == w] + [cp.SOC(mu * x[3 * k], x[3 * k + 1 : 3 * k + 3]) for k in range(K)]
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(x)), cons)
+    assert prob.is_dpp()
+    return prob, W, w, x
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m benchmark.perf_forces", description=__doc__.split("\n")[0])
+    p.add_argument("--frames", type=int, default=200, help="at most this many frames")
+    p.add_argument("--repeats", type=int, default=7, help="timed repetitions of our sequence solve")
+    p.add_argument("--seed", type=int, default=0, help="scenario seed of the lift")
+    args = p.parse_args(argv)
+    import cvxpy as cp
+
+    from fsv.forces import FrameStatus, nominal_forces, required_wrench, tangent_basis, to_object_frame
+
+    ep, kin, con, idx = _frames(args.seed)
+    idx = idx[: args.frames]
+    k, c = _subset(kin, con, idx)
+    model = ep.object_model
+    g = ep.truth.gravity
+    fingers = np.flatnonzero(c.active[0])
+    K = len(fingers)
+
+    sol = nominal_forces(k, c, model, gravity=g)  # warm-up (imports, first solver build)
+    ours = []
+    for _ in range(args.repeats):
+        t0 = time.perf_counter()
+        sol = nominal_forces(k, c, model, gravity=g)
+        ours.append((time.perf_counter() - t0) / len(idx))
+    ours_ms = float(np.median(ours) * 1e3)
+
+    prob, W, w, x = _cvxpy_solver(K, model.friction)
+    req = to_object_frame(k.rot, required_wrench(k, model, g))
+    n = c.normal[:, fingers]
+    tx, ty = tangent_basis(n)
+    dirs = np.stack([n, tx, ty], axis=2)  # (T, K, 3, 3)
+    cols = np.concatenate([dirs, np.cross(c.point[:, fingers, None, :], dirs)], axis=-1)  # (T, K, 3, 6)
+    Wall = cols.reshape(len(idx), 3 * K, 6).transpose(0, 2, 1)
+    times, diff = [], 0.0
+    for i in range(len(idx) + 1):
+        j = max(i - 1, 0)  # the first solve compiles the problem and is not timed
+        W.value, w.value = Wall[j], req[j]
+        t0 = time.perf_counter()
+        prob.solve(solver=cp.CLARABEL)
+        if i > 0:
+            times.append(time.perf_counter() - t0)
+            F = np.einsum("kd,kdi->ki", x.value.reshape(K, 3), dirs[j])
+            diff = max(diff, float(np.abs(F - sol.force[j, fingers]).max()))
+    cvx_ms = float(np.median(times) * 1e3)
+    ratio = cvx_ms / ours_ms
+    print(f"frames: {len(idx)} of a simulated lift, {K} static finger contacts each (oracle contacts and kinematics)")
+    print(f"ours  (Clarabel direct, updated per frame): {ours_ms:.3f} ms/frame (median of {args.repeats} runs), "
+          f"median {np.median(sol.iterations):.0f} iterations, {sol.count(FrameStatus.OPTIMAL)} optimal")
+    print(f"cvxpy (DPP parameters, Clarabel):           {cvx_ms:.3f} ms/frame (median over frames)")
+    print(f"ratio cvxpy / ours: {ratio:.1f}x   max force difference: {diff:.2e} N")
+    print(f"targets: <= {TARGET_MS} ms/frame: {'met' if ours_ms <= TARGET_MS else 'NOT met'}; "
+          f">= {TARGET_RATIO:.0f}x: {'met' if ratio >= TARGET_RATIO else 'NOT met'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
