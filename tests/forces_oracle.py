@@ -181,3 +181,39 @@ def oracle(kind, required, contacts: Contacts, t: int, model: ObjectModel, targe
 
 def _cross(p, F):
     return [p[1] * F[2] - p[2] * F[1], p[2] * F[0] - p[0] * F[2], p[0] * F[1] - p[1] * F[0]]
+
+
+def grasp_truth(seed: int, T: int = 20, K: int = 4, model: ObjectModel | None = None, p_sliding: float = 0.0):
+    """A self-consistent benchmark Truth of a box held in the air by a random grasp.
+
+    Contact forces are random inside their cones; the box's acceleration and angular acceleration
+    are those Newton–Euler gives for them (no table force). Returns ``(truth, model)``.
+    """
+    from benchmark.truth import Truth
+
+    rng = np.random.default_rng(seed)
+    model = box_model() if model is None else model
+    contacts, force = random_grasp(rng, T, K, model, p_sliding=p_sliding)
+    q = rng.normal(size=(T, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    R = np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+    kin = kinematics_for(rng, force, contacts.point, model, rot=R)
+    zk = np.zeros((T, K, 3))
+    truth = Truth(
+        t=kin.t, box_pos=kin.pos, box_quat=q, box_vel=kin.vel, box_omega=kin.omega, box_acc=kin.acc,
+        box_alpha=kin.alpha, imu_acc=np.einsum("tji,tj->ti", R, kin.acc - GRAVITY),
+        imu_gyro=np.einsum("tji,tj->ti", R, kin.omega), finger_names=np.array(contacts.finger_names),
+        contact_active=contacts.active, contact_sliding=contacts.sliding, contact_point=contacts.point,
+        contact_normal=contacts.normal, contact_force=force, env_force=np.zeros((T, 3)),
+        env_torque=np.zeros((T, 3)), fingertip_pos=zk, hand_qpos=np.zeros((T, 12)), mass=model.mass_kg,
+        inertia=model.inertia, gravity=GRAVITY,
+    )
+    return truth, model

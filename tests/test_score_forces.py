@@ -1,0 +1,60 @@
+"""The force scorer: net wrench errors, nominal vs true normal forces, sum of squares, sensitivity, Fig. 5."""
+
+import numpy as np
+
+from benchmark.contact_error import contacts_from_truth, vision_like_contacts
+from benchmark.score_forces import plot_fig5, score_forces, sensitivity, true_net_wrench
+from forces_oracle import grasp_truth
+from fsv import Kinematics
+from fsv.forces import FrameStatus, nominal_forces
+
+
+def _kin(truth):
+    return Kinematics(truth.t, truth.box_pos, truth.box_rot, truth.box_vel, truth.box_acc, truth.box_omega,
+                      truth.box_alpha, np.ones(len(truth.t), bool), "oracle")
+
+
+def test_scores_of_nominal_forces_on_a_consistent_truth(tmp_path):
+    truth, model = grasp_truth(3, T=40, K=4)
+    kin = _kin(truth)
+    sol = nominal_forces(kin, contacts_from_truth(truth), model)
+    s = score_forces(sol, truth, kin.rot)
+    assert s["net_force_err_n_rms"] < 1e-6 and s["net_torque_err_nm_rms"] < 1e-7
+    assert s["solver_failures"] == 0 and s["frames_scored"] == 40 and s["status"]["optimal"] == 40
+    # The L2-minimal grasp presses less than the random (over-gripping) one, and never has a larger SoS.
+    assert s["nominal_normal_err_n_mean"] < -0.5
+    assert s["sos_true_not_below_nominal_frac"] == 1.0 and s["sos_frames"] == 40
+    # A biased estimate shows up in the net force error: 1 N along world x at every frame.
+    shifted = type(sol)(**{**sol.__dict__, "env_wrench": sol.env_wrench + np.concatenate(
+        [np.einsum("tji,j->ti", kin.rot, [1.0, 0, 0]), np.zeros((40, 3))], axis=1)})
+    assert abs(score_forces(shifted, truth, kin.rot)["net_force_err_n_rms"] - 1.0) < 1e-6
+    png = plot_fig5(sol, truth, kin.rot, tmp_path / "fig5.png", title="test")
+    assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_true_net_wrench_is_what_newton_euler_requires():
+    truth, model = grasp_truth(4, T=10, K=3)
+    w = true_net_wrench(truth)
+    assert np.allclose(w[:, :3], model.mass_kg * (truth.box_acc - truth.gravity))
+
+
+def test_sensitivity_is_zero_without_contact_error_and_grows_with_it():
+    truth, model = grasp_truth(5, T=60, K=4)
+    kin, c = _kin(truth), contacts_from_truth(truth)
+    none = sensitivity(kin, c, c, model)
+    assert none["normal_diff_n_mean"] == 0 and none["normal_diff_n_std"] == 0 and none["pairs"] == 240
+    small = sensitivity(kin, c, vision_like_contacts(c, model, np.random.default_rng(0), mean_m=0, std_m=1e-3), model)
+    large = sensitivity(kin, c, vision_like_contacts(c, model, np.random.default_rng(0), mean_m=0, std_m=1e-2), model)
+    assert 0 < small["force_diff_n_rms"] < large["force_diff_n_rms"]
+
+
+def test_frames_without_estimate_are_not_scored():
+    truth, model = grasp_truth(6, T=10, K=3)
+    kin = _kin(truth)
+    valid = np.ones(10, bool)
+    valid[:3] = False
+    kin = Kinematics(kin.t, kin.pos, kin.rot, kin.vel, kin.acc, kin.omega, kin.alpha, valid, "test")
+    sol = nominal_forces(kin, contacts_from_truth(truth), model)
+    s = score_forces(sol, truth, kin.rot)
+    assert s["frames_scored"] == 7 and s["status"]["no_kinematics"] == 3
+    assert sol.count(FrameStatus.NO_KINEMATICS) == 3 and np.isfinite(s["net_force_err_n_rms"])
