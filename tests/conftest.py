@@ -1,7 +1,13 @@
 """Shared pytest fixtures."""
 
-import numpy as np
-import pytest
+import os
+
+# Headless rendering on the CPU, set before any test module imports mujoco or pyrender.
+os.environ.setdefault("MUJOCO_GL", "egl")
+os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 # --- kinematics (issue 4): an analytic box trajectory with exact derivatives -------------------
 
