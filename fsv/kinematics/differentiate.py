@@ -3,15 +3,18 @@
 Translation: each world-frame coordinate of the centre of mass goes through the differentiator's
 stencils (``fsv.kinematics.stencils``).
 
-Rotation, on SO(3): for frame k let R_e be the orientation at the estimation time t_e = t_k - lag
-(the frame itself offline; in causal mode the frame ``lag`` earlier, or the geodesic interpolation
-between two frames when the lag is fractional). Every rotation of the stencil's window is expressed
-relative to it as a rotation vector, phi_j = log(R_e^T R_j), so that R(t) = R_e exp(phi(t)) with
-phi(t_e) = 0. Because the right Jacobian of SO(3) is the identity at phi = 0 (and its derivative
-contributes phi' x phi' = 0 there), the body-frame angular velocity and acceleration at t_e are
-exactly phi'(t_e) and phi''(t_e); the stencils estimate those, and R_e maps them to the world
-frame. A rotation at constant angular velocity has phi linear in time, so every differentiator
-returns that velocity exactly (rotation angles within a window must stay below pi).
+Rotation, on SO(3): for frame k the orientation R_e at the estimation time t_e = t_k - lag is
+the method's order-0 filter applied in the tangent space of the nearest frame r,
+R_e = R_r exp(sum_j c_j log(R_r^T R_j)) (the frame itself for central differences; a geodesic
+blend of two frames for a fractional causal lag). Every rotation of the stencil's window is then
+expressed relative to R_e as a rotation vector, phi_j = log(R_e^T R_j), so that
+R(t) = R_e exp(phi(t)) with phi(t_e) ~ 0. Because the right Jacobian of SO(3) is the identity at
+phi = 0 (and its derivative contributes phi' x phi' = 0 there), the body-frame angular velocity and
+acceleration at t_e are phi'(t_e) and phi''(t_e); the stencils estimate those, and R_e maps them
+to the world frame. A rotation at constant angular velocity has phi linear in time, so every
+differentiator returns that velocity exactly (rotation angles within a window must stay below pi).
+
+Position and orientation in the returned ``Kinematics`` are the filtered pose at t_e (order 0).
 
 Frames whose stencil would reach outside the sequence are marked invalid in ``Kinematics.valid``
 and hold the estimate of the nearest valid frame (so arrays stay finite).
@@ -58,8 +61,8 @@ def differentiate_poses(poses: Poses, config: AlgebraicConfig | CentralConfig | 
 
     Returns:
         Kinematics in the world frame. Offline, values at frame k refer to t_k (``delay_s`` = 0);
-        causal, they refer to t_k - ``delay_s`` and use frames up to k only, and ``pos``/``rot``
-        are the pose at that time (linear / geodesic interpolation between frames).
+        causal, they refer to t_k - ``delay_s`` and use frames up to k only. ``pos``/``rot`` are
+        the method's filtered pose at that time (order-0 stencil).
 
     Raises:
         InputError: For an unknown config, uneven frame times, or a sequence shorter than the
@@ -89,14 +92,10 @@ def differentiate_poses(poses: Poses, config: AlgebraicConfig | CentralConfig | 
     R_ref = so3.matrix_from_quat(q_ref)
     omega = np.einsum("tij,tj->ti", R_ref, rate)
     alpha = np.einsum("tij,tj->ti", R_ref, accel)
-    if config.causal:
-        pos, R_out = _hold(pos, lo, hi), _hold(R_ref, lo, hi)
-    else:
-        pos, R_out = poses.pos, poses.rot
     return Kinematics(
         t=poses.t,
-        pos=pos,
-        rot=R_out,
+        pos=_hold(pos, lo, hi),
+        rot=R_ref,
         vel=_hold(vel, lo, hi),
         acc=_hold(acc, lo, hi),
         omega=_hold(omega, lo, hi),
@@ -124,17 +123,18 @@ def _hold(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
 
 
 def _reference(quats: np.ndarray, offsets: np.ndarray, coeffs: np.ndarray, lo: int, hi: int) -> np.ndarray:
-    """Orientation at the estimation time of each frame: one frame, or the geodesic blend of two."""
+    """Filtered orientation at each frame's estimation time (frames outside [lo, hi) hold the edge).
+
+    The order-0 stencil is applied to rotation vectors in the tangent space of its heaviest tap.
+    """
     T = quats.shape[0]
     k = np.clip(np.arange(T), lo, hi - 1)
     if offsets.size == 1:
         return quats[k + offsets[0]]
-    if offsets.size != 2 or not np.isclose(coeffs.sum(), 1.0):
-        raise InputError(f"pose interpolation needs two taps summing to 1, got {offsets} {coeffs}")
-    older, newer = np.argsort(offsets)
-    q_a, q_b = quats[k + offsets[older]], quats[k + offsets[newer]]
-    step = so3.quat_log(so3.quat_mul(so3.quat_conj(q_a), q_b))
-    return so3.quat_mul(q_a, so3.quat_exp(coeffs[newer] * step))
+    q_r = quats[k + offsets[np.argmax(coeffs)]]
+    rel = so3.quat_mul(so3.quat_conj(q_r)[:, None, :], quats[k[:, None] + offsets[None, :]])
+    mean = np.einsum("j,tjd->td", coeffs, so3.quat_log(rel)) / coeffs.sum()
+    return so3.quat_mul(q_r, so3.quat_exp(mean))
 
 
 def _rotation_rates(

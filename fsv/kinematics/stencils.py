@@ -13,7 +13,9 @@ read ``delay`` later; when the delay is not a whole number of frames, two shifte
 linearly (``Stencil.taps``), which keeps exactness because the n-th derivative of a degree-(n+1)
 polynomial is linear in time.
 
-Three families:
+Order 0 is each method's smoothing filter; it gives the pose the kinematics refer to (which
+matters: the AHRS comparison rotates a - g into the box frame with it, and a 3 degree orientation
+error alone turns gravity into a 0.5 m/s^2 acceleration error). Three families:
 
 * Algebraic: the minimal (kappa, mu) algebraic numerical differentiators of Mboup, Join and Fliess
   (Numer. Algorithms 50, 2009). Their kernel for the n-th derivative over a window of length
@@ -31,8 +33,10 @@ Three families:
   weights are (anti)symmetric, every moment below n vanishes and the delay is (L-1)/2 frames. For
   kappa != mu and n >= 2 the discretisation leaves m_1 != 0 (a linear ramp would leak into the
   acceleration); ``exact_moments`` removes that residue with the smallest change of the weights.
+  Order 0 is the minimal (kappa, mu) smoother: the normalised Jacobi weight integrated over each
+  interval (a regularised incomplete beta function), exact on lines at its delay.
 * Central finite differences with a step of h frames: (x_(k+h) - x_(k-h)) / (2 h dt) and
-  (x_(k+h) - 2 x_k + x_(k-h)) / (h dt)^2.
+  (x_(k+h) - 2 x_k + x_(k-h)) / (h dt)^2; no smoothing (order 0 is the sample itself).
 * Gaussian filtering (standard deviation sigma frames, truncated at ``truncate`` sigma, normalised
   to unit sum) followed by the central differences of step 1: the convolution of the two.
 """
@@ -43,6 +47,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import special
 
 from fsv.errors import InputError
 
@@ -56,7 +61,7 @@ class Stencil:
         weights: w_i applied to x_(k-i), shape (L,), [1/s^n].
         dt: Sampling period in [s].
         delay_s: The estimate at t_k is the n-th derivative at t_k - delay_s, [s].
-        exact_degree: Highest polynomial degree on which the estimate is exact at that delay.
+        exact_degree: The estimate is exact at that delay on every polynomial of this degree or lower.
     """
 
     order: int
@@ -134,7 +139,8 @@ def algebraic_weights(order: int, window_frames: int, kappa: float, mu: float, e
     """Dimensionless weights (dt = 1) of the minimal (kappa, mu) algebraic differentiator.
 
     Args:
-        order: Derivative order n in {1, 2}.
+        order: Derivative order n in {0, 1, 2}; 0 is the (kappa, mu) smoothing filter, whose
+            weights integrate the normalised Jacobi weight over each interval (incomplete beta).
         window_frames: Number of samples L (window length T = L dt).
         kappa: Jacobi exponent offset on the newest end, > -1.
         mu: Jacobi exponent offset on the oldest end, > -1.
@@ -146,7 +152,7 @@ def algebraic_weights(order: int, window_frames: int, kappa: float, mu: float, e
     """
     a, b = kappa + order, mu + order
     u = np.arange(window_frames + 1) / window_frames
-    prim = _jacobi_weight_derivative(u, a, b, order - 1)
+    prim = special.betainc(a + 1, b + 1, u) if order == 0 else _jacobi_weight_derivative(u, a, b, order - 1)
     w = np.diff(prim)
     w = w / moments(w, order)[order]
     if exact_moments:
@@ -191,8 +197,6 @@ class AlgebraicConfig:
 
     def stencil(self, order: int, dt: float) -> Stencil:
         order, dt = _check_order(order), _check_dt(dt)
-        if order == 0:
-            return _finish(0, np.ones(1), dt, exact_degree=0)
         w = algebraic_weights(order, int(self.window_frames), float(self.kappa), float(self.mu), self.exact_moments)
         exact = order + 1 if (self.exact_moments or self.kappa == self.mu or order == 1) else 0
         return _finish(order, w, dt, exact_degree=exact)
@@ -224,7 +228,7 @@ class CentralConfig:
     def stencil(self, order: int, dt: float) -> Stencil:
         order, dt = _check_order(order), _check_dt(dt)
         if order == 0:
-            return _finish(0, np.ones(1), dt, exact_degree=0)
+            return _finish(0, np.ones(1), dt, exact_degree=1)
         h = int(self.step_frames)
         w = np.zeros(2 * h + 1)
         if order == 1:
@@ -270,7 +274,7 @@ class GaussianConfig:
     def stencil(self, order: int, dt: float) -> Stencil:
         order, dt = _check_order(order), _check_dt(dt)
         if order == 0:
-            return _finish(0, np.ones(1), dt, exact_degree=0)
+            return _finish(0, self.kernel(), dt, exact_degree=1)
         diff = np.array([0.5, 0.0, -0.5]) if order == 1 else np.array([1.0, -2.0, 1.0])
         w = np.convolve(self.kernel(), diff)
         return _finish(order, w, dt, exact_degree=2 if order == 1 else 3)
