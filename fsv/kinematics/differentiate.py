@@ -22,6 +22,8 @@ and hold the estimate of the nearest valid frame (so arrays stay finite).
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from fsv.errors import InputError
@@ -73,9 +75,7 @@ def differentiate_poses(poses: Poses, config: AlgebraicConfig | CentralConfig | 
     if not isinstance(poses, Poses):
         raise InputError(f"poses must be fsv.Poses, got {type(poses).__name__}")
     dt = sampling_period(poses.t)
-    stencils = [config.stencil(n, dt) for n in (0, 1, 2)]
-    lag = max(s.delay_s for s in stencils) if config.causal else 0.0
-    taps = [s.taps(lag) for s in stencils]
+    taps = _taps(config, dt)
     T = len(poses)
     lo = max(-int(o.min()) for o, _ in taps)
     hi = T - max(int(o.max()) for o, _ in taps)  # valid frames: lo <= k < hi
@@ -102,15 +102,35 @@ def differentiate_poses(poses: Poses, config: AlgebraicConfig | CentralConfig | 
         alpha=_hold(alpha, lo, hi),
         valid=valid,
         method=config.name,
-        delay_s=float(lag),
+        delay_s=_lag(config, dt),
     )
+
+
+@functools.lru_cache(maxsize=512)
+def _lag(config, dt: float) -> float:
+    """Common lag of all orders: 0 offline, the largest stencil delay in causal mode, [s]."""
+    return max(config.stencil(n, dt).delay_s for n in (0, 1, 2)) if config.causal else 0.0
+
+
+@functools.lru_cache(maxsize=512)
+def _taps(config, dt: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(offsets, coeffs) of orders 0, 1, 2 at the common lag (configs are frozen, hence cacheable)."""
+    taps = [config.stencil(n, dt).taps(_lag(config, dt)) for n in (0, 1, 2)]
+    for arrays in taps:
+        for a in arrays:
+            a.setflags(write=False)
+    return taps
 
 
 def _apply(x: np.ndarray, offsets: np.ndarray, coeffs: np.ndarray, lo: int, hi: int) -> np.ndarray:
     """sum_j coeffs[j] * x[k + offsets[j]] for lo <= k < hi; other rows are zero. x: (T, d)."""
+    first = int(offsets.min())
+    dense = np.zeros(int(offsets.max()) - first + 1)
+    dense[offsets - first] = coeffs
+    seg = x[lo + first : hi + first + dense.size - 1]
     out = np.zeros_like(x, dtype=float)
-    for o, c in zip(offsets, coeffs):
-        out[lo:hi] += c * x[lo + o : hi + o]
+    for i in range(x.shape[1]):
+        out[lo:hi, i] = np.correlate(seg[:, i], dense, "valid")
     return out
 
 

@@ -56,17 +56,15 @@ def matrix_from_quat(q: np.ndarray) -> np.ndarray:
 
 def quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product p q (rotation q first, then p), broadcasting over leading axes."""
-    pw, px, py, pz = np.moveaxis(np.asarray(p, dtype=float), -1, 0)
-    qw, qx, qy, qz = np.moveaxis(np.asarray(q, dtype=float), -1, 0)
-    return np.stack(
-        [
-            pw * qw - px * qx - py * qy - pz * qz,
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw,
-        ],
-        -1,
-    )
+    p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
+    pw, px, py, pz = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
+    qw, qx, qy, qz = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    out = np.empty(np.broadcast_shapes(p.shape, q.shape))
+    out[..., 0] = pw * qw - px * qx - py * qy - pz * qz
+    out[..., 1] = pw * qx + px * qw + py * qz - pz * qy
+    out[..., 2] = pw * qy - px * qz + py * qw + pz * qx
+    out[..., 3] = pw * qz + px * qy - py * qx + pz * qw
+    return out
 
 
 def quat_conj(q: np.ndarray) -> np.ndarray:
@@ -80,15 +78,15 @@ def quat_log(q: np.ndarray) -> np.ndarray:
     q and -q give the same rotation vector (the shorter way round).
     """
     q = np.asarray(q, dtype=float)
-    q = np.where(q[..., :1] < 0, -q, q)
-    w, v = q[..., 0], q[..., 1:]
-    s = np.linalg.norm(v, axis=-1)
-    angle = 2 * np.arctan2(s, w)
+    sign = np.where(q[..., 0] < 0, -1.0, 1.0)
+    w, v = sign * q[..., 0], q[..., 1:]
+    s = np.sqrt(np.einsum("...i,...i->...", v, v))
     small = s < 1e-8
-    # angle / s -> 2 / w (1 - s^2 / (3 w^2)) as s -> 0 (w ~ 1 there).
+    s_safe = np.where(small, 1.0, s)
     w_small = np.where(small, w, 1.0)  # w ~ 1 wherever s is small
-    scale = np.where(small, 2 / w_small * (1 - s**2 / (3 * w_small**2)), angle / np.where(small, 1.0, s))
-    return v * scale[..., None]
+    # angle / s -> 2 / w (1 - s^2 / (3 w^2)) as s -> 0.
+    scale = np.where(small, 2 / w_small * (1 - s**2 / (3 * w_small**2)), 2 * np.arctan2(s, w) / s_safe)
+    return v * (sign * scale)[..., None]
 
 
 def quat_exp(phi: np.ndarray) -> np.ndarray:
