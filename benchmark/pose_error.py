@@ -14,10 +14,10 @@ every frame; consecutive errors have correlation rho (0.72 at 30 fps for 0.1 s).
 Scale: the pose error of a tracker grows with the depth noise. ``for_scenario`` scales the
 reference standard deviations (given at 1 cm depth noise) linearly with ``Scenario.noise_m``; at
 0 noise the poses are exact. The reference values (1.5 mm, 3 deg, 0.1 s) are our choice: a few
-millimetres and degrees, like model-based RGB-D hand-object trackers on a hand-occluded box; at
-30 fps they make three-point central differences about as noisy as the paper's (Table 1:
-1.7 m/s^2, 1.6 rad/s), so the table compares the differentiators at the paper's noise level. They
-fix the noise level, not the ranking of the differentiators.
+millimetres and degrees, like model-based RGB-D trackers on a hand-occluded box. At 30 fps they
+make three-point central accelerations about as noisy as the paper's (Table 1: 1.7 m/s^2) and
+central angular velocities about half as noisy (0.8 vs 1.6 rad/s). They set the noise level, not
+the ranking of the differentiators.
 """
 
 from __future__ import annotations

@@ -45,19 +45,25 @@ Gaussian and the algebraic filters. Without it the slow lift task rewards ever l
 
 
 def _support(cfg) -> int:
+    """Frames spanned by a config's acceleration stencil."""
     return cfg.stencil(2, 1.0).weights.size
 
 
-GAUSSIAN_GRID = tuple(
-    c
-    for c in (GaussianConfig(sigma_frames=s / 4, truncate=tr) for tr in (2.0, 3.0, 4.0) for s in range(2, 41))
-    if _support(c) <= MAX_SUPPORT_FRAMES
-)
-ALGEBRAIC_GRID = tuple(
-    AlgebraicConfig(window_frames=L, kappa=k, mu=k)
-    for L in range(5, MAX_SUPPORT_FRAMES + 1, 2)
-    for k in (0.0, 0.5, 1.0, 2.0, 3.0)
-)
+def gaussian_grid(max_support: int = MAX_SUPPORT_FRAMES) -> tuple:
+    """Gaussian candidates: sigma in steps of 1/4 frame, truncated at 2, 3 or 4 sigma, within the budget."""
+    cands = (GaussianConfig(sigma_frames=s / 4, truncate=tr) for tr in (2.0, 3.0, 4.0) for s in range(2, 4 * max_support))
+    return tuple(c for c in cands if _support(c) <= max_support)
+
+
+def algebraic_grid(max_support: int = MAX_SUPPORT_FRAMES) -> tuple:
+    """Centred algebraic candidates: odd windows L <= budget, kappa = mu in {0, 0.5, 1, 2, 3}."""
+    return tuple(
+        AlgebraicConfig(window_frames=L, kappa=k, mu=k) for L in range(5, max_support + 1, 2) for k in (0.0, 0.5, 1.0, 2.0, 3.0)
+    )
+
+
+GAUSSIAN_GRID = gaussian_grid()
+ALGEBRAIC_GRID = algebraic_grid()
 
 
 def imu_errors(kin: Kinematics, truth: Truth) -> tuple[np.ndarray, np.ndarray]:
@@ -274,39 +280,71 @@ def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | 
     return paths
 
 
-def calibrate(task: str = "lift", noise_m: float = 0.01, seeds=CALIBRATION_SEEDS, duration_s: float | None = None):
-    """Simulates the calibration episodes and tunes the Gaussian and algebraic parameters.
+def rms_errors(calibration: list[tuple[Truth, Poses]], config) -> tuple[float, float]:
+    """RMS acceleration and gyro errors of one config pooled over episodes (frames where it is valid)."""
+    acc, gyro = [], []
+    for truth, poses in calibration:
+        kin = differentiate_poses(poses, config)
+        e_acc, e_gyro = imu_errors(kin, truth)
+        acc.append(e_acc[kin.valid].ravel())
+        gyro.append(e_gyro[kin.valid].ravel())
+    return float(np.sqrt(np.mean(np.concatenate(acc) ** 2))), float(np.sqrt(np.mean(np.concatenate(gyro) ** 2)))
 
-    Returns:
-        ``(best, scores)`` as :func:`tune`.
+
+def support_sweep(calibration: list[tuple[Truth, Poses]], supports=(9, 15, 21, 31)) -> list[dict]:
+    """Best Gaussian and best algebraic config at each support budget, with their RMS errors.
+
+    Shows how the comparison depends on the window budget (the slow lift rewards long windows).
     """
+    rows = []
+    for S in supports:
+        best, _ = tune(calibration, {"gaussian": gaussian_grid(S), "algebraic": algebraic_grid(S)})
+        for method in ("gaussian", "algebraic"):
+            acc, gyro = rms_errors(calibration, best[method])
+            rows.append(dict(support=S, method=method, params=best[method].describe(), acc_rms=acc, gyro_rms=gyro))
+    return rows
+
+
+def calibration_set(task: str = "lift", noise_m: float = 0.01, seeds=CALIBRATION_SEEDS, duration_s: float | None = None):
+    """Simulated calibration episodes as (truth, tracker-like poses) pairs (seeds never scored)."""
     from benchmark.pose_error import tracker_like_poses
     from benchmark.scenario import Scenario
     from benchmark.simulate import simulate
 
-    calibration = []
+    out = []
     for seed in seeds:
         sc = Scenario(task=task, noise_m=noise_m, seed=int(seed), duration_s=duration_s)
         truth = simulate(sc).truth
-        calibration.append((truth, tracker_like_poses(truth, sc)))
-    return tune(calibration)
+        out.append((truth, tracker_like_poses(truth, sc)))
+    return out
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description="Table 1 tools: re-tune the differentiators on calibration episodes.")
+    parser = argparse.ArgumentParser(description="Table 1 tools: tune the differentiators on calibration episodes.")
     parser.add_argument("--calibrate", action="store_true", help="tune on the calibration seeds and print the best parameters")
+    parser.add_argument("--sweep", action="store_true", help="also compare the best Gaussian and algebraic filters per window budget")
     parser.add_argument("--task", default="lift")
     parser.add_argument("--noise", type=float, default=0.01)
     args = parser.parse_args(argv)
-    if not args.calibrate:
+    if not (args.calibrate or args.sweep):
         parser.print_help()
         return 0
-    best, scores = calibrate(args.task, args.noise)
-    for method, scored in scores.items():
-        top = sorted(scored, key=lambda s: s[1])[:5]
-        print(f"{method}: best {best[method].describe()}")
-        for cfg, j in top:
-            print(f"    {j:.4f}  {cfg.describe()}")
+    calibration = calibration_set(args.task, args.noise)
+    seeds = f"{CALIBRATION_SEEDS[0]}-{CALIBRATION_SEEDS[-1]}"
+    if args.calibrate:
+        best, scores = tune(calibration)
+        print(f"calibration: task {args.task}, noise {args.noise} m, seeds {seeds}, support <= {MAX_SUPPORT_FRAMES} frames")
+        for method, scored in scores.items():
+            print(f"{method}: best {best[method].describe()}")
+            for cfg, j in sorted(scored, key=lambda s: s[1])[:5]:
+                print(f"    objective {j:.4f}  {cfg.describe()}")
+    if args.sweep:
+        print("| support [frames] | method | parameters | acc RMS [m/s^2] | gyro RMS [rad/s] |")
+        print("|---|---|---|---|---|")
+        ref_acc, ref_gyro = rms_errors(calibration, DECLARED["central"])
+        print(f"| 3 | central | {DECLARED['central'].describe()} | {ref_acc:.3f} | {ref_gyro:.3f} |")
+        for r in support_sweep(calibration):
+            print(f"| {r['support']} | {r['method']} | {r['params']} | {r['acc_rms']:.3f} | {r['gyro_rms']:.3f} |")
     return 0
 
 
