@@ -76,6 +76,23 @@ def _capsule_t(o, d, a, b, r):
     return best
 
 
+def _near_pixels(calib, a, b, r):
+    """Flat indices of the pixels whose rays may hit the capsule a-b (its projected bounding box)."""
+    T = calib.T_world_cam
+    pc = (np.stack([a, b]) - T[:3, 3]) @ T[:3, :3]
+    z = pc[:, 2]
+    if np.any(z <= r):
+        return np.arange(calib.width * calib.height)
+    uv = pc[:, :2] / z[:, None] * [calib.K[0, 0], calib.K[1, 1]] + [calib.K[0, 2], calib.K[1, 2]]
+    pad = r * calib.K[0, 0] / (z.min() - r) + 2
+    u0, v0 = np.maximum(np.floor(uv.min(0) - pad).astype(int), 0)
+    u1, v1 = np.minimum(np.ceil(uv.max(0) + pad).astype(int), [calib.width - 1, calib.height - 1])
+    if u1 < u0 or v1 < v0:
+        return np.zeros(0, dtype=int)
+    vv, uu = np.mgrid[v0 : v1 + 1, u0 : u1 + 1]
+    return (vv * calib.width + uu).reshape(-1)
+
+
 def render_depth(calib, box_pos, box_rot, half, capsules=(), noise_m=0.0, rng=None, table=True):
     """Depth image (H, W) float32 of a box on the table z = 0 plus capsules (a, b, radius)."""
     o, d = _rays(calib)
@@ -85,8 +102,11 @@ def render_depth(calib, box_pos, box_rot, half, capsules=(), noise_m=0.0, rng=No
             tt = -o[2] / d[:, 2]
         t = np.minimum(t, np.where(tt > 0, tt, np.inf))
     for a, b, r in capsules:
-        t = np.minimum(t, _capsule_t(o, d, np.asarray(a, float), np.asarray(b, float), float(r)))
+        a, b, r = np.asarray(a, float), np.asarray(b, float), float(r)
+        sel = _near_pixels(calib, a, b, r)
+        t[sel] = np.minimum(t[sel], _capsule_t(o, d[sel], a, b, r))
     z = np.where(np.isfinite(t), t, 0.0)  # d has unit optical-axis component: t is the depth
     if noise_m > 0:
         z = np.where(z > 0, z + rng.normal(0.0, noise_m, z.shape), 0.0)
     return np.maximum(z, 0).reshape(calib.height, calib.width).astype(np.float32)
+

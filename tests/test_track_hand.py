@@ -7,7 +7,7 @@ from benchmark.hand import hand_model
 from fsv import InputError, ObjectModel
 from fsv.hand import forward_kinematics
 from fsv.track.camera import CameraRays
-from fsv.track.hand import HandKinematics, HandState, HandTracker, box_signed_distance
+from fsv.track.hand import HandKinematics, HandState, HandTracker, box_signed_distance, ray_capsules
 from fsv.track.object import predict_box_depth
 from fsv.track.rotation import exp_so3
 from raycast import look_at_calibration, render_depth
@@ -112,3 +112,23 @@ def test_bad_inputs_are_named():
         HandTracker(CALIB, HAND, BOX, HandState(np.zeros(3), np.eye(3), np.zeros(3)))
     with pytest.raises(InputError, match="palm_rot"):
         HandState(np.zeros(3), np.ones((3, 3)), np.zeros(20))
+
+
+def test_ray_capsules_match_an_independent_ray_caster():
+    kin = HandKinematics(HAND)
+    p, r, _, _ = kin.pose(hover_state())
+    a, b = kin.capsules(p, r)
+    rays = CameraRays.from_calibration(CALIB)
+    depth, geom, x, nrm = ray_capsules(rays.origin, rays.ray, a, b, HAND.geom_radius)
+    ref = render_depth(CALIB, [0.0, 0.0, -1.0], np.eye(3), [1e-3] * 3, list(zip(a, b, HAND.geom_radius)),
+                       table=False).reshape(-1)
+    hit = ref > 0
+    assert hit.sum() > 300
+    np.testing.assert_array_equal(np.isfinite(depth), hit)
+    np.testing.assert_allclose(depth[hit], ref[hit], atol=1e-5)  # float32 reference
+    # hit points lie on their capsule's surface, normals are unit and face the camera
+    from fsv.track.hand import closest_on_capsules
+    g, d, _, _ = closest_on_capsules(x[hit], a, b, HAND.geom_radius)
+    assert np.abs(d).max() < 1e-9
+    np.testing.assert_allclose(np.linalg.norm(nrm[hit], axis=1), 1.0)
+    assert np.all(np.einsum("ni,ni->n", nrm[hit], rays.ray[hit]) < 0)

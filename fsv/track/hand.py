@@ -251,6 +251,62 @@ def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius
     return g, dist[rows, g], cp, normal
 
 
+def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray):
+    """First intersection of camera rays with a set of capsules.
+
+    Args:
+        origin: Camera centre, shape (3,), [m].
+        rays: Ray directions with unit optical-axis component, shape (N, 3), so that the ray
+            parameter of a hit is its depth.
+        a, b: Capsule end points, shape (G, 3), [m].
+        radius: Capsule radii, shape (G,), [m].
+
+    Returns:
+        ``(depth (N,), geom (N,), point (N, 3), normal (N, 3))``: depth of the first hit (+inf for
+        none), the capsule hit (-1 for none), the hit point and the outward unit surface normal.
+    """
+    N = rays.shape[0]
+    ab = b - a
+    L = np.maximum(np.linalg.norm(ab, axis=1), 1e-12)
+    u = ab / L[:, None]
+    w = origin[None, :] - a  # (G, 3)
+    d = rays
+    dd = np.einsum("ni,ni->n", d, d)[:, None]  # (N, 1)
+    du = d @ u.T  # (N, G)
+    wu = np.einsum("gi,gi->g", w, u)[None]  # (1, G)
+    wd = d @ w.T  # (N, G)
+    ww = np.einsum("gi,gi->g", w, w)[None]
+    r2 = (radius**2)[None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        # Cylinder: |w_p + t d_p|^2 = r^2 with the components perpendicular to the axis.
+        A = dd - du**2
+        B = 2 * (wd - wu * du)
+        C = ww - wu**2 - r2
+        disc = B**2 - 4 * A * C
+        t_cyl = np.where((disc >= 0) & (A > 1e-12), (-B - np.sqrt(np.maximum(disc, 0))) / (2 * A), np.inf)
+        s = wu + t_cyl * du
+        t_cyl = np.where((t_cyl > 0) & (s >= 0) & (s <= L[None]), t_cyl, np.inf)
+        best = t_cyl
+        for end in (a, b):  # the two end spheres
+            we = origin[None, :] - end
+            Be = 2 * (d @ we.T)
+            Ce = np.einsum("gi,gi->g", we, we)[None] - r2
+            disc = Be**2 - 4 * dd * Ce
+            t_s = np.where(disc >= 0, (-Be - np.sqrt(np.maximum(disc, 0))) / (2 * dd), np.inf)
+            best = np.minimum(best, np.where(t_s > 0, t_s, np.inf))
+    geom = np.argmin(best, axis=1)
+    rows = np.arange(N)
+    depth = best[rows, geom]
+    hit = np.isfinite(depth)
+    x = origin + np.where(hit, depth, 0.0)[:, None] * d
+    g = geom
+    sax = np.clip(np.einsum("ni,ni->n", x - a[g], u[g]), 0.0, L[g])
+    axis_pt = a[g] + sax[:, None] * u[g]
+    nrm = x - axis_pt
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
+    return depth, np.where(hit, geom, -1), x, nrm
+
+
 def box_signed_distance(points_obj: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance to a box centred at the origin and its gradient (object frame).
 
@@ -331,12 +387,12 @@ class HandTracker:
         uvz = uvz[uvz[:, 2] > 0.05]
         W, H = self.rays.width, self.rays.height
         if uvz.shape[0] == 0:
-            return np.zeros((0, 3))
+            return np.zeros(0, dtype=int)
         m = self.config.roi_margin_px
         u0, v0 = np.maximum(np.floor(uvz[:, :2].min(0)).astype(int) - m, 0)
         u1, v1 = np.minimum(np.ceil(uvz[:, :2].max(0)).astype(int) + m, [W - 1, H - 1])
         if u1 <= u0 or v1 <= v0:
-            return np.zeros((0, 3))
+            return np.zeros(0, dtype=int)
         vv, uu = np.mgrid[v0 : v1 + 1, u0 : u1 + 1]
         idx = (vv * W + uu).reshape(-1)
         z = depth_m.reshape(-1)[idx].astype(float)
@@ -345,10 +401,12 @@ class HandTracker:
         idx = idx[keep]
         if idx.size > self.config.max_points:
             idx = idx[:: int(np.ceil(idx.size / self.config.max_points))]
-        return self.rays.points(depth_m, idx)
+        return idx
 
-    def _solve(self, pts, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):
+    def _solve(self, idx, z_obs, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):
         c = self.config
+        rays = self.rays.ray[idx]
+        pts = self.rays.origin + z_obs[:, None] * rays
         n = self.model.num_joints
         pos_w, rot_w = np.array(state.palm_pos), np.array(state.palm_rot)
         q = np.array(state.joints)
@@ -360,18 +418,35 @@ class HandTracker:
             a, b = self.kin.capsules(pose[0], pose[1])
             A = np.zeros((6 + n, 6 + n))
             g = np.zeros(6 + n)
-            if pts.shape[0]:
-                geom, d, cp, nrm = closest_on_capsules(pts, a, b, self.model.geom_radius)
-                use = d < c.assign_max_m
+            if idx.size:
+                # Where a capsule is hit, the residual is along the ray (observed minus predicted
+                # depth): only the visible front surface explains a pixel, so depth noise cannot
+                # pull points onto the far side of a thin finger.
+                zh, geom, x, nrm = ray_capsules(self.rays.origin, rays, a, b, self.model.geom_radius)
                 k = c.cauchy_k * sigma
-                w = np.where(use, 1.0 / (1.0 + (d / k) ** 2), 0.0)
-                explained = float(np.mean(use & (np.abs(d) < 2 * sigma))) if use.size else 0.0
-                seg = self.model.geom_segment[geom]
-                # residual d = |p - c| - r; the surface point moving along +n lowers d.
-                J = -self.kin.point_jacobian(cp, seg, nrm, pose)
-                Jw = J * w[:, None]
-                A += Jw.T @ J
-                g -= Jw.T @ d
+                r = z_obs - zh
+                front = (geom >= 0) & (r > -3 * sigma)
+                if np.any(front):
+                    nd = np.einsum("ni,ni->n", nrm[front], rays[front])
+                    seg = self.model.geom_segment[geom[front]]
+                    J = -self.kin.point_jacobian(x[front], seg, nrm[front], pose) / nd[:, None]
+                    w = 1.0 / (1.0 + (r[front] / k) ** 2)
+                    Jw = J * w[:, None]
+                    A += Jw.T @ J
+                    g -= Jw.T @ r[front]
+                # Elsewhere (outside the model's silhouette, or well in front of it), ICP: the
+                # point pulls its nearest capsule surface.
+                rest = ~front
+                explained = float(np.mean(front & (np.abs(r) < 2 * sigma)))
+                if np.any(rest):
+                    gi, dist, cp, n2 = closest_on_capsules(pts[rest], a, b, self.model.geom_radius)
+                    use = dist < c.assign_max_m
+                    explained += float(np.sum(use & (np.abs(dist) < 2 * sigma))) / idx.size
+                    w = np.where(use, 1.0 / (1.0 + (dist / k) ** 2), 0.0)
+                    J = -self.kin.point_jacobian(cp, self.model.geom_segment[gi], n2, pose)
+                    Jw = J * w[:, None]
+                    A += Jw.T @ J
+                    g -= Jw.T @ dist
             # No interpenetration with the box: capsule samples at least their radius outside.
             Rl = pose[1][self.pen_segment]
             xs = pose[0][self.pen_segment] + np.einsum("pij,pj->pi", Rl, self.pen_local)
@@ -419,11 +494,13 @@ class HandTracker:
                              f"got {depth_m.shape} and {np.shape(scene_depth)}")
         c = self.config
         prior = self.predict()
-        pts = self._candidates(depth_m, np.asarray(scene_depth), prior, sigma)
-        state, explained = self._solve(pts, prior, prior, box_pos, box_rot, sigma)
+        idx = self._candidates(depth_m, np.asarray(scene_depth), prior, sigma)
+        z_obs = depth_m.reshape(-1)[idx].astype(float)
+        state, explained = self._solve(idx, z_obs, prior, prior, box_pos, box_rot, sigma)
         reinit = False
-        if explained < c.lost_fraction and pts.shape[0] >= 50:
-            state, explained, reinit = self._search(pts, state, explained, prior, box_pos, box_rot, sigma)
+        if explained < c.lost_fraction and idx.size >= 50:
+            state, explained, reinit = self._search(idx, z_obs, state, explained, box_pos, box_rot, sigma)
+        pts = self.rays.origin + z_obs[:, None] * self.rays.ray[idx]
         self.history = (self.history + [state])[-2:]
         pose = self.kin.pose(state)
         tips = self.kin.fingertips(pose[0], pose[1])
@@ -444,13 +521,13 @@ class HandTracker:
             counts[k] = int(np.sum(good & near_tip))
         return counts >= self.config.visible_min_points
 
-    def _search(self, pts, state, explained, prior, box_pos, box_rot, sigma):
+    def _search(self, idx, z_obs, state, explained, box_pos, box_rot, sigma):
         """Particle search over the palm pose when the fit explains too few points."""
         best, best_e, reinit = state, explained, False
         for _ in range(self.config.particles):
             cand = HandState(state.palm_pos + self.rng.normal(0.0, 0.02, 3),
                              exp_so3(self.rng.normal(0.0, 0.2, 3)) @ state.palm_rot, state.joints)
-            fit, e = self._solve(pts, cand, cand, box_pos, box_rot, sigma)
+            fit, e = self._solve(idx, z_obs, cand, cand, box_pos, box_rot, sigma)
             if e > best_e + 0.05:
                 best, best_e, reinit = fit, e, True
         return best, best_e, reinit

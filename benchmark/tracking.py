@@ -1,0 +1,196 @@
+"""The tracker against the truth: its initialisation, its scores and a picture of it on the depth.
+
+Initialisation (what the method is given, documented here because it decides how hard tracking
+is): the scenario's nominal start (the box and the hand as the simulation starts them, frame 0)
+perturbed by seeded Gaussian errors from ``Scenario.rng("tracker-init")`` with the standard
+deviations of :data:`INIT_PERTURBATION`; no later frame of the truth is ever used.
+
+Scores (DESIGN.md, "Metric definitions"):
+
+* box position error: Euclidean distance of the tracked centre from the true one, median over
+  frames, [mm]; box rotation error: geodesic angle, median, [deg];
+* fingertip error: Euclidean distance of the tracked pad centres, median over frames and fingers;
+* contact point error: vision contact point minus true contact point in the object frame, per axis,
+  pooled over axes and over the frames where both the truth and the estimate have the contact;
+  mean and standard deviation (the paper: mean -1.55 mm, std 6.13 mm), and the Euclidean median;
+* contact detection: recall (true contacts found) and precision (found contacts that are true),
+  over fingers and frames.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from benchmark.scenario import Scenario
+from benchmark.truth import Truth
+from fsv import Calibration, DepthVideo, HandModel, ObjectModel
+from fsv.hand import capsule_endpoints, forward_kinematics_qpos
+from fsv.track.rotation import angle_between, exp_so3
+from fsv.track.tracker import TrackInit, Tracking
+from fsv.types import Contacts
+
+INIT_PERTURBATION = {
+    "box_pos_m": 0.003,
+    "box_rot_rad": np.radians(2.0),
+    "palm_pos_m": 0.005,
+    "palm_rot_rad": np.radians(3.0),
+    "joints_rad": 0.05,
+}
+"""Standard deviations of the seeded first-frame errors (per axis / per joint)."""
+
+
+def tracker_init(truth: Truth, scenario: Scenario, hand_model: HandModel, scale: float = 1.0) -> TrackInit:
+    """The first-frame initialisation handed to the tracker: the nominal start, perturbed.
+
+    Args:
+        truth: The episode's truth; only frame 0 (the start the simulation began from) is read.
+        scenario: Seeds the perturbation (stream "tracker-init").
+        hand_model: The hand model (joint ranges).
+        scale: Multiplies every standard deviation of :data:`INIT_PERTURBATION` (0 = exact start).
+    """
+    rng = scenario.rng("tracker-init")
+    s = {k: v * float(scale) for k, v in INIT_PERTURBATION.items()}
+    base = TrackInit.from_qpos(truth.box_pos[0], truth.box_quat[0], truth.hand_qpos[0])
+    joints = base.joints + rng.normal(0.0, s["joints_rad"], base.joints.shape)
+    return TrackInit(
+        box_pos=base.box_pos + rng.normal(0.0, s["box_pos_m"], 3),
+        box_rot=exp_so3(rng.normal(0.0, s["box_rot_rad"], 3)) @ base.box_rot,
+        palm_pos=base.palm_pos + rng.normal(0.0, s["palm_pos_m"], 3),
+        palm_rot=exp_so3(rng.normal(0.0, s["palm_rot_rad"], 3)) @ base.palm_rot,
+        joints=np.clip(joints, hand_model.joint_range[:, 0], hand_model.joint_range[:, 1]),
+    )
+
+
+def truth_contacts(truth: Truth) -> Contacts:
+    """The true contacts as an `fsv.Contacts` (for the ``--contacts oracle`` ablation)."""
+    normal = np.asarray(truth.contact_normal, dtype=float)
+    active = np.asarray(truth.contact_active, bool)
+    sliding = np.asarray(truth.contact_sliding, bool) & active
+    force = np.asarray(truth.contact_force, dtype=float)
+    tangential = force - np.einsum("tki,tki->tk", force, normal)[..., None] * normal
+    norm = np.linalg.norm(tangential, axis=-1, keepdims=True)
+    slide_dir = np.where(sliding[..., None] & (norm > 1e-12), tangential / np.maximum(norm, 1e-12), 0.0)
+    safe_normal = np.where(active[..., None], normal, np.array([0.0, 0.0, 1.0]))
+    return Contacts(finger_names=tuple(truth.finger_names), active=active, sliding=sliding,
+                    point=truth.contact_point, normal=safe_normal, slide_dir=slide_dir)
+
+
+def score_tracking(tracking: Tracking, truth: Truth, contacts: Contacts | None = None) -> dict:
+    """The tracker's scores against the truth (see the module docstring).
+
+    Args:
+        tracking: The tracker's output.
+        truth: The episode's truth.
+        contacts: Contacts to score instead of ``tracking.contacts``.
+
+    Returns:
+        A dict of floats: ``box_pos_err_mm_median``, ``box_rot_err_deg_median``,
+        ``fingertip_err_mm_median``, ``contact_err_mm_mean``, ``contact_err_mm_std``,
+        ``contact_err_mm_median_euclid``, ``contact_recall``, ``contact_precision``, ``frames``,
+        ``contact_pairs`` (NaN where undefined, e.g. no contact at all).
+    """
+    c = tracking.contacts if contacts is None else contacts
+    pos_err = np.linalg.norm(tracking.box.pos - truth.box_pos, axis=1)
+    rot_err = np.degrees(angle_between(tracking.box.rot, truth.box_rot))
+    tip_err = np.linalg.norm(tracking.fingertips - truth.fingertip_pos, axis=-1)
+    t_act = np.asarray(truth.contact_active, bool)
+    both = c.active & t_act
+    diff = (c.point - truth.contact_point)[both] * 1e3  # (P, 3) mm
+    nan = float("nan")
+    return {
+        "frames": int(len(truth.t)),
+        "box_pos_err_mm_median": float(np.median(pos_err) * 1e3),
+        "box_rot_err_deg_median": float(np.median(rot_err)),
+        "fingertip_err_mm_median": float(np.median(tip_err) * 1e3),
+        "contact_pairs": int(both.sum()),
+        "contact_err_mm_mean": float(diff.mean()) if diff.size else nan,
+        "contact_err_mm_std": float(diff.std()) if diff.size else nan,
+        "contact_err_mm_median_euclid": float(np.median(np.linalg.norm(diff, axis=1))) if diff.size else nan,
+        "contact_recall": float(both.sum() / t_act.sum()) if t_act.any() else nan,
+        "contact_precision": float(both.sum() / c.active.sum()) if c.active.any() else nan,
+    }
+
+
+def _project(calib: Calibration, pts: np.ndarray) -> np.ndarray:
+    T = calib.T_world_cam
+    p = (pts - T[:3, 3]) @ T[:3, :3]
+    return np.stack([calib.K[0, 0] * p[..., 0] / p[..., 2] + calib.K[0, 2],
+                     calib.K[1, 1] * p[..., 1] / p[..., 2] + calib.K[1, 2]], -1)
+
+
+_BOX_EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)]
+
+
+def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, object_model: ObjectModel,
+                 hand_model: HandModel, path: str | os.PathLike, frames: int = 6) -> Path:
+    """A PNG strip: depth frames with the tracked box (green), hand capsules (orange), fingertips
+    (red: seen, white: hidden) and active contact points (cyan crosses) drawn over them.
+
+    Args:
+        depth: The depth video.
+        calib: Its calibration.
+        tracking: The tracker's output.
+        object_model: The box (its size).
+        hand_model: The hand (its capsules).
+        path: Where to write the PNG (atomically).
+        frames: How many evenly spaced frames to show.
+
+    Returns:
+        The path written.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    T = depth.num_frames
+    idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
+    fig, axes = plt.subplots(1, len(idx), figsize=(3.2 * len(idx), 2.8), squeeze=False)
+    half = object_model.half_extents
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    for ax, i in zip(axes[0], idx):
+        d = np.where(depth.depth_m[i] > 0, depth.depth_m[i], np.nan)
+        ax.imshow(d, cmap="Greys_r", vmin=np.nanpercentile(d, 1), vmax=np.nanpercentile(d, 99))
+        corners = tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T
+        uv = _project(calib, corners)
+        for a, b in _BOX_EDGES:
+            ax.plot(uv[[a, b], 0], uv[[a, b], 1], color="lime", lw=1.2)
+        ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, tracking.hand_qpos[i]))
+        for (a, b), r in zip(ends, hand_model.geom_radius):
+            uv = _project(calib, np.stack([a, b]))
+            px = r * calib.K[0, 0] / max(1e-3, float(((a + b) / 2 - calib.T_world_cam[:3, 3]) @ calib.T_world_cam[:3, 2]))
+            ax.plot(uv[:, 0], uv[:, 1], color="orange", lw=max(1.0, 1.4 * px), alpha=0.55, solid_capstyle="round")
+        tips = _project(calib, tracking.fingertips[i])
+        seen = tracking.observed[i]
+        ax.scatter(tips[seen, 0], tips[seen, 1], s=12, c="red", zorder=3)
+        ax.scatter(tips[~seen, 0], tips[~seen, 1], s=12, c="white", edgecolors="red", zorder=3)
+        act = tracking.contacts.active[i]
+        if act.any():
+            pts = tracking.box.pos[i] + tracking.contacts.point[i, act] @ tracking.box.rot[i].T
+            uv = _project(calib, pts)
+            ax.scatter(uv[:, 0], uv[:, 1], marker="x", s=30, c="cyan", zorder=4)
+        ax.set_title(f"t = {depth.t[i]:.2f} s", fontsize=8)
+        ax.set_xlim(0, calib.width - 1)
+        ax.set_ylim(calib.height - 1, 0)
+        ax.axis("off")
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(buf.getvalue())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
