@@ -66,20 +66,6 @@ def tracker_init(truth: Truth, scenario: Scenario, hand_model: HandModel, scale:
     )
 
 
-def truth_contacts(truth: Truth) -> Contacts:
-    """The true contacts as an `fsv.Contacts` (for the ``--contacts oracle`` ablation)."""
-    normal = np.asarray(truth.contact_normal, dtype=float)
-    active = np.asarray(truth.contact_active, bool)
-    sliding = np.asarray(truth.contact_sliding, bool) & active
-    force = np.asarray(truth.contact_force, dtype=float)
-    tangential = force - np.einsum("tki,tki->tk", force, normal)[..., None] * normal
-    norm = np.linalg.norm(tangential, axis=-1, keepdims=True)
-    slide_dir = np.where(sliding[..., None] & (norm > 1e-12), tangential / np.maximum(norm, 1e-12), 0.0)
-    safe_normal = np.where(active[..., None], normal, np.array([0.0, 0.0, 1.0]))
-    return Contacts(finger_names=tuple(truth.finger_names), active=active, sliding=sliding,
-                    point=truth.contact_point, normal=safe_normal, slide_dir=slide_dir)
-
-
 def score_tracking(tracking: Tracking, truth: Truth, contacts: Contacts | None = None) -> dict:
     """The tracker's scores against the truth (see the module docstring).
 

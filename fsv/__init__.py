@@ -8,10 +8,15 @@ from fsv.errors import FsvError, InputError, SolverError, TrackingError
 from fsv.models import HandModel, ObjectModel
 from fsv.types import Calibration, Contacts, DepthVideo, Kinematics, Poses
 
+# The whole method (issue 6): depth -> tracking -> contacts -> kinematics -> forces.
+from fsv.pipeline import Estimate, run_pipeline
+from fsv.track.tracker import TrackInit
+
 __all__ = [
     "Calibration",
     "Contacts",
     "DepthVideo",
+    "Estimate",
     "FsvError",
     "HandModel",
     "InputError",
@@ -19,5 +24,7 @@ __all__ = [
     "ObjectModel",
     "Poses",
     "SolverError",
+    "TrackInit",
     "TrackingError",
+    "run_pipeline",
 ]

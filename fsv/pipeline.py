@@ -1,5 +1,8 @@
 """The whole method in one call: depth -> tracking -> contacts -> kinematics -> forces.
 
+Forces: the nominal forces of eq. 4-6 (the minimal forces that explain the motion) and, when a
+trained internal-force model is given, the full forces of eq. 14 with learned internal forces.
+
 >>> est = run_pipeline(depth, calib, object_model, hand_model, init)
 >>> est.kinematics.acc, est.contacts.point, est.timing_s
 
@@ -17,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
+from fsv.forces import ForceSolution, nominal_forces
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig, differentiate_poses
 from fsv.models import HandModel, ObjectModel
 from fsv.track.tracker import TrackerConfig, TrackInit, Tracking, track
@@ -33,17 +37,21 @@ class Estimate:
         tracking: Box and hand tracking, with the contacts detected from it.
         contacts: The contacts the force stage used (the tracked ones unless an oracle replaced them).
         kinematics: The box kinematics the force stage used.
-        forces: The force stage's solution, or None when it was not run.
+        nominal: The nominal forces (eq. 4-6), or None when the force stage was not run.
+        forces: The full forces with learned internal forces (eq. 14), or None without a model.
+        internal_pred: The predicted internal normal forces fed to eq. 14, shape (T, K), [N], or None.
         oracle: Names of the stages replaced by truth ("contacts", "kinematics"); empty for the
             method proper.
         timing_s: Seconds spent per stage: ``track`` (with ``track_box``, ``track_hand``,
-            ``track_contacts``), ``kinematics``, ``forces``, ``total``.
+            ``track_contacts``), ``kinematics``, ``forces``, ``learn``, ``total``.
     """
 
     tracking: Tracking
     contacts: Contacts
     kinematics: Kinematics
-    forces: object
+    nominal: ForceSolution | None
+    forces: ForceSolution | None
+    internal_pred: np.ndarray | None
     oracle: tuple
     timing_s: dict
 
@@ -51,8 +59,8 @@ class Estimate:
 def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand_model: HandModel,
                  init: TrackInit, *, differentiator: AlgebraicConfig | CentralConfig | GaussianConfig | None = None,
                  tracker_config: TrackerConfig | None = None, contacts: Contacts | None = None,
-                 kinematics: Kinematics | None = None, forces: bool = True, gravity=GRAVITY,
-                 rng: np.random.Generator | None = None) -> Estimate:
+                 kinematics: Kinematics | None = None, forces: bool = True, internal_model=None,
+                 gravity=GRAVITY, rng: np.random.Generator | None = None) -> Estimate:
     """Runs the FSV method on a depth video.
 
     Args:
@@ -66,6 +74,8 @@ def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectMode
         contacts: Oracle ablation: contacts replacing the tracked ones (labelled in ``oracle``).
         kinematics: Oracle ablation: kinematics replacing the estimated ones.
         forces: Run the force stage.
+        internal_model: A trained ``fsv.learn.InternalForceModel``; with it the force stage also
+            reconstructs the full forces with learned internal forces (eq. 14).
         gravity: Gravity in the world, shape (3,), [m/s^2].
         rng: Generator of the trackers' re-initialisation searches.
 
@@ -97,19 +107,18 @@ def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectMode
     else:
         oracle.append("kinematics")
     timing["kinematics"] = time.perf_counter() - t0
-    solution = None
-    timing["forces"] = 0.0
+    nominal = full = predicted = None
+    timing["forces"] = timing["learn"] = 0.0
     if forces:
         t0 = time.perf_counter()
-        solution = _forces(kinematics, contacts, object_model, gravity)
+        nominal = nominal_forces(kinematics, contacts, object_model, gravity=gravity)
         timing["forces"] = time.perf_counter() - t0
+        if internal_model is not None:
+            from fsv.learn import learned_forces  # torch is loaded only when a model is used
+
+            t0 = time.perf_counter()
+            full, predicted = learned_forces(internal_model, kinematics, contacts, object_model, gravity=gravity)
+            timing["learn"] = time.perf_counter() - t0
     timing["total"] = time.perf_counter() - t_start
-    return Estimate(tracking=tracking, contacts=contacts, kinematics=kinematics, forces=solution,
-                    oracle=tuple(oracle), timing_s=timing)
-
-
-def _forces(kinematics: Kinematics, contacts: Contacts, object_model: ObjectModel, gravity: np.ndarray):
-    """The nominal forces of eq. 4-6 (minimal sum of squares explaining the motion)."""
-    from fsv.forces import nominal_forces
-
-    return nominal_forces(kinematics, contacts, object_model, gravity=gravity)
+    return Estimate(tracking=tracking, contacts=contacts, kinematics=kinematics, nominal=nominal, forces=full,
+                    internal_pred=predicted, oracle=tuple(oracle), timing_s=timing)

@@ -1,0 +1,95 @@
+"""run_pipeline end to end on synthetic depth: a box lifted at constant acceleration under a hand."""
+
+import numpy as np
+import pytest
+
+from benchmark.hand import hand_model
+from fsv import Contacts, DepthVideo, InputError, Kinematics, ObjectModel, TrackInit, run_pipeline
+from fsv.track.hand import HandKinematics, HandState
+from fsv.track.rotation import angle_between, exp_so3
+from raycast import look_at_calibration, render_depth
+
+SIZE = np.array([0.171, 0.111, 0.060])
+BOX = ObjectModel(size_m=SIZE, mass_kg=0.4, inertia=ObjectModel.solid_box_inertia(SIZE, 0.4), friction=0.8)
+CALIB = look_at_calibration([0.20, -0.48, 0.36], [0.0, 0.0, 0.08])
+HAND = hand_model(1.0)
+ACC_Z = 0.15  # m/s^2, upwards
+OMEGA_Z = 0.2  # rad/s
+
+
+@pytest.fixture(scope="module")
+def lift():
+    """36 frames of 1 cm noisy depth: the box rises at constant acceleration and turns at constant
+    rate; a half-open hand hovers above it and follows it."""
+    rng = np.random.default_rng(0)
+    kin = HandKinematics(HAND)
+    T, fps = 36, 30.0
+    t = np.arange(T) / fps
+    q = np.clip(np.mean(HAND.joint_range, 1) + rng.normal(0.0, 0.1, HAND.num_joints), *HAND.joint_range.T)
+    palm0, Rp = np.array([0.0, -0.03, 0.115]), exp_so3([np.pi - 0.3, 0.0, 0.0])
+    box_pos = np.stack([[0.0, 0.0, 0.03 + 0.5 * ACC_Z * tk**2] for tk in t])
+    box_rot = np.stack([exp_so3([0.0, 0.0, OMEGA_Z * tk]) for tk in t])
+    palm = palm0 + box_pos - box_pos[0]
+    frames = []
+    for k in range(T):
+        p, r, _, _ = kin.pose(HandState(palm[k], Rp, q))
+        a, b = kin.capsules(p, r)
+        frames.append(render_depth(CALIB, box_pos[k], box_rot[k], SIZE / 2, list(zip(a, b, HAND.geom_radius)), 0.01, rng))
+    init = TrackInit(box_pos=box_pos[0] + [0.003, -0.002, 0.002], box_rot=exp_so3([0.02, 0.0, 0.01]),
+                     palm_pos=palm0 + 0.004, palm_rot=Rp, joints=q + 0.05)
+    video = DepthVideo(np.stack(frames), fps)
+    est = run_pipeline(video, CALIB, BOX, HAND, init, rng=np.random.default_rng(1))
+    return est, box_pos, box_rot, palm, video, init
+
+
+def test_tracks_box_and_hand_and_differentiates_the_motion(lift):
+    est, box_pos, box_rot, palm = lift[:4]
+    pos_err = np.linalg.norm(est.tracking.box.pos - box_pos, axis=1)
+    rot_err = np.degrees(angle_between(est.tracking.box.rot, box_rot))
+    assert np.median(pos_err) < 0.002 and np.median(rot_err) < 1.5
+    palm_err = np.linalg.norm(est.tracking.hand_qpos[:, :3] - palm, axis=1)
+    assert np.median(palm_err) < 0.006, palm_err
+    kin = est.kinematics
+    assert kin.method == "algebraic" and kin.valid.sum() >= 20
+    acc = kin.acc[kin.valid]
+    assert abs(np.median(acc[:, 2]) - ACC_Z) < 0.1, acc[:, 2]
+    assert abs(np.median(kin.omega[kin.valid, 2]) - OMEGA_Z) < 0.05
+
+
+def test_no_contact_frames_get_no_forces_and_timings_are_recorded(lift):
+    est = lift[0]
+    assert not est.contacts.active.any()  # the hand hovers 2 cm above the box
+    assert est.oracle == () and est.forces is None
+    assert est.nominal is not None and len(est.nominal.status) == 36
+    for stage in ("track", "track_box", "track_hand", "track_contacts", "kinematics", "forces", "total"):
+        assert est.timing_s[stage] >= 0
+    assert est.timing_s["total"] >= est.timing_s["track"] + est.timing_s["kinematics"]
+
+
+def test_oracle_inputs_replace_the_estimates_and_are_labelled(lift):
+    est, video, init = lift[0], lift[4], lift[5]
+    n = 6
+    k = est.kinematics
+    oracle_kin = Kinematics(t=k.t[:n], pos=k.pos[:n], rot=k.rot[:n], vel=np.zeros((n, 3)), acc=np.zeros((n, 3)),
+                            omega=np.zeros((n, 3)), alpha=np.zeros((n, 3)), valid=np.ones(n, bool), method="oracle")
+    K = len(HAND.finger_names)
+    active = np.zeros((n, K), bool)
+    active[:, 0] = True
+    oracle_contacts = Contacts(HAND.finger_names, active, np.zeros((n, K), bool),
+                               np.tile([0.0, -SIZE[1] / 2, 0.0], (n, K, 1)), np.tile([0.0, 1.0, 0.0], (n, K, 1)),
+                               np.zeros((n, K, 3)))
+    short = DepthVideo(video.depth_m[:n], video.fps)
+    out = run_pipeline(short, CALIB, BOX, HAND, init, kinematics=oracle_kin, contacts=oracle_contacts)
+    assert out.oracle == ("contacts", "kinematics")
+    assert out.kinematics is oracle_kin and out.contacts is oracle_contacts
+    assert not out.tracking.contacts.active.any()
+    with pytest.raises(InputError, match="kinematics must be None or an fsv.Kinematics of 5 frames"):
+        run_pipeline(DepthVideo(video.depth_m[:5], video.fps), CALIB, BOX, HAND, init, kinematics=oracle_kin)
+
+
+def test_bad_init_is_named():
+    with pytest.raises(InputError, match="TrackInit.box_rot"):
+        TrackInit(np.zeros(3), 2 * np.eye(3), np.zeros(3), np.eye(3), np.zeros(20))
+    with pytest.raises(InputError, match="init.joints"):
+        run_pipeline(DepthVideo(np.zeros((3, 240, 320), np.float32), 30.0), CALIB, BOX, HAND,
+                     TrackInit(np.zeros(3), np.eye(3), np.zeros(3), np.eye(3), np.zeros(3)))
