@@ -2,6 +2,9 @@
 
 from benchmark.errors import BenchmarkError, EpisodeFileError, RenderError, ScenarioError, SimulationError
 from benchmark.scenario import Scenario
+from benchmark.episode import Episode, load_episode, save_episode
+from benchmark.simulate import simulate
+from benchmark.tasks import TASKS
 
 # Depth rendering (issue 3)
 from benchmark.render import render  # noqa: E402

@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import dataclasses
+import json
+import os
+import pathlib
+import tempfile
+import zipfile
+import zlib
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from benchmark.errors import EpisodeFileError
+from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.scenario import Scenario
 from benchmark.truth import Truth
-from fsv import Calibration, DepthVideo, HandModel, ObjectModel
+from fsv import Calibration, DepthVideo, FsvError, HandModel, ObjectModel
 
 
 @dataclass(frozen=True)
@@ -99,3 +106,144 @@ def depth_from_arrays(arrays) -> tuple[DepthVideo | None, Calibration | None, np
     calib = Calibration(K=arrays["calib_K"], T_world_cam=arrays["calib_T_world_cam"], width=width, height=height)
     labels = np.asarray(arrays["labels"], dtype=np.uint8) if "labels" in arrays else None
     return depth, calib, labels
+
+
+# --- the episode file -------------------------------------------------------------------------
+
+FORMAT = "fsv-bench-episode"
+VERSION = 1
+FORMAT_DOC = """\
+An episode file is a NumPy ``.npz`` archive (zip, deflate-compressed) holding only plain arrays
+(no pickles). Entry ``meta.json`` is a uint8 array of UTF-8 JSON:
+
+    {"format": "fsv-bench-episode", "version": 1, "scenario": {Scenario fields},
+     "sections": [names of the sections present], "<section>": {scalars of that section}}
+
+Array entries are named ``<section>/<field>``. Sections of version 1:
+
+    truth/*    every array field of benchmark.truth.Truth (scalars ``mass`` in the JSON)
+    object/*   fsv.ObjectModel arrays (size_m, inertia); mass_kg and frictions in the JSON
+    hand/*     fsv.HandModel arrays; segment, joint and finger names in the JSON
+    render/*   after rendering only: the arrays of :func:`depth_arrays` (uint16 depth counts and
+               their quantum, fps, calibration, labels)
+
+A reader must refuse another format or version. Writers replace the file atomically.
+"""
+
+
+def _truth_arrays(truth: Truth) -> tuple[dict, dict]:
+    arrays, meta = {}, {}
+    for name, value in truth.as_dict().items():
+        if value is None:
+            continue
+        if np.ndim(value) == 0:
+            meta[name] = float(value)
+        else:
+            arrays[name] = np.asarray(value)
+    return arrays, meta
+
+
+def _truth_from(arrays: dict, meta: dict) -> Truth:
+    kw = dict(arrays)
+    kw["finger_names"] = np.asarray(kw["finger_names"]).astype(str)
+    kw.update(meta)
+    return Truth(**kw)
+
+
+_OBJECT_ARRAYS = ("size_m", "inertia")
+_HAND_NAMES = ("segment_names", "joint_names", "finger_names")
+
+
+def _sections(ep: Episode) -> dict:
+    """Section name -> (arrays, json scalars) of an episode."""
+    out = {"truth": _truth_arrays(ep.truth)}
+    om = ep.object_model
+    out["object"] = ({k: np.asarray(getattr(om, k)) for k in _OBJECT_ARRAYS},
+                     {"mass_kg": om.mass_kg, "friction": om.friction, "table_friction": om.table_friction})
+    hm = ep.hand_model
+    out["hand"] = ({f.name: np.asarray(getattr(hm, f.name)) for f in fields(hm) if f.name not in _HAND_NAMES},
+                   {k: list(getattr(hm, k)) for k in _HAND_NAMES})
+    rendered = depth_arrays(ep)
+    if rendered:
+        out["render"] = (rendered, {})
+    return out
+
+
+def save_episode(episode: Episode, path) -> pathlib.Path:
+    """Writes an episode file (format: see ``FORMAT_DOC``), replacing ``path`` atomically.
+
+    Args:
+        episode: The episode to write.
+        path: Destination; ``.npz`` is appended if missing.
+
+    Returns:
+        The path written.
+    """
+    path = pathlib.Path(path)
+    if path.suffix != ".npz":
+        path = path.with_name(path.name + ".npz")
+    sections = _sections(episode)
+    meta = {"format": FORMAT, "version": VERSION, "scenario": dataclasses.asdict(episode.scenario),
+            "sections": list(sections)}
+    arrays = {}
+    for name, (arrs, scalars) in sections.items():
+        meta[name] = scalars
+        for k, v in arrs.items():
+            arrays[f"{name}/{k}"] = v
+    arrays["meta.json"] = np.frombuffer(json.dumps(meta, sort_keys=True).encode(), dtype=np.uint8)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez_compressed(f, **arrays)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        pathlib.Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def load_episode(path) -> Episode:
+    """Reads an episode file written by :func:`save_episode`.
+
+    Raises:
+        EpisodeFileError: If the file is missing, truncated or corrupt, of another format, or of
+            another version.
+    """
+    path = pathlib.Path(path)
+    if not path.is_file():
+        raise EpisodeFileError(f"no episode file at {path}")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "meta.json" not in z.files:
+                raise EpisodeFileError(f"{path} is not an fsv-bench episode (no meta.json entry)")
+            meta = json.loads(bytes(z["meta.json"]).decode())
+            if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+                raise EpisodeFileError(f"{path} is not an fsv-bench episode (format {meta.get('format')!r})")
+            if meta.get("version") != VERSION:
+                raise EpisodeFileError(f"{path} is episode format version {meta.get('version')!r}; "
+                                       f"this fsv-bench reads version {VERSION}")
+            arrays = {}
+            for key in z.files:
+                if key != "meta.json":
+                    section, _, name = key.partition("/")
+                    arrays.setdefault(section, {})[name] = z[key]
+    except EpisodeFileError:
+        raise
+    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, UnicodeDecodeError) as e:
+        raise EpisodeFileError(f"{path} is truncated or corrupt: {e}") from e
+    try:
+        scenario = Scenario(**meta["scenario"])
+        truth = _truth_from(arrays["truth"], meta["truth"])
+        o = meta["object"]
+        om = ObjectModel(mass_kg=o["mass_kg"], friction=o["friction"], table_friction=o["table_friction"],
+                         **arrays["object"])
+        hm = HandModel(**arrays["hand"], **meta["hand"])
+        ep = Episode(scenario=scenario, truth=truth, object_model=om, hand_model=hm)
+        if "render" in meta["sections"]:
+            depth, calib, labels = depth_from_arrays(arrays["render"])
+            ep = replace(ep, depth=depth, calib=calib, labels=labels)
+    except (KeyError, TypeError, BenchmarkError, FsvError) as e:
+        raise EpisodeFileError(f"{path} has missing or inconsistent episode data: {e}") from e
+    return ep

@@ -25,7 +25,7 @@ from fsv import HandModel
 
 FINGERS = ("thumb", "index", "middle", "ring", "little")
 # Fraction of the pad radius used by the distal shaft, so that the pad sphere alone touches a face.
-_SHAFT_RADIUS_RATIO = 0.85
+_SHAFT_RADIUS_RATIO = 0.7
 
 
 @functools.lru_cache(maxsize=None)
@@ -35,29 +35,18 @@ def hand_spec() -> dict:
     return yaml.safe_load(text)
 
 
-def _axis_angle_quat(axis, angle: float) -> np.ndarray:
-    axis = np.asarray(axis, dtype=float)
-    axis = axis / np.linalg.norm(axis)
-    return np.concatenate([[np.cos(angle / 2)], np.sin(angle / 2) * axis])
-
-
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return np.array([
-        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-    ])
-
-
-def _base_quat(rotations: list) -> np.ndarray:
-    """Composes extrinsic rotations (about the parent's fixed axes, in the listed order)."""
-    q = np.array([1.0, 0.0, 0.0, 0.0])
-    unit = {"x": [1, 0, 0], "y": [0, 1, 0], "z": [0, 0, 1]}
-    for r in rotations:
-        q = _quat_mul(_axis_angle_quat(unit[r["axis"]], np.deg2rad(r["angle"])), q)
+def _base_quat(finger: dict) -> np.ndarray:
+    """Orientation of a finger's first segment: +y along ``base_direction``, -z towards ``base_pad``."""
+    if "base_direction" not in finger:
+        return np.array([1.0, 0.0, 0.0, 0.0])
+    y = np.asarray(finger["base_direction"], dtype=float)
+    y /= np.linalg.norm(y)
+    pad = np.asarray(finger["base_pad"], dtype=float)
+    z = -(pad - (pad @ y) * y)
+    z /= np.linalg.norm(z)
+    R = np.stack([np.cross(y, z), y, z], axis=1)
+    w = np.sqrt(max(1.0 + np.trace(R), 1e-12)) / 2
+    q = np.array([w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)])
     return q / np.linalg.norm(q)
 
 
@@ -96,7 +85,7 @@ def hand_model(scale: float = 1.0) -> HandModel:
             parent.append(prev)
             if i == 0:
                 off_pos.append(s * np.asarray(finger["base_pos"], dtype=float))
-                off_quat.append(_base_quat(finger.get("base_rot_deg", [])))
+                off_quat.append(_base_quat(finger))
             else:
                 off_pos.append(np.array([0.0, prev_len, 0.0]))
                 off_quat.append(np.array([1.0, 0, 0, 0]))

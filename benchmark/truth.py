@@ -39,6 +39,8 @@ class Truth:
         mass: Box mass, [kg].
         inertia: Box inertia about the centre of mass, box frame, (3, 3), [kg m^2].
         gravity: (3,), [m/s^2].
+        held: Frames in which the hand carries the box (between the end of the load phase and
+            the start of a put-down), (T,) bool; None if unknown.
     """
 
     t: np.ndarray
@@ -63,6 +65,7 @@ class Truth:
     mass: float
     inertia: np.ndarray
     gravity: np.ndarray
+    held: np.ndarray | None = None
 
     def __post_init__(self):
         T = np.shape(self.t)[0]
@@ -78,6 +81,8 @@ class Truth:
             got = np.shape(getattr(self, name))
             if got != shape:
                 raise BenchmarkError(f"Truth.{name} must have shape {shape}, got {got}")
+        if self.held is not None and np.shape(self.held) != (T,):
+            raise BenchmarkError(f"Truth.held must have shape ({T},), got {np.shape(self.held)}")
         if np.shape(self.hand_qpos)[0] != T:
             raise BenchmarkError(f"Truth.hand_qpos must have {T} rows, got {np.shape(self.hand_qpos)}")
 
@@ -93,6 +98,30 @@ class Truth:
             ],
             axis=-2,
         )
+
+    def newton_euler_residual(self) -> tuple[np.ndarray, np.ndarray]:
+        """How far the recorded forces are from explaining the recorded motion.
+
+        Force: m (a - g) - (sum of finger forces + table force). Torque about the centre of mass:
+        J alpha + omega x J omega - (sum of r_k x F_k + table torque), world frame, with
+        J = R J_box R^T and r_k the finger's centre of pressure relative to the centre of mass.
+
+        Returns:
+            ``(force (T, 3) [N], torque (T, 3) [N m])``.
+        """
+        R = self.box_rot
+        f = np.einsum("tij,tkj->tki", R, self.contact_force)
+        r = np.einsum("tij,tkj->tki", R, self.contact_point)
+        force = self.mass * (self.box_acc - self.gravity) - f.sum(axis=1) - self.env_force
+        J = np.einsum("tij,jk,tlk->til", R, self.inertia, R)
+        Jw = np.einsum("tij,tj->ti", J, self.box_omega)
+        torque = (np.einsum("tij,tj->ti", J, self.box_alpha) + np.cross(self.box_omega, Jw)
+                  - np.cross(r, f).sum(axis=1) - self.env_torque)
+        return force, torque
+
+    def normal_force(self) -> np.ndarray:
+        """Normal component of each finger's force (pressing into the box is positive), (T, K), [N]."""
+        return np.einsum("tkj,tkj->tk", self.contact_force, self.contact_normal)
 
     def as_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in fields(self)}

@@ -64,3 +64,32 @@ def analytic_truth():
 @pytest.fixture(scope="session")
 def analytic_truth_factory():
     return make_analytic_truth
+
+
+# --- world (issue 2): short simulated episodes, simulated once per session ----------------------
+
+
+@pytest.fixture(scope="session")
+def lift_episode():
+    """A 2.5 s lift (user 0, grasp 0, mass 0, seed 0) with its simulation statistics."""
+    from benchmark.simulate import run
+    from benchmark.scenario import Scenario
+
+    return run(Scenario(task="lift", duration_s=2.5))
+
+
+@pytest.fixture(scope="session")
+def episode_factory():
+    """simulate(Scenario(**kw)), cached per keyword set for the session."""
+    from benchmark.simulate import simulate
+    from benchmark.scenario import Scenario
+
+    cache = {}
+
+    def make(**kw):
+        key = tuple(sorted(kw.items()))
+        if key not in cache:
+            cache[key] = simulate(Scenario(**kw))
+        return cache[key]
+
+    return make

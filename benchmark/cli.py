@@ -1,0 +1,163 @@
+"""``fsv-bench``: simulate a scenario, run the pipeline's stages on it, save and summarise.
+
+    fsv-bench --task lift --noise 0.01 [--user N --grasp N --mass N --seed N --duration S --out DIR]
+
+The command runs a list of :class:`Stage` objects in order (``STAGES``). Each stage adds its own
+command-line options, reads and extends the shared :class:`Run` (the episode, the summary), and
+contributes one block to ``DIR/summary.json`` and a few lines to the printed summary. A later stage
+(render, tracking, kinematics, forces, learning) plugs in by defining a ``Stage`` in its own module
+and appending it to ``STAGES`` below, without touching the others.
+
+Bad input (unknown task, index out of range, negative noise or duration) prints one line naming the
+bad value and the accepted ones, exits with status 2 and writes nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+from benchmark.episode import Episode, save_episode
+from benchmark.errors import BenchmarkError, ScenarioError
+from benchmark.report import format_world, scenario_block, world_block, write_json
+from benchmark.scenario import Scenario
+from fsv.errors import InputError
+
+
+@dataclass
+class Run:
+    """State shared by the stages of one command.
+
+    Attributes:
+        args: Parsed command-line options (every stage's).
+        scenario: The scenario being run.
+        out: Output directory (created only once the input has been validated).
+        episode: The episode, once simulated (stages may replace it, e.g. after rendering).
+        summary: Blocks of ``summary.json``, in stage order.
+        timing_s: Seconds spent per stage.
+        lines: Human-readable lines printed at the end.
+    """
+
+    args: argparse.Namespace
+    scenario: Scenario
+    out: pathlib.Path
+    episode: Episode | None = None
+    summary: dict = field(default_factory=dict)
+    timing_s: dict = field(default_factory=dict)
+    lines: list = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One step of the command.
+
+    Attributes:
+        name: Key of its block in ``summary.json`` and of its entry in ``timing_s``.
+        add_arguments: Adds the stage's options to the parser (may do nothing).
+        run: Does the work on a :class:`Run`; raises a BenchmarkError/FsvError on failure.
+    """
+
+    name: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[Run], None]
+
+
+def _no_arguments(parser: argparse.ArgumentParser) -> None:
+    return None
+
+
+def _simulate(run: Run) -> None:
+    from benchmark.simulate import run as simulate_run
+
+    episode, stats = simulate_run(run.scenario, progress=not run.args.quiet)
+    run.episode = episode
+    run.summary["scenario"] = scenario_block(episode)
+    block = world_block(episode, stats.steps_per_s)
+    run.summary["world"] = block
+    run.lines.append(format_world(block))
+
+
+SIMULATE = Stage(name="simulate", add_arguments=_no_arguments, run=_simulate)
+
+# The stages, in pipeline order. Later stages append themselves here, one line each.
+STAGES: list = [SIMULATE]
+
+
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line and exit status 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"fsv-bench: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command's parser, with every stage's options."""
+    p = _Parser(prog="fsv-bench", description="Simulate a hand-box manipulation and score force sensing from vision.")
+    p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
+    p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres")
+    p.add_argument("--user", type=int, default=0, help="index into sim_assets/users.yaml")
+    p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
+    p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
+    p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--duration", type=float, default=None, help="episode length in seconds (default: the task's)")
+    p.add_argument("--out", type=pathlib.Path, default=None,
+                   help="output directory (default: runs/<task>-u<user>-g<grasp>-m<mass>-s<seed>)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    for stage in STAGES:
+        stage.add_arguments(p)
+    return p
+
+
+def scenario_from_args(args: argparse.Namespace) -> Scenario:
+    """The scenario of the command line, fully validated (raises ScenarioError)."""
+    from benchmark.world import validate
+
+    sc = Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
+                  seed=args.seed, duration_s=args.duration)
+    validate(sc)
+    return sc
+
+
+def main(argv: list | None = None) -> int:
+    """Entry point of ``fsv-bench``; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        scenario = scenario_from_args(args)
+    except (ScenarioError, InputError) as e:
+        print(f"fsv-bench: error: {e}", file=sys.stderr)
+        return 2
+    out = args.out or pathlib.Path("runs") / (
+        f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}")
+    run = Run(args=args, scenario=scenario, out=out)
+    start = time.perf_counter()
+    try:
+        for stage in STAGES:
+            t0 = time.perf_counter()
+            stage.run(run)
+            run.timing_s[stage.name] = time.perf_counter() - t0
+        path = save_episode(run.episode, out / "episode.npz")
+        run.timing_s["total"] = time.perf_counter() - start
+        run.summary["timing_s"] = run.timing_s
+        write_json(out / "summary.json", run.summary)
+    except (ScenarioError, InputError) as e:
+        print(f"fsv-bench: error: {e}", file=sys.stderr)
+        return 2
+    except BenchmarkError as e:
+        print(f"fsv-bench: failed: {e}", file=sys.stderr)
+        return 1
+    sc = scenario
+    print(f"fsv-bench: task {sc.task}, user {sc.user}, grasp {sc.grasp}, mass {sc.mass}, seed {sc.seed}, "
+          f"noise {sc.noise_m} m, {len(run.episode.truth.t)} frames")
+    for line in run.lines:
+        print(line)
+    print(f"episode: {path}\nsummary: {out / 'summary.json'} ({run.timing_s['total']:.1f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

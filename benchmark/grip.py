@@ -1,0 +1,376 @@
+"""The synthetic human: where the hand goes for a grasp, and how hard each finger squeezes.
+
+Two parts:
+
+* :func:`plan_grasp` places the hand on the box for a grasp of ``sim_assets/grasps.yaml``: it
+  solves for the palm's pose (height, setback, pitch above the box) and the 20 joint angles so
+  that each active pad touches its spot on the box face, no other part of the hand comes closer
+  than a few millimetres to the box or the table, and the posture stays close to a relaxed human
+  one (a regularised least-squares inverse kinematics, with MuJoCo's kinematics and distances).
+* :class:`GripPolicy` turns the load the hand must carry into fingertip forces, following the
+  motor-control literature: the grip (normal) force tracks the load force in parallel with a
+  user-specific safety margin over the slip limit (Johansson & Westling 1984), from a baseline
+  grip, anticipating the planned load rather than reacting to it (Flanagan & Wing 1995), with a
+  per-finger share of the internal force (Radwin et al. 1992). The forces become joint torques
+  through the fingertip Jacobians, tau = J^T f; MuJoCo's contact solver then produces the true
+  contact forces.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from scipy.optimize import least_squares
+
+from benchmark.errors import ScenarioError
+from benchmark.scenario import Scenario
+from benchmark.world import World, build_world, grasp_of, user_of
+
+# Relaxed postures (radians): [abduction, flexion, flexion, flexion] per digit.
+_PRIOR_ACTIVE = {"thumb": [0.0, 0.3, 0.4, 0.3], "finger": [0.0, 0.25, 1.4, 0.5]}
+_PRIOR_FREE = [0.0, 0.2, 0.3, 0.15]
+_CLEARANCE_M = 0.007  # keep every non-pad part of the hand this far from the box and the table
+_SHAFT_CLEARANCE_M = 0.0025  # ... except the distal shafts of the active digits, next to their pads
+
+
+def face_normal(face: str) -> np.ndarray:
+    """Outward unit normal of a box face named ``+x``, ``-x``, ``+y``, ``-y``, ``+z`` or ``-z``."""
+    if len(face) != 2 or face[0] not in "+-" or face[1] not in "xyz":
+        raise ScenarioError(f"face {face!r} is not one of +x, -x, +y, -y, +z, -z")
+    n = np.zeros(3)
+    n["xyz".index(face[1])] = 1.0 if face[0] == "+" else -1.0
+    return n
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """A grasp fitted to one hand, with the box lying at its start pose.
+
+    Attributes:
+        active: Whether each finger (thumb first) touches the box, (K,) bool.
+        spot: Pad contact point on the box surface, object frame, (K, 3), [m] (zero if inactive).
+        normal_in: Unit normal into the box at the spot, object frame, (K, 3).
+        palm_pos: Palm position in the object frame, (3,), [m].
+        palm_quat: Palm orientation in the object frame (w, x, y, z), (4,).
+        q_grasp: Joint angles with every active pad on its spot, (n,), [rad].
+        q_open: Pre-shape: the same posture opened so that the pads clear the box, (n,), [rad].
+        tip_error_m: Largest distance of an active pad centre from its target, [m].
+        clearance_m: Smallest distance of any other hand part to the box or table, [m], counting
+            the distal shafts of the active digits from their own, smaller, required gap (so a
+            positive value means every part keeps at least its required gap... minus the
+            difference of the two required gaps).
+    """
+
+    active: np.ndarray
+    spot: np.ndarray
+    normal_in: np.ndarray
+    palm_pos: np.ndarray
+    palm_quat: np.ndarray
+    q_grasp: np.ndarray
+    q_open: np.ndarray
+    tip_error_m: float
+    clearance_m: float
+
+
+def _pitch_quat(pitch: float) -> np.ndarray:
+    return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
+
+
+@functools.lru_cache(maxsize=64)
+def _plan(user: int, grasp: int) -> GraspPlan:
+    sc = Scenario(user=user, grasp=grasp)
+    world = build_world(sc)
+    spec = grasp_of(sc)
+    hand, m = world.hand, world.model
+    d = mujoco.MjData(m)
+    K = len(hand.finger_names)
+    unknown = set(spec["spots"]) - set(hand.finger_names)
+    if unknown:
+        raise ScenarioError(f"grasp {spec['name']!r} names unknown digits {sorted(unknown)}; accepted: {hand.finger_names}")
+    active = np.array([f in spec["spots"] for f in hand.finger_names])
+    spot = np.zeros((K, 3))
+    normal_in = np.zeros((K, 3))
+    for k, f in enumerate(hand.finger_names):
+        if active[k]:
+            spot[k] = spec["spots"][f]["point"]
+            normal_in[k] = -face_normal(spec["spots"][f]["face"])
+    box_pos = d.qpos[world.box_qadr : world.box_qadr + 3].copy()
+    target = box_pos + spot - normal_in * hand.fingertip_radius[:, None]
+    prior = np.zeros(hand.num_joints)
+    for k, f in enumerate(hand.finger_names):
+        js = [j for j, n in enumerate(hand.joint_names) if n.startswith(f + "_")]
+        prior[js] = _PRIOR_ACTIVE["thumb" if k == 0 else "finger"] if active[k] else _PRIOR_FREE
+    lo, hi = hand.joint_range[:, 0], hand.joint_range[:, 1]
+    prior = np.clip(prior, lo, hi)
+    pad_geoms = {int(np.flatnonzero((world.geom_segment == hand.fingertip_segment[k])
+                                    & (m.geom_type == mujoco.mjtGeom.mjGEOM_SPHERE))[0]) for k in range(K) if active[k]}
+    body_geoms = [g for g in np.flatnonzero(world.geom_segment >= 0) if g not in pad_geoms]
+    distal = {int(hand.fingertip_segment[k]) for k in range(K) if active[k]}
+    clearance = np.repeat([_SHAFT_CLEARANCE_M if world.geom_segment[g] in distal else _CLEARANCE_M
+                           for g in body_geoms], 2)
+    half = world.obj.half_extents
+    x0 = np.concatenate([[0.0, half[2] + 0.03, 0.3], prior])  # palm y, z (object frame), pitch; joints
+
+    def pose(x):
+        d.qpos[world.hand_qadr[:3]] = box_pos + [spec["palm_x"], x[0], x[1]]
+        d.qpos[world.hand_qadr[3:7]] = _pitch_quat(x[2])
+        d.qpos[world.joint_qadr] = x[3:]
+        mujoco.mj_kinematics(m, d)
+
+    def distances():
+        out = []
+        for g in body_geoms:
+            out.append(mujoco.mj_geomDistance(m, d, int(g), world.box_geom, 0.05, None))
+            out.append(d.geom_xpos[g][2] - m.geom_rbound[g])
+        return np.array(out)
+
+    def residual(x):
+        pose(x)
+        tips = d.site_xpos[world.tip_site]
+        r_tip = (tips - target)[active].ravel() / 0.001
+        r_post = (x[3:] - prior) / 0.5
+        r_pitch = [(x[2] - 0.3) / 0.5]
+        r_col = np.maximum(0.0, clearance - distances()) / 0.0005
+        return np.concatenate([r_tip, r_post, r_pitch, r_col])
+
+    bounds = (np.concatenate([[-0.1, half[2], -0.6], lo]), np.concatenate([[0.1, 0.15, 1.2], hi]))
+    sol = least_squares(residual, x0, bounds=bounds, x_scale=np.concatenate([[0.01, 0.01, 0.1], np.full(hand.num_joints, 0.1)]),
+                        max_nfev=400)
+    x = sol.x
+    pose(x)
+    tip_err = float(np.max(np.linalg.norm(d.site_xpos[world.tip_site] - target, axis=1)[active]))
+    gap = float(np.min(distances() - clearance + _CLEARANCE_M))
+    q_grasp = x[3:].copy()
+    # Pre-shape: open every flexion of the active digits by 0.5 rad (pads swing away from the faces).
+    q_open = q_grasp.copy()
+    for k, f in enumerate(hand.finger_names):
+        if active[k]:
+            for j, n in enumerate(hand.joint_names):
+                if n.startswith(f + "_") and n.endswith("flex"):
+                    q_open[j] = np.clip(q_grasp[j] - 0.5, lo[j], hi[j])
+    return GraspPlan(active=active, spot=spot, normal_in=normal_in,
+                     palm_pos=np.array([spec["palm_x"], x[0], x[1]]), palm_quat=_pitch_quat(x[2]),
+                     q_grasp=q_grasp, q_open=q_open, tip_error_m=tip_err, clearance_m=gap)
+
+
+def plan_grasp(scenario: Scenario) -> GraspPlan:
+    """Fits the scenario's grasp to its user's hand (cached per user and grasp).
+
+    Raises:
+        ScenarioError: If the user or grasp does not exist.
+    """
+    user_of(scenario)
+    grasp_of(scenario)
+    return _plan(scenario.user, scenario.grasp)
+
+
+@dataclass(frozen=True)
+class GripPolicy:
+    """How one user distributes and scales fingertip forces.
+
+    Attributes:
+        friction: Skin-box friction coefficient the user expects.
+        safety_margin: Grip exceeds the slip limit by this fraction of it.
+        baseline_grip_n: Internal force kept without load, [N] (thumb-side normal force).
+        anticipation_s: The grip follows the load planned this far ahead, [s].
+        response_s: Time constant of the grip force's first-order response, [s].
+        share: Per finger share of the internal force, thumb first, (K,); the thumb opposes the
+            fingers (its share is 1, the active fingers' shares are renormalised to sum to 1).
+    """
+
+    friction: float
+    safety_margin: float
+    baseline_grip_n: float
+    anticipation_s: float
+    response_s: float
+    share: np.ndarray
+
+    @staticmethod
+    def for_scenario(scenario: Scenario, world: World) -> "GripPolicy":
+        user = user_of(scenario)
+        share = np.array([1.0] + [float(user["finger_share"][f]) for f in world.hand.finger_names[1:]])
+        return GripPolicy(friction=world.obj.friction, safety_margin=float(user["safety_margin"]),
+                          baseline_grip_n=float(user["baseline_grip_n"]), anticipation_s=float(user["anticipation_s"]),
+                          response_s=float(user["response_s"]), share=share)
+
+    def distribute(self, wrench: np.ndarray, points: np.ndarray, normals_in: np.ndarray,
+                   active: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Nominal forces, the internal force pattern, and the grip needed to keep every pad from slipping.
+
+        Args:
+            wrench: Force and torque (about the centre of mass) the hand must apply to the box,
+                (6,), world frame, [N], [N m].
+            points: Contact points relative to the centre of mass, (K, 3), world frame, [m].
+            normals_in: Unit normals into the box, (K, 3), world frame.
+            active: Digits in contact, (K,) bool.
+
+        Returns:
+            ``(f_nom (K, 3), f_int (K, 3), grip_slip)``: the forces producing the wrench with the
+            least norm weighted by the inverse grip shares (a digit carries load in proportion to
+            its grip), the internal (workless) forces per newton of grip (thumb normal component 1),
+            and the smallest grip that keeps every active pad inside its friction cone shrunk by
+            the safety margin, [N].
+        """
+        K = len(active)
+        idx = np.flatnonzero(active)
+        G = np.zeros((6, 3 * len(idx)))
+        for i, k in enumerate(idx):
+            r = points[k]
+            G[:3, 3 * i : 3 * i + 3] = np.eye(3)
+            G[3:, 3 * i : 3 * i + 3] = [[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]]
+        share = self.share[idx].copy()
+        share[1:] /= share[1:].sum()
+        # Load shared in proportion to each digit's share of the grip (weighted least norm), so
+        # that every pad works at a similar fraction of its friction cone.
+        W = np.repeat(share, 3)
+        Gp = W[:, None] * G.T @ np.linalg.inv((G * W) @ G.T)
+        f_nom = np.zeros((K, 3))
+        f_nom[idx] = (Gp @ wrench).reshape(-1, 3)
+        d = (share[:, None] * normals_in[idx]).ravel()
+        d_int = (d - Gp @ (G @ d)).reshape(-1, 3)
+        d_int /= d_int[0] @ normals_in[idx[0]]
+        f_int = np.zeros((K, 3))
+        f_int[idx] = d_int
+        mu = self.friction / (1.0 + self.safety_margin)
+        n0 = np.einsum("kj,kj->k", f_nom[idx], normals_in[idx])
+        n1 = np.einsum("kj,kj->k", d_int, normals_in[idx])
+        t0 = f_nom[idx] - n0[:, None] * normals_in[idx]
+        t1 = d_int - n1[:, None] * normals_in[idx]
+        a = mu**2 * n1**2 - np.einsum("kj,kj->k", t1, t1)
+        b = 2 * (mu**2 * n0 * n1 - np.einsum("kj,kj->k", t0, t1))
+        c = mu**2 * n0**2 - np.einsum("kj,kj->k", t0, t0)
+        ok = (c >= 0) & (n0 >= 0)
+        root = (-b + np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))) / (2 * np.maximum(a, 1e-9))
+        grip = float(np.max(np.where(ok, 0.0, np.maximum(root, -n0 / np.maximum(n1, 1e-9)))))
+        return f_nom, f_int, max(grip, 0.0)
+
+
+MAX_FINGER_FORCE_N = 40.0
+
+
+def _quat_of(R: np.ndarray) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R).ravel())
+    return q
+
+
+class Human:
+    """The synthetic human acting in a world: moves the palm's mocap target and sets finger torques.
+
+    Each control tick (:meth:`act`) it writes ``data.mocap_pos/quat`` (the palm's target along
+    the task's motion), ``data.ctrl`` (posture targets of the fingers' position actuators) and
+    ``data.qfrc_applied`` on the finger joints (tau = J^T f of the grip policy's forces).
+
+    Args:
+        scenario: The scenario (user, grasp).
+        world: Its compiled world.
+        motion: The planned box motion (world frame).
+        phases: The prehension phases.
+        releases: Whether the hand lets go at the end.
+    """
+
+    def __init__(self, scenario: Scenario, world: World, motion, phases, releases: bool):
+        self.world, self.motion, self.phases, self.releases = world, motion, phases, releases
+        self.plan = plan_grasp(scenario)
+        self.policy = GripPolicy.for_scenario(scenario, world)
+        self.grip = 0.0
+        self._last_t = 0.0
+        self._jac = np.zeros((3, world.model.nv))
+        m = world.model
+        self._mass = float(m.body_mass[world.box_body])
+        self._inertia = np.diag(m.body_inertia[world.box_body])
+        self._gravity = m.opt.gravity.copy()
+        self.R_palm_obj = np.zeros((3, 3))
+        self.R_palm_obj = _rot(self.plan.palm_quat)
+        start_pos, start_rot = motion.start_pos, motion.start_rot
+        self.grasp_palm_pos = start_pos + start_rot @ self.plan.palm_pos
+        self.approach = np.array([0.0, -0.06, 0.12])
+        self.last_forces = np.zeros((len(world.hand.finger_names), 3))
+        self.last_grip_target = 0.0
+
+    def palm_start(self) -> tuple[np.ndarray, np.ndarray]:
+        """Palm pose at t = 0: above and behind the grasp pose."""
+        R = self.motion.start_rot @ self.R_palm_obj
+        return self.grasp_palm_pos + self.approach, _quat_of(R)
+
+    def _load_fraction(self, t: float) -> float:
+        ph = self.phases
+        if t < ph.close_end:
+            return 0.0
+        if t < ph.load_end:
+            return float(min_jerk_scalar((t - ph.close_end) / (ph.load_end - ph.close_end)))
+        if self.releases and t >= ph.move_end:
+            return float(1.0 - min_jerk_scalar((t - ph.move_end) / max(ph.unload_end - ph.move_end, 1e-9)))
+        return 1.0
+
+    def act(self, data: mujoco.MjData, t: float) -> None:
+        """Writes the palm target, posture targets and finger torques for time t."""
+        w, ph, plan = self.world, self.phases, self.plan
+        m = w.model
+        pos, rot, _, _, _, _ = self.motion(t)
+        palm_pos = pos + rot @ self.plan.palm_pos
+        palm_rot = rot @ self.R_palm_obj
+        q_target = plan.q_grasp
+        if t < ph.reach_end:
+            s = min_jerk_scalar(t / ph.reach_end)
+            palm_pos = palm_pos + (1 - s) * self.approach
+            q_target = plan.q_open
+        elif t < ph.close_end:
+            s = min_jerk_scalar((t - ph.reach_end) / (ph.close_end - ph.reach_end))
+            q_target = plan.q_open + s * (plan.q_grasp - plan.q_open)
+        elif self.releases and t >= ph.unload_end:
+            s = min_jerk_scalar((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
+            q_target = plan.q_grasp + s * (plan.q_open - plan.q_grasp)
+            if t >= ph.open_end:
+                palm_pos = palm_pos + min_jerk_scalar((t - ph.open_end) / max(ph.duration - ph.open_end, 1e-9)) * self.approach
+        data.mocap_pos[w.mocap] = palm_pos
+        data.mocap_quat[w.mocap] = _quat_of(palm_rot)
+        data.ctrl[:] = q_target[w.actuator_joint]
+
+        # Grip policy: anticipate the planned load, distribute it, squeeze with a safety margin.
+        box_rot = data.xmat[w.box_body].reshape(3, 3)
+        com = data.xpos[w.box_body]
+        lam = self._load_fraction(t + self.policy.anticipation_s)
+        _, _, _, acc, omega, alpha = self.motion(t + self.policy.anticipation_s)
+        J_world = box_rot @ self._inertia @ box_rot.T
+        wrench = lam * np.concatenate([self._mass * (acc - self._gravity), J_world @ alpha + np.cross(omega, J_world @ omega)])
+        normals = (box_rot @ plan.normal_in.T).T
+        points = (box_rot @ plan.spot.T).T + com - com
+        f_nom, f_int, grip_slip = self.policy.distribute(wrench, points, normals, plan.active)
+        if t < ph.reach_end:
+            grip_target = 0.0
+        elif t < ph.close_end:
+            grip_target = self.policy.baseline_grip_n * min_jerk_scalar((t - ph.reach_end) / (ph.close_end - ph.reach_end))
+        elif self.releases and t >= ph.unload_end:
+            grip_target = self.policy.baseline_grip_n * (1 - min_jerk_scalar((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9)))
+        else:
+            grip_target = self.policy.baseline_grip_n + grip_slip
+        dt = t - self._last_t
+        self._last_t = t
+        self.grip += (1.0 - np.exp(-dt / self.policy.response_s)) * (grip_target - self.grip)
+        forces = f_nom + self.grip * f_int
+        norm = np.linalg.norm(forces, axis=1, keepdims=True)
+        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
+        if t < ph.reach_end or (self.releases and t >= ph.open_end):
+            forces[:] = 0.0
+        self.last_forces, self.last_grip_target = forces, grip_target
+        data.qfrc_applied[:] = 0.0
+        for k in np.flatnonzero(plan.active):
+            mujoco.mj_jacSite(m, data, self._jac, None, int(w.tip_site[k]))
+            dofs = w.finger_dofs[k]
+            data.qfrc_applied[dofs] = self._jac[:, dofs].T @ forces[k]
+
+
+def min_jerk_scalar(s: float) -> float:
+    """The minimum-jerk profile 10 s^3 - 15 s^4 + 6 s^5 of a scalar s, clipped to [0, 1]."""
+    s = min(max(s, 0.0), 1.0)
+    return s * s * s * (10 - 15 * s + 6 * s * s)
+
+
+def _rot(quat: np.ndarray) -> np.ndarray:
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, np.asarray(quat, dtype=float))
+    return R.reshape(3, 3)

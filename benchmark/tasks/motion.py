@@ -1,0 +1,133 @@
+"""Minimum-jerk motions of the box and the phases of a prehension (reach, grasp, load, move, release).
+
+A task describes what happens to the box as keyframes (time, displacement, rotation) relative to
+its start pose; :class:`Motion` interpolates them with minimum-jerk profiles (Flash & Hogan 1985),
+so positions, velocities and accelerations are smooth and known in closed form. The hand follows
+the box's planned pose with the grasp's palm offset.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fsv.hand import axis_angle_to_rot
+
+
+def min_jerk(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The minimum-jerk profile 10 s^3 - 15 s^4 + 6 s^5 and its first two derivatives in s.
+
+    Args:
+        s: Normalised time, any shape; clipped to [0, 1].
+
+    Returns:
+        ``(p, dp/ds, d2p/ds2)``, each shaped like ``s``.
+    """
+    s = np.clip(s, 0.0, 1.0)
+    return (10 * s**3 - 15 * s**4 + 6 * s**5, 30 * s**2 - 60 * s**3 + 30 * s**4, 60 * s - 180 * s**2 + 120 * s**3)
+
+
+@dataclass(frozen=True)
+class Phases:
+    """Times in [s] that split an episode into the phases of a prehension.
+
+    Attributes:
+        reach_end: The palm arrives at the grasp pose (fingers pre-shaped, open).
+        close_end: The fingers have closed on the spots; the grip has reached its baseline.
+        load_end: The load has moved from the table to the hand; the manipulation starts.
+        move_end: The manipulation (the task's keyframes) is over.
+        unload_end: After a put-down, the load has gone back to the table (== move_end if the
+            hand keeps the box).
+        open_end: The fingers have let go (== unload_end if the hand keeps the box).
+        duration: End of the episode.
+    """
+
+    reach_end: float
+    close_end: float
+    load_end: float
+    move_end: float
+    unload_end: float
+    open_end: float
+    duration: float
+
+    @staticmethod
+    def for_duration(duration: float, releases: bool) -> "Phases":
+        """Human-like phase lengths, compressed proportionally for short episodes."""
+        k = min(1.0, duration / 8.0)
+        reach, close, load = 0.8 * k, 0.35 * k, 0.3 * k
+        unload, open_ = (0.3 * k, 0.3 * k) if releases else (0.0, 0.0)
+        tail = 0.25 * k if releases else 0.0
+        move_end = duration - unload - open_ - tail
+        return Phases(reach_end=reach, close_end=reach + close, load_end=reach + close + load, move_end=move_end,
+                      unload_end=move_end + unload, open_end=move_end + unload + open_, duration=duration)
+
+
+class Motion:
+    """Piecewise minimum-jerk motion of the box through keyframes, world frame.
+
+    Keyframe i is ``(t_i, d_i, r_i)``: at time t_i the box centre is at ``start_pos + d_i`` and its
+    orientation is ``exp(r_i) @ start_rot`` (r_i a rotation vector in the world frame). Between
+    keyframes the displacement and the relative rotation (about a fixed axis) follow minimum-jerk
+    profiles; before the first and after the last keyframe the box rests.
+
+    Args:
+        start_pos: Box centre at rest, (3,), [m].
+        start_rot: Box orientation at rest, (3, 3).
+        keyframes: List of ``(t, displacement (3,), rotation vector (3,))``, times increasing.
+    """
+
+    def __init__(self, start_pos: np.ndarray, start_rot: np.ndarray, keyframes: list):
+        self.start_pos = np.asarray(start_pos, dtype=float)
+        self.start_rot = np.asarray(start_rot, dtype=float)
+        self.t = np.array([k[0] for k in keyframes], dtype=float)
+        if np.any(np.diff(self.t) <= 0):
+            raise ValueError(f"keyframe times must increase, got {self.t}")
+        self.d = np.array([k[1] for k in keyframes], dtype=float).reshape(-1, 3)
+        self.R = [axis_angle_to_rot(_unit(k[2]), np.linalg.norm(k[2])) @ self.start_rot for k in keyframes]
+        # Relative rotation of each segment as axis * angle, world frame.
+        self.seg_axis, self.seg_angle = [], []
+        for a, b in zip(self.R[:-1], self.R[1:]):
+            axis, angle = _log(b @ a.T)
+            self.seg_axis.append(axis)
+            self.seg_angle.append(angle)
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The planned box state at time t.
+
+        Returns:
+            ``(pos (3,), rot (3, 3), vel (3,), acc (3,), omega (3,), alpha (3,))``, world frame, SI units.
+        """
+        zero = np.zeros(3)
+        if len(self.t) == 0:
+            return self.start_pos.copy(), self.start_rot.copy(), zero, zero, zero, zero
+        if t <= self.t[0]:
+            return self.start_pos + self.d[0], self.R[0], zero, zero, zero, zero
+        if t >= self.t[-1]:
+            return self.start_pos + self.d[-1], self.R[-1], zero, zero, zero, zero
+        i = int(np.searchsorted(self.t, t, side="right") - 1)
+        T = self.t[i + 1] - self.t[i]
+        p, dp, ddp = min_jerk((t - self.t[i]) / T)
+        delta = self.d[i + 1] - self.d[i]
+        pos = self.start_pos + self.d[i] + p * delta
+        vel = dp / T * delta
+        acc = ddp / T**2 * delta
+        axis, angle = self.seg_axis[i], self.seg_angle[i]
+        rot = axis_angle_to_rot(axis, p * angle) @ self.R[i]
+        return pos, rot, vel, acc, axis * angle * dp / T, axis * angle * ddp / T**2
+
+
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    n = np.linalg.norm(v)
+    return v / n if n > 0 else np.array([1.0, 0.0, 0.0])
+
+
+def _log(R: np.ndarray) -> tuple[np.ndarray, float]:
+    """Axis and angle of a rotation matrix (angle in [0, pi))."""
+    c = np.clip((np.trace(R) - 1) / 2, -1.0, 1.0)
+    angle = float(np.arccos(c))
+    if angle < 1e-12:
+        return np.array([1.0, 0.0, 0.0]), 0.0
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2 * np.sin(angle))
+    return w / np.linalg.norm(w), angle

@@ -1,0 +1,46 @@
+"""fsv-bench: simulate, save, summarise; bad input is one line, status 2, nothing written."""
+
+import json
+
+import numpy as np
+import pytest
+
+from benchmark.cli import main
+from benchmark.episode import load_episode
+
+
+def test_run_writes_episode_and_summary(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["--task", "lift", "--noise", "0.01", "--duration", "1.5", "--seed", "2", "--quiet", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "Newton-Euler residual" in text and "grip while held" in text
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "noise_m": 0.01, "seed": 2,
+                                   "frames": 46, "fps": 30.0}
+    assert summary["world"]["ne_force_residual_n"] < 0.01
+    assert summary["world"]["lift_height_m"] > 0.05
+    assert set(summary["timing_s"]) >= {"simulate", "total"}
+    ep = load_episode(out / "episode.npz")
+    assert len(ep.truth.t) == 46
+    assert np.isfinite(ep.truth.contact_force).all()
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--task", "juggle"], "'juggle'; accepted: lift"),
+    (["--user", "9"], "user 9 does not exist; accepted: 0 ("),
+    (["--grasp", "-1"], "grasp must be a non-negative integer, got -1"),
+    (["--mass", "42"], "mass 42 does not exist; accepted: 0 (light)"),
+    (["--noise", "-0.5"], "got -0.5"),
+    (["--duration", "-3"], "duration must be > 0 seconds, got -3.0"),
+    (["--duration", "ten"], "invalid float value: 'ten'"),
+])
+def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, argv, needle):
+    out = tmp_path / "never"
+    try:
+        code = main(argv + ["--out", str(out), "--quiet"])
+    except SystemExit as e:  # argparse's own errors
+        code = e.code
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err
+    assert not out.exists()

@@ -1,0 +1,107 @@
+"""Episode files: a versioned npz + JSON format that round-trips exactly and refuses bad files."""
+
+import json
+import zipfile
+
+import numpy as np
+import pytest
+
+from benchmark.episode import FORMAT, VERSION, load_episode, save_episode
+from benchmark.errors import EpisodeFileError
+from fsv import Calibration, DepthVideo
+
+
+@pytest.fixture(scope="module")
+def saved(lift_episode, tmp_path_factory):
+    ep = lift_episode[0]
+    return ep, save_episode(ep, tmp_path_factory.mktemp("ep") / "lift")
+
+
+def test_round_trip_is_exact(saved):
+    ep, path = saved
+    assert path.suffix == ".npz"
+    back = load_episode(path)
+    assert back.scenario == ep.scenario
+    for name, value in ep.truth.as_dict().items():
+        got = getattr(back.truth, name)
+        assert np.asarray(got).dtype == np.asarray(value).dtype, name
+        np.testing.assert_array_equal(got, value, err_msg=name)
+    np.testing.assert_array_equal(back.object_model.inertia, ep.object_model.inertia)
+    assert back.object_model.mass_kg == ep.object_model.mass_kg
+    assert back.hand_model.joint_names == ep.hand_model.joint_names
+    np.testing.assert_array_equal(back.hand_model.geom_fromto, ep.hand_model.geom_fromto)
+    assert back.depth is None and back.calib is None and back.labels is None
+
+
+def test_rendered_parts_round_trip(saved, tmp_path):
+    ep, _ = saved
+    T = len(ep.truth.t)
+    depth = DepthVideo(depth_m=np.random.default_rng(0).uniform(0, 1, (T, 4, 5)).astype(np.float32), fps=30)
+    calib = Calibration(K=np.diag([200.0, 200.0, 1.0]), T_world_cam=np.eye(4), width=5, height=4)
+    labels = np.zeros((T, 4, 5), np.uint8)
+    labels[:, 1, 2] = 11
+    back = load_episode(save_episode(ep.with_depth(depth, calib, labels), tmp_path / "r.npz"))
+    np.testing.assert_allclose(back.depth.depth_m, depth.depth_m, atol=0.6e-4)  # stored as uint16 of 0.1 mm
+    np.testing.assert_array_equal(back.calib.K, calib.K)
+    assert (back.calib.width, back.calib.height) == (5, 4)
+    np.testing.assert_array_equal(back.labels, labels)
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(EpisodeFileError, match="no episode file"):
+        load_episode(tmp_path / "nothing.npz")
+
+
+def test_truncated_file(saved, tmp_path):
+    _, path = saved
+    bad = tmp_path / "trunc.npz"
+    bad.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    with pytest.raises(EpisodeFileError, match="truncated or corrupt"):
+        load_episode(bad)
+
+
+def test_foreign_files(tmp_path):
+    text = tmp_path / "notes.npz"
+    text.write_text("hello")
+    with pytest.raises(EpisodeFileError, match="truncated or corrupt"):
+        load_episode(text)
+    other = tmp_path / "other.npz"
+    np.savez(other, x=np.zeros(3))
+    with pytest.raises(EpisodeFileError, match="not an fsv-bench episode"):
+        load_episode(other)
+
+
+def _rewrite_meta(path, dest, **changes):
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    meta = json.loads(bytes(arrays["meta.json"]).decode())
+    meta.update(changes)
+    arrays["meta.json"] = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+    np.savez_compressed(dest, **arrays)
+    return dest
+
+
+def test_other_version_and_format(saved, tmp_path):
+    _, path = saved
+    with pytest.raises(EpisodeFileError, match=f"version 99.*reads version {VERSION}"):
+        load_episode(_rewrite_meta(path, tmp_path / "v99.npz", version=99))
+    with pytest.raises(EpisodeFileError, match="not an fsv-bench episode"):
+        load_episode(_rewrite_meta(path, tmp_path / "fmt.npz", format="something-else"))
+    assert FORMAT == "fsv-bench-episode"
+
+
+def test_inconsistent_content(saved, tmp_path):
+    _, path = saved
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files if k != "truth/box_acc"}
+    np.savez_compressed(tmp_path / "part.npz", **arrays)
+    with pytest.raises(EpisodeFileError, match="missing or inconsistent"):
+        load_episode(tmp_path / "part.npz")
+
+
+def test_write_is_atomic_and_leaves_no_temporaries(saved, tmp_path):
+    ep, _ = saved
+    p = save_episode(ep, tmp_path / "a.npz")
+    save_episode(ep, p)  # overwrite in place
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["a.npz"]
+    assert zipfile.is_zipfile(p)

@@ -1,0 +1,74 @@
+"""The synthetic human's grip: nominal forces explain the load, internal forces squeeze with a margin."""
+
+import numpy as np
+import pytest
+
+from benchmark.grip import GripPolicy, plan_grasp
+from benchmark.scenario import Scenario
+from benchmark.world import build_world, users
+
+
+def _policy(user=0, **kw):
+    sc = Scenario(user=user)
+    p = GripPolicy.for_scenario(sc, build_world(sc))
+    return GripPolicy(**{**p.__dict__, **kw})
+
+
+def _grasp_geometry():
+    plan = plan_grasp(Scenario())
+    return plan.spot, plan.normal_in, plan.active
+
+
+def _grasp_map(points, active):
+    cols = []
+    for k in np.flatnonzero(active):
+        r = points[k]
+        cols.append(np.vstack([np.eye(3), [[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]]]))
+    return np.hstack(cols)
+
+
+def test_distribute_explains_the_wrench_and_internal_forces_are_workless():
+    points, normals, active = _grasp_geometry()
+    pol = _policy()
+    wrench = np.array([0.5, -0.3, 4.4, 0.02, -0.01, 0.03])
+    f_nom, f_int, grip = pol.distribute(wrench, points, normals, active)
+    G = _grasp_map(points, active)
+    np.testing.assert_allclose(G @ f_nom[active].ravel(), wrench, atol=1e-10)
+    np.testing.assert_allclose(G @ f_int[active].ravel(), 0.0, atol=1e-10)
+    assert f_int[0] @ normals[0] == pytest.approx(1.0)
+    # every active pad is inside the friction cone shrunk by the safety margin, one is on its edge
+    f = f_nom + grip * f_int
+    fn = np.einsum("kj,kj->k", f, normals)[active]
+    ft = np.linalg.norm(f[active] - fn[:, None] * normals[active], axis=1)
+    mu = pol.friction / (1 + pol.safety_margin)
+    assert np.all(ft <= mu * fn + 1e-9)
+    assert np.max(ft - mu * fn) == pytest.approx(0.0, abs=1e-6)
+    # the fingers share the internal force as the user says (index ~ middle > ring)
+    n_int = np.einsum("kj,kj->k", f_int, normals)
+    assert n_int[1] > n_int[3] and n_int[2] > n_int[3]
+
+
+def test_grip_rises_with_load_and_margin():
+    points, normals, active = _grasp_geometry()
+    pol = _policy()
+    grips = [pol.distribute(np.array([0, 0, L, 0, 0, 0]), points, normals, active)[2] for L in (1.0, 3.0, 6.0)]
+    assert grips[0] < grips[1] < grips[2]
+    # two opposed sides hold a vertical load L with grip G >= L / (2 mu) per side
+    mu = pol.friction / (1 + pol.safety_margin)
+    assert grips[2] >= 6.0 / (2 * mu) - 1e-9
+    careful = _policy(safety_margin=1.0).distribute(np.array([0, 0, 6.0, 0, 0, 0]), points, normals, active)[2]
+    assert careful > grips[2] * 1.3
+
+
+def test_users_differ_in_grip_policy():
+    margins = [u["safety_margin"] for u in users()]
+    assert len(users()) >= 4 and len(set(margins)) == len(margins)
+
+
+@pytest.mark.parametrize("user", [0, 1, 2, 3])
+@pytest.mark.parametrize("grasp", [0, 1, 2, 3])
+def test_grasp_plans_fit_every_hand(user, grasp):
+    plan = plan_grasp(Scenario(user=user, grasp=grasp))
+    assert plan.tip_error_m < 0.01
+    assert plan.clearance_m > 0.0  # no part but the pads touches the box or the table
+    assert plan.active[0] and plan.active.sum() >= 4
