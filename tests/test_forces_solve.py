@@ -250,3 +250,13 @@ def test_bad_inputs_name_the_value():
         ForceSettings(slack_weight=0.0)
     with pytest.raises(InputError, match="contacts must be fsv.Contacts"):
         nominal_forces(kin, force, model)
+
+
+def test_a_solver_that_gives_up_is_reported_failed_with_nan_forces():
+    rng = np.random.default_rng(8)
+    model = box_model()
+    contacts, force = random_grasp(rng, 2, 4, model)
+    kin = kinematics_for(rng, force, contacts.point, model)
+    sol = nominal_forces(kin, contacts, model, settings=ForceSettings(max_iter=1))
+    assert list(sol.status) == [FrameStatus.FAILED] * 2
+    assert np.isnan(sol.force).all() and np.isnan(sol.objective).all()

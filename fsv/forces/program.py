@@ -33,8 +33,7 @@ import scipy.sparse as sp
 STATIC_SLOTS = (0, 1, 2)
 SLIDING_SLOTS = (3,)
 
-_OK = (clarabel.SolverStatus.Solved, clarabel.SolverStatus.AlmostSolved)
-_INFEASIBLE = (clarabel.SolverStatus.PrimalInfeasible, clarabel.SolverStatus.AlmostPrimalInfeasible)
+OK = (clarabel.SolverStatus.Solved, clarabel.SolverStatus.AlmostSolved)
 
 
 @dataclass(frozen=True)
@@ -77,20 +76,6 @@ class Weights:
     slack_weight: float
     regularization: float
     max_iter: int
-
-
-@dataclass
-class FrameResult:
-    """The raw outcome of one solve, per contact slot of the caller."""
-
-    ok: bool
-    infeasible: bool
-    nominal: np.ndarray  # (K, 3) nominal finger forces, zero for inactive fingers
-    internal: np.ndarray  # (K, 3)
-    corner: np.ndarray  # (8, 3) table corner forces
-    slack: np.ndarray  # (6,)
-    objective: float
-    iterations: int
 
 
 class Program:
@@ -219,7 +204,7 @@ class Program:
                 S[2 * K + layout.corners[o - len(layout.fingers)], j] = 1.0
         self._S = S
         self._num_w = num_w
-        self._slack_cols = np.asarray(slack_cols, dtype=np.int64)
+        self._data = self._A_data0.copy()
         self._b = np.zeros(m)
         self._q = np.zeros(n)
         self._settings = clarabel.DefaultSettings()
@@ -242,7 +227,7 @@ class Program:
             self._settings.tol_feas = 1e-10
         self._solver = None
 
-    def solve(self, bank: np.ndarray, wrench: np.ndarray, target: np.ndarray) -> FrameResult:
+    def solve(self, bank: np.ndarray, wrench: np.ndarray, target: np.ndarray) -> tuple:
         """Solves the program for one frame.
 
         Args:
@@ -253,10 +238,13 @@ class Program:
                 predicted internal), shape (K,); only the fitted fingers' entries are read.
 
         Returns:
-            The forces per finger and corner, the slack, the cost and the solver's outcome.
+            ``(forces, status, objective, iterations)``: forces shape (2K + 8, 3) stacking the
+            nominal finger forces (K), the internal finger forces (K) and the table corner forces
+            (8), zero where absent; Clarabel's status; the cost with its constant term [N^2];
+            the number of interior-point iterations.
         """
         cols = bank.reshape(-1, 6)[self._gather]  # (num_w, 6)
-        data = self._A_data0.copy()
+        data = self._data
         data[self._wpos] = cols.ravel()
         b = self._b
         b[:6] = wrench
@@ -266,7 +254,7 @@ class Program:
             q[js] = -2.0 * target[k]
             const += target[k] ** 2
         if self._solver is None:
-            A = sp.csc_matrix((data, self._A_indices, self._A_indptr), shape=(self.m, self.n))
+            A = sp.csc_matrix((data.copy(), self._A_indices, self._A_indptr), shape=(self.m, self.n))
             self._solver = clarabel.DefaultSolver(self._P, q, A, b, self.cones, self._settings)
         elif self._q_fit:
             self._solver.update(A=data, b=b, q=q)
@@ -275,15 +263,4 @@ class Program:
         sol = self._solver.solve()
         x = np.asarray(sol.x)
         forces = self._S @ (x[: self._num_w, None] * cols[:, :3])
-        K = self.num_fingers
-        status = sol.status
-        return FrameResult(
-            ok=status in _OK,
-            infeasible=status in _INFEASIBLE,
-            nominal=forces[:K],
-            internal=forces[K : 2 * K],
-            corner=forces[2 * K :],
-            slack=x[self._slack_cols],
-            objective=float(sol.obj_val) + const,
-            iterations=int(sol.iterations),
-        )
+        return forces, sol.status, sol.obj_val + const, sol.iterations

@@ -33,7 +33,7 @@ import numpy as np
 from fsv._check import as_array, same_length
 from fsv.errors import InputError
 from fsv.forces.environment import TableContacts, table_contacts
-from fsv.forces.program import FrameResult, Layout, Program, Weights
+from fsv.forces.program import OK, Layout, Program, Weights
 from fsv.forces.solution import FrameStatus, ForceSolution
 from fsv.forces.wrench import GRAVITY, required_wrench, tangent_basis, to_object_frame
 from fsv.models import ObjectModel
@@ -246,26 +246,29 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     objective = np.zeros(T)
     iterations = np.zeros(T, np.int64)
     programs: dict = {}
-    keys = np.concatenate([use, sliding, fitted, corners_on], axis=1)
-    for t in range(T):
-        if not valid[t]:
+    keys = [row.tobytes() for row in np.concatenate([use, sliding, fitted, corners_on], axis=1)]
+    touching = (use.any(axis=1) | corners_on.any(axis=1)).tolist()
+    for t, is_valid in enumerate(valid.tolist()):
+        if not is_valid:
             status[t] = FrameStatus.NO_KINEMATICS
             nominal[t] = internal[t] = corner[t] = objective[t] = np.nan
             continue
-        if not (use[t].any() or corners_on[t].any()):
+        if not touching[t]:
             status[t] = FrameStatus.NO_CONTACTS
             continue
-        key = keys[t].tobytes()
-        res = _program(programs, key, False, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K).solve(
-            bank[t], required[t], target[t]
-        )
-        if not res.ok:
-            retry = _program(programs, key, True, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K)
-            res2 = retry.solve(bank[t], required[t], target[t])
-            status[t] = FrameStatus.LEAST_VIOLATION if res2.ok else FrameStatus.FAILED
-            res = res2 if res2.ok else _failed(res2, K)
-        nominal[t], internal[t], corner[t] = res.nominal, res.internal, res.corner
-        objective[t], iterations[t] = res.objective, res.iterations
+        prog = programs.get((keys[t], False))
+        if prog is None:
+            prog = programs[(keys[t], False)] = _program(False, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K)
+        forces, code, objective[t], iterations[t] = prog.solve(bank[t], required[t], target[t])
+        if code not in OK:
+            retry = programs.get((keys[t], True))
+            if retry is None:
+                retry = programs[(keys[t], True)] = _program(True, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K)
+            forces, code, objective[t], iterations[t] = retry.solve(bank[t], required[t], target[t])
+            status[t] = FrameStatus.LEAST_VIOLATION if code in OK else FrameStatus.FAILED
+            if code not in OK:
+                forces, objective[t] = np.full((2 * K + 8, 3), np.nan), np.nan
+        nominal[t], internal[t], corner[t] = forces[:K], forces[K : 2 * K], forces[2 * K :]
     env = np.concatenate([corner.sum(axis=1), np.cross(table.point, corner).sum(axis=1)], axis=1)
     point = np.where(use[..., None], contacts.point, 0.0)
     achieved = np.concatenate([nominal.sum(axis=1), np.cross(point, nominal).sum(axis=1)], axis=1) + env
@@ -291,22 +294,14 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     )
 
 
-def _program(cache, key, slack, kind, use, sliding, fitted, corners, weights, K) -> Program:
-    prog = cache.get((key, slack))
-    if prog is None:
-        fingers = tuple(int(k) for k in np.flatnonzero(use))
-        layout = Layout(
-            kind=kind,
-            fingers=fingers,
-            sliding=tuple(bool(sliding[k]) for k in fingers),
-            fitted=tuple(bool(fitted[k]) for k in fingers),
-            corners=tuple(int(j) for j in np.flatnonzero(corners)),
-            slack=slack,
-        )
-        prog = cache[(key, slack)] = Program(layout, weights, K)
-    return prog
-
-
-def _failed(res: FrameResult, K: int) -> FrameResult:
-    nan3 = np.full((K, 3), np.nan)
-    return FrameResult(False, res.infeasible, nan3, nan3.copy(), np.full((8, 3), np.nan), np.full(6, np.nan), np.nan, res.iterations)
+def _program(slack, kind, use, sliding, fitted, corners, weights, K) -> Program:
+    fingers = tuple(int(k) for k in np.flatnonzero(use))
+    layout = Layout(
+        kind=kind,
+        fingers=fingers,
+        sliding=tuple(bool(sliding[k]) for k in fingers),
+        fitted=tuple(bool(fitted[k]) for k in fingers),
+        corners=tuple(int(j) for j in np.flatnonzero(corners)),
+        slack=slack,
+    )
+    return Program(layout, weights, K)
