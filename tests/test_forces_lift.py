@@ -1,0 +1,75 @@
+"""End-to-end gate on a simulated lift: oracle contacts and kinematics, nominal forces against the truth."""
+
+import json
+import types
+
+import numpy as np
+import pytest
+
+from benchmark.contact_error import contacts_from_truth
+from benchmark.motion import oracle_kinematics
+from benchmark.score_forces import add_arguments, run_stage, score_forces, true_net_wrench
+from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
+
+
+@pytest.fixture(scope="module")
+def lift(lift_episode):
+    episode = lift_episode[0] if isinstance(lift_episode, tuple) else lift_episode
+    kin = oracle_kinematics(episode.truth)
+    contacts = contacts_from_truth(episode.truth)
+    sol = nominal_forces(kin, contacts, episode.object_model, gravity=episode.truth.gravity)
+    return episode, kin, contacts, sol
+
+
+def test_the_nominal_resultant_is_the_true_resultant(lift):
+    episode, kin, contacts, sol = lift
+    tr = episode.truth
+    assert np.all(sol.status == FrameStatus.OPTIMAL)
+    err = to_world_frame(kin.rot, sol.net_wrench) - true_net_wrench(tr)
+    assert np.sqrt(np.mean(np.sum(err[:, :3] ** 2, axis=1))) < 0.05
+    # The box must actually have been lifted and held for the gate to mean something.
+    held = (sol.env_active == 0) & contacts.active.any(axis=1)
+    assert held.sum() >= 10 and tr.box_pos[held, 2].max() > tr.box_pos[0, 2] + 0.01
+
+
+def test_the_true_sum_of_squares_is_never_below_the_nominal_one(lift):
+    episode, kin, contacts, sol = lift
+    tr = episode.truth
+    free = (sol.env_active == 0) & (np.linalg.norm(tr.env_force, axis=1) == 0) & contacts.active.any(axis=1)
+    sos_true = np.einsum("tki,tki->t", tr.contact_force, tr.contact_force)
+    assert free.sum() >= 10
+    assert np.all(sos_true[free] >= sol.sum_of_squares[free] - 1e-6 * (1 + sos_true[free]))
+    s = score_forces(sol, tr, kin.rot)
+    assert s["sos_true_not_below_nominal_frac"] == 1.0 and s["solver_failures"] == 0
+    assert s["nominal_normal_err_n_mean"] < 0  # people over-grip (the paper's Fig. 5)
+
+
+def test_the_decomposition_recovers_the_true_normal_forces(lift):
+    """Tactile readings of the truth are consistent with the motion: eq. 9 fits them almost exactly."""
+    episode, kin, contacts, sol = lift
+    tr = episode.truth
+    measured = np.where(contacts.active, np.einsum("tki,tki->tk", tr.contact_force, tr.contact_normal), np.nan)
+    dec = decompose_forces(kin, contacts, episode.object_model, measured, gravity=tr.gravity)
+    ok = dec.status == FrameStatus.OPTIMAL
+    assert ok.mean() > 0.95
+    assert np.abs(dec.internal_wrench[ok]).max() < 1e-6
+    assert np.abs((dec.normal_force - np.nan_to_num(measured))[ok][contacts.active[ok]]).max() < 0.05
+
+
+def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
+    episode = lift[0]
+    import argparse
+
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    run = types.SimpleNamespace(args=parser.parse_args(["--contacts", "oracle"]), episode=episode, out=tmp_path,
+                                summary={}, lines=[])
+    run_stage(run)
+    block = run.summary["forces"]
+    for key in ("net_force_err_n_rms", "net_torque_err_nm_rms", "nominal_normal_err_n_mean", "solver_failures"):
+        assert key in block
+    assert block["contacts"].startswith("oracle") and "contacts" in block["oracle"]
+    assert block["net_force_err_n_rms"] < 0.05
+    assert (tmp_path / "forces_fig5.png").stat().st_size > 10_000
+    assert "ORACLE" in run.lines[0]
+    json.dumps(block)  # summary.json must be able to hold it
