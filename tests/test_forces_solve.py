@@ -52,6 +52,9 @@ def test_nominal_is_feasible_minimal_and_matches_the_oracle(seed, K, mu):
     assert np.all(_rel_residual(sol) <= REL)
     _check_cones(sol, mu)
     _check_kinetic(sol, contacts, mu, "force")
+    tang = sol.tangential_force
+    assert np.allclose(np.einsum("tki,tki->tk", tang, sol.normal), 0, atol=1e-12)
+    assert np.allclose(tang + sol.normal_force[..., None] * sol.normal, sol.force)
     # The generating forces are feasible, so the nominal (minimal) sum of squares is not above theirs.
     assert np.all(sol.sum_of_squares <= np.einsum("tki,tki->t", force, force) * (1 + 1e-7) + 1e-7)
     assert np.allclose(sol.internal, 0.0)

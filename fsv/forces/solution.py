@@ -120,6 +120,11 @@ class ForceSolution:
         return self._along_normal(self.force)
 
     @property
+    def tangential_force(self) -> np.ndarray:
+        """Tangential (friction) component F_k - f_k n_k of the total finger force, shape (T, K, 3), [N]."""
+        return self.force - self.normal_force[..., None] * self.normal
+
+    @property
     def nominal_normal(self) -> np.ndarray:
         """Normal component f_k^(n) of the nominal part, shape (T, K), [N]."""
         return self._along_normal(self.nominal)
