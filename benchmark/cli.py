@@ -86,6 +86,11 @@ SIMULATE = Stage(name="simulate", add_arguments=_no_arguments, run=_simulate)
 # The stages, in pipeline order. Later stages append themselves here, one line each.
 STAGES: list = [SIMULATE]
 
+# forces (issue 5): nominal contact forces, scored against the truth (benchmark/score_forces.py).
+from benchmark import score_forces as _score_forces  # noqa: E402
+
+STAGES.append(Stage(name="forces", add_arguments=_score_forces.add_arguments, run=_score_forces.run_stage))
+
 
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line and exit status 2."""
