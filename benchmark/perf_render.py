@@ -55,3 +55,116 @@ def _rate(fn, frames: int, repeats: int = 3) -> float:
             fn(k)
         best = min(best, time.perf_counter() - t0)
     return frames / best
+
+
+def scene_frames(num: int):
+    """The default scenario's world and `num` kinematic states: the box lifts and turns with the
+    hand over it, its fingers half flexed.
+
+    Returns:
+        ``(world, set_frame)`` with ``set_frame(data, k)`` posing frame k.
+    """
+    from benchmark.scenario import Scenario
+    from benchmark.world import build_world, set_frame
+
+    world = build_world(Scenario())
+    s = np.linspace(0.0, 1.0, num)
+    lo, hi = world.hand.joint_range[:, 0], world.hand.joint_range[:, 1]
+    hinges = lo + 0.4 * (hi - lo)
+
+    def pose(data, k):
+        z = 0.03 + 0.15 * s[k]
+        yaw = 0.5 * s[k]
+        box_quat = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
+        hand = np.concatenate([[0.0, -0.02, z + 0.1, 1.0, 0.0, 0.0, 0.0], hinges])
+        set_frame(world, data, [0.05 * s[k], 0.0, z], box_quat, hand)
+
+    return world, pose
+
+
+def main(argv=None) -> dict:
+    """Measures and prints renderer speeds; returns them as a dict."""
+    from benchmark.render import world_labels
+    from benchmark.sensor import SensorModel
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--frames", type=int, default=150, help="frames per timed pass (default 150)")
+    args = parser.parse_args(argv)
+    if args.frames < 1:
+        parser.error(f"--frames must be >= 1, got {args.frames}")
+
+    camera = load_camera()
+    world, pose = scene_frames(args.frames)
+    model = world.model
+    data = mujoco.MjData(model)
+    ours = DepthRenderer(model, camera, world_labels(world))
+    sensor = SensorModel(noise_m=0.01)
+    rng = np.random.default_rng(0)
+
+    spec = mujoco.MjSpec.from_string(_model_xml(world))
+    add_mujoco_camera(spec, camera, "depth_camera")
+    peer_model = spec.compile()
+    peer_data = mujoco.MjData(peer_model)
+    peer = mujoco.Renderer(peer_model, camera.height, camera.width)
+    peer.enable_depth_rendering()
+
+    def posed(k):
+        pose(data, k)
+        return data
+
+    def render_only(k):
+        d = posed(k)
+        ours.render(d.xpos, d.xmat)
+
+    def render_and_sense(k):
+        d = posed(k)
+        sensor.measure(ours.render(d.xpos, d.xmat)[0], camera.K, rng)
+
+    def mujoco_depth(k):
+        d = posed(k)
+        peer_data.qpos[:] = d.qpos
+        peer_data.mocap_pos[:] = d.mocap_pos
+        peer_data.mocap_quat[:] = d.mocap_quat
+        mujoco.mj_kinematics(peer_model, peer_data)
+        mujoco.mj_camlight(peer_model, peer_data)
+        peer.update_scene(peer_data, camera="depth_camera")
+        peer.render()
+
+    rates = {
+        "pyrender_depth_labels_fps": _rate(render_only, args.frames),
+        "pyrender_depth_labels_sensor_fps": _rate(render_and_sense, args.frames),
+        "mujoco_depth_fps": _rate(mujoco_depth, args.frames),
+    }
+    # agreement of the two renderers on one frame (pixels both see, within the sensor's range)
+    mujoco_depth(args.frames // 2)
+    theirs = peer.render()
+    d = posed(args.frames // 2)
+    mine, labels = ours.render(d.xpos, d.xmat)
+    both = (mine > 0) & (mine <= 1.0) & (theirs <= 1.0)
+    diff = np.abs(mine - theirs)[both]
+    rates["agreement_median_m"] = float(np.median(diff))
+    rates["agreement_within_0.1mm"] = float(np.mean(diff < 1e-4))
+    n_nodes = len(ours.nodes)
+    print(f"scene: {model.ngeom} geoms, {n_nodes} pyrender nodes; {camera.width}x{camera.height}; {args.frames} frames, best of 3")
+    print(f"pyrender depth + labels          : {rates['pyrender_depth_labels_fps']:7.1f} frames/s")
+    print(f"pyrender depth + labels + sensor : {rates['pyrender_depth_labels_sensor_fps']:7.1f} frames/s")
+    print(f"MuJoCo Renderer depth (peer)     : {rates['mujoco_depth_fps']:7.1f} frames/s")
+    print(f"ratio pyrender / MuJoCo          : {rates['pyrender_depth_labels_fps'] / rates['mujoco_depth_fps']:7.2f} "
+          f"(with sensor {rates['pyrender_depth_labels_sensor_fps'] / rates['mujoco_depth_fps']:.2f})")
+    print(f"depth agreement with MuJoCo      : median {rates['agreement_median_m'] * 1e6:.2f} um, "
+          f"{100 * rates['agreement_within_0.1mm']:.1f} % of pixels within 0.1 mm")
+    peer.close()
+    return rates
+
+
+def _model_xml(world) -> str:
+    """The MJCF text of a world (for a MuJoCo spec to which the camera is added)."""
+    from benchmark.scenario import Scenario
+    from benchmark.world import user_of, world_xml
+
+    sc = Scenario()
+    return world_xml(sc.user, sc.mass, float(user_of(sc)["stiffness_nm_per_rad"]))
+
+
+if __name__ == "__main__":
+    main()

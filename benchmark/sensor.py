@@ -119,13 +119,15 @@ class SensorModel:
         if z.ndim != 2:
             raise BenchmarkError(f"measure takes one depth image of shape (H, W), got shape {z.shape}")
         ok = self.measurable(z, K)
-        noise = rng.standard_normal(z.shape, dtype=np.float32)
+        out = rng.standard_normal(z.shape, dtype=np.float32)
         if self.dropout > 0:
             ok &= rng.random(z.shape, dtype=np.float32) >= self.dropout
-        out = z + self.sigma(z).astype(np.float32) * noise
+        out *= self.sigma(z).astype(np.float32) if self.noise_quad_per_m > 0 else np.float32(self.noise_m)
+        out += z
         if self.quantum_m is not None:
-            out = quantise(out, self.quantum_m)
-        out[~ok | (out <= 0)] = 0.0
+            out = dequantise(np.rint(out / np.float32(self.quantum_m)), self.quantum_m)
+        ok &= out > 0
+        out[~ok] = 0.0
         return out
 
 
@@ -166,23 +168,32 @@ def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
     that shows something gets cos = 1 (not grazing).
     """
     H, W = z.shape
+    z = np.asarray(z, dtype=np.float32)
     with np.errstate(divide="ignore"):
-        w = np.where(z > 0, 1.0 / z.astype(np.float64), np.nan)
+        w = np.where(z > 0, np.float32(1) / z, np.float32(np.nan))
 
     def slope(axis):
         d = np.diff(w, axis=axis)
-        pad = [(0, 0), (0, 0)]
-        pad[axis] = (0, 1)
-        fwd = np.pad(d, pad, constant_values=np.nan)
-        pad[axis] = (1, 0)
-        bwd = np.pad(d, pad, constant_values=np.nan)
-        return -np.where(np.abs(fwd) <= np.abs(bwd), fwd, np.where(np.isnan(bwd), fwd, bwd)) / (w * w)
+        a = np.abs(d)
+        np.nan_to_num(a, copy=False, nan=np.inf)
+        n = w.shape[axis]
+        fwd, bwd = [slice(None)] * 2, [slice(None)] * 2
+        fwd[axis], bwd[axis] = slice(0, n - 1), slice(1, n)
+        out = np.full(w.shape, np.nan, dtype=np.float32)
+        cost = np.full(w.shape, np.inf, dtype=np.float32)
+        out[tuple(fwd)], cost[tuple(fwd)] = d, a
+        better = a < cost[tuple(bwd)]
+        out[tuple(bwd)][better] = d[better]
+        return out
 
-    x = ((np.arange(W) - K[0, 2]) / K[0, 0])[None, :]
-    y = ((np.arange(H) - K[1, 2]) / K[1, 1])[:, None]
-    zz = 1.0 / w
-    mx, my = -K[0, 0] * slope(1), -K[1, 1] * slope(0)
-    mz = -x * mx - y * my + zz
+    x = ((np.arange(W) - K[0, 2]) / K[0, 0]).astype(np.float32)[None, :]
+    y = ((np.arange(H) - K[1, 2]) / K[1, 1]).astype(np.float32)[:, None]
+    mx = slope(1)
+    mx *= z * z * np.float32(K[0, 0])  # -fx z_u = fx z^2 w_u
+    my = slope(0)
+    my *= z * z * np.float32(K[1, 1])
+    mz = z - x * mx - y * my
     with np.errstate(invalid="ignore"):
-        c = zz / np.sqrt((mx * mx + my * my + mz * mz) * (x * x + y * y + 1))
-    return np.where(np.isfinite(c), c, 1.0).astype(np.float32)
+        c = z / np.sqrt((mx * mx + my * my + mz * mz) * (x * x + y * y + 1))
+    c[~np.isfinite(c)] = 1.0
+    return c
