@@ -62,8 +62,12 @@ def strip(depth_m: np.ndarray, t: np.ndarray, num: int = 6, near_m: float = 0.15
     return np.concatenate(out, axis=1)
 
 
-def write_preview(depth_m: np.ndarray, fps: float, out_dir, num: int = 6, gif: bool = True) -> list[pathlib.Path]:
-    """Writes ``depth_preview.png`` (a strip of frames) and ``depth.gif`` (every frame) to out_dir.
+def write_preview(
+    depth_m: np.ndarray, fps: float, out_dir, num: int = 6, gif: bool = True, gif_fps: float = 15.0
+) -> list[pathlib.Path]:
+    """Writes ``depth_preview.png`` (a strip of frames) and ``depth.gif`` (the video) to out_dir.
+
+    Both use a 64-colour palette, which keeps them small.
 
     Args:
         depth_m: Depth video, shape (T, H, W), [m].
@@ -71,22 +75,38 @@ def write_preview(depth_m: np.ndarray, fps: float, out_dir, num: int = 6, gif: b
         out_dir: Directory (created if missing).
         num: Frames in the strip.
         gif: Also write the animation.
+        gif_fps: Highest frame rate of the animation (frames are skipped evenly above it), [Hz].
 
     Returns:
         Paths of the files written.
     """
-    import imageio.v3 as iio
+    from PIL import Image
 
+    if not (fps > 0 and gif_fps > 0):
+        raise BenchmarkError(f"frame rates must be > 0, got fps={fps}, gif_fps={gif_fps}")
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t = np.arange(len(depth_m)) / fps
     paths = [out_dir / "depth_preview.png"]
-    _atomic(paths[0], lambda p: iio.imwrite(p, strip(depth_m, t, num), extension=".png"))
+    png = _palette(strip(depth_m, t, num))
+    _atomic(paths[0], lambda p: png.save(p, format="PNG", optimize=True))
     if gif:
+        step = max(1, int(np.ceil(fps / gif_fps)))
+        frames = [_palette(f) for f in colorize(np.asarray(depth_m)[::step])]
         paths.append(out_dir / "depth.gif")
-        frames = colorize(depth_m)
-        _atomic(paths[1], lambda p: iio.imwrite(p, frames, extension=".gif", duration=1000 / fps, loop=0))
+        _atomic(
+            paths[1],
+            lambda p: frames[0].save(
+                p, format="GIF", save_all=True, append_images=frames[1:], duration=1000 * step / fps, loop=0
+            ),
+        )
     return paths
+
+
+def _palette(rgb: np.ndarray):
+    from PIL import Image
+
+    return Image.fromarray(rgb).quantize(colors=64, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
 
 
 def _atomic(path: pathlib.Path, write) -> None:
@@ -94,6 +114,7 @@ def _atomic(path: pathlib.Path, write) -> None:
     os.close(fd)
     try:
         write(tmp)
+        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
         os.unlink(tmp)

@@ -1,0 +1,61 @@
+"""Depth previews: colour map, frame strip, PNG and GIF files."""
+
+import numpy as np
+import pytest
+from matplotlib import colormaps
+from PIL import Image
+
+from benchmark.errors import BenchmarkError
+from benchmark.preview import colorize, strip, write_preview
+
+
+def video(T=12, H=40, W=32):
+    d = np.linspace(0.15, 1.0, W, dtype=np.float32)[None, None, :].repeat(H, 1).repeat(T, 0).copy()
+    d[:, :4, :4] = 0.0  # no measurement
+    return d
+
+
+def test_colorize_maps_the_range_onto_turbo_and_missing_to_black():
+    rgb = colorize(np.array([[0.0, 0.15, 1.0, 2.0, 0.575]]))
+    turbo = colormaps["turbo"]
+    np.testing.assert_array_equal(rgb[0, 0], [0, 0, 0])
+    np.testing.assert_array_equal(rgb[0, 1], np.round(np.array(turbo(0.0)[:3]) * 255))
+    np.testing.assert_array_equal(rgb[0, 2], np.round(np.array(turbo(1.0)[:3]) * 255))
+    np.testing.assert_array_equal(rgb[0, 3], rgb[0, 2])  # clipped beyond the far end
+    np.testing.assert_allclose(rgb[0, 4], np.round(np.array(turbo(0.5)[:3]) * 255), atol=4)  # 256-entry table
+
+
+def test_strip_holds_evenly_spaced_frames_with_gaps():
+    d = video()
+    d[-1] += 0.1  # the last frame differs, so it must be the strip's last panel
+    s = strip(d, np.arange(12) / 30, num=4)
+    assert s.shape == (40, 4 * 32 + 3 * 4, 3)
+    np.testing.assert_array_equal(s[:, 32:36], 255)
+    np.testing.assert_array_equal(s[20:, -32:], colorize(d[-1])[20:])  # below the time stamp
+    assert strip(d[:2], np.arange(2) / 30, num=6).shape[1] == 2 * 32 + 4
+
+
+def test_write_preview_writes_a_png_strip_and_a_gif(tmp_path):
+    d = video(T=30) + 0.02 * np.arange(30, dtype=np.float32)[:, None, None]  # frames differ (GIF merges repeats)
+    paths = write_preview(d, fps=30.0, out_dir=tmp_path / "new", num=3, gif_fps=15.0)
+    assert [p.name for p in paths] == ["depth_preview.png", "depth.gif"]
+    with Image.open(paths[0]) as png:
+        assert png.size == (3 * 32 + 2 * 4, 40)
+    with Image.open(paths[1]) as gif:
+        assert gif.n_frames == 15  # every second frame of 30
+        assert gif.info["duration"] == pytest.approx(1000 * 2 / 30, abs=1)
+    assert not list((tmp_path / "new").glob("*.tmp"))
+
+
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: colorize(np.ones((2, 2)), near_m=1.0, far_m=0.5), "far_m > near_m"),
+        (lambda: strip(np.ones((2, 2)), np.zeros(1)), r"shape \(T, H, W\)"),
+        (lambda: strip(np.ones((1, 2, 2)), np.zeros(1), num=0), "num must be >= 1"),
+        (lambda: write_preview(np.ones((1, 2, 2)), fps=0.0, out_dir="unused"), "frame rates must be > 0"),
+    ],
+)
+def test_bad_input_is_rejected(call, match):
+    with pytest.raises(BenchmarkError, match=match):
+        call()
