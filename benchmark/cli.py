@@ -86,6 +86,11 @@ SIMULATE = Stage(name="simulate", add_arguments=_no_arguments, run=_simulate)
 # The stages, in pipeline order. Later stages append themselves here, one line each.
 STAGES: list = [SIMULATE]
 
+# Render (issue 3): noisy depth video, calibration and labels; depth preview PNG/GIF in DIR.
+from benchmark.render import add_cli_arguments as _render_arguments, run_cli_stage as _render  # noqa: E402
+
+STAGES.append(Stage(name="render", add_arguments=_render_arguments, run=_render))
+
 # forces (issue 5): nominal contact forces, scored against the truth (benchmark/score_forces.py).
 from benchmark import score_forces as _score_forces  # noqa: E402
 

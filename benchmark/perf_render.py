@@ -1,6 +1,6 @@
 """Speed of the depth renderer, against MuJoCo's own renderer on the same scene as a peer.
 
-Run: ``python -m benchmark.perf_render [--frames N]``. It simulates a short episode of the
+Run: ``python -m benchmark.perf_render [--frames N]``. It simulates a short lift of the
 default scenario, then renders its frames at 320 x 240 three ways in this process:
 
 - pyrender (this benchmark's renderer): exact depth + label image per frame;
@@ -58,26 +58,21 @@ def _rate(fn, frames: int, repeats: int = 3) -> float:
 
 
 def scene_frames(num: int):
-    """The default scenario's world and `num` kinematic states: the box lifts and turns with the
-    hand over it, its fingers half flexed.
+    """The default scenario's world and the first `num` frames of its simulated lift.
 
     Returns:
         ``(world, set_frame)`` with ``set_frame(data, k)`` posing frame k.
     """
     from benchmark.scenario import Scenario
+    from benchmark.simulate import simulate
     from benchmark.world import build_world, set_frame
 
-    world = build_world(Scenario())
-    s = np.linspace(0.0, 1.0, num)
-    lo, hi = world.hand.joint_range[:, 0], world.hand.joint_range[:, 1]
-    hinges = lo + 0.4 * (hi - lo)
+    sc = Scenario(duration_s=(num - 1) / Scenario().fps)
+    truth = simulate(sc).truth
+    world = build_world(sc)
 
     def pose(data, k):
-        z = 0.03 + 0.15 * s[k]
-        yaw = 0.5 * s[k]
-        box_quat = [np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2)]
-        hand = np.concatenate([[0.0, -0.02, z + 0.1, 1.0, 0.0, 0.0, 0.0], hinges])
-        set_frame(world, data, [0.05 * s[k], 0.0, z], box_quat, hand)
+        set_frame(world, data, truth.box_pos[k], truth.box_quat[k], truth.hand_qpos[k])
 
     return world, pose
 

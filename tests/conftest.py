@@ -93,3 +93,14 @@ def episode_factory():
         return cache[key]
 
     return make
+
+
+# --- render (issue 3): the 2.5 s lift rendered once per session -----------------------------------
+
+
+@pytest.fixture(scope="session")
+def rendered_lift_episode(lift_episode):
+    """``lift_episode`` with its noisy depth (σ = 0.01 m), calibration and labels."""
+    from benchmark.render import render
+
+    return render(lift_episode[0])

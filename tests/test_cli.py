@@ -44,3 +44,19 @@ def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, arg
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and needle in err
     assert not out.exists()
+
+
+def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, capsys):
+    from PIL import Image
+
+    out = tmp_path / "run"
+    assert main(["--duration", "1", "--noise", "0.005", "--quiet", "--no-gif", "--out", str(out)]) == 0
+    assert "render: 31 depth frames 320x240 at 30 Hz, noise 0.005 m" in capsys.readouterr().out
+    block = json.loads((out / "summary.json").read_text())["render"]
+    assert block["frames"] == 31 and block["preview"] == ["depth_preview.png"]
+    assert 0.5 < block["valid_fraction"] < 1 and block["box_pixels_median"] > 1000
+    with Image.open(out / "depth_preview.png") as png:
+        assert png.size == (6 * 320 + 5 * 4, 240)
+    assert not (out / "depth.gif").exists()
+    ep = load_episode(out / "episode.npz")
+    assert ep.depth.depth_m.shape == (31, 240, 320) and ep.labels.shape == (31, 240, 320)

@@ -105,3 +105,28 @@ def test_write_is_atomic_and_leaves_no_temporaries(saved, tmp_path):
     save_episode(ep, p)  # overwrite in place
     assert sorted(x.name for x in tmp_path.iterdir()) == ["a.npz"]
     assert zipfile.is_zipfile(p)
+
+
+def test_rendered_depth_of_the_default_sensor_round_trips_bit_exactly(rendered_lift_episode, tmp_path):
+    """The default sensor quantises to 1 mm, so the file stores whole millimetres exactly."""
+    from benchmark.episode import depth_arrays
+
+    ep = rendered_lift_episode
+    arrays = depth_arrays(ep)
+    assert arrays["depth_counts"].dtype == np.uint16 and arrays["depth_quantum_m"] == 0.001
+    back = load_episode(save_episode(ep, tmp_path / "lift.npz"))
+    np.testing.assert_array_equal(back.depth.depth_m, ep.depth.depth_m)
+    np.testing.assert_array_equal(back.labels, ep.labels)
+    np.testing.assert_array_equal(back.calib.T_world_cam, ep.calib.T_world_cam)
+    assert back.depth.fps == ep.depth.fps
+    raw = ep.depth.depth_m.nbytes + ep.labels.nbytes
+    assert (tmp_path / "lift.npz").stat().st_size < raw / 3  # compact: uint16 + deflate
+
+
+def test_depth_beyond_uint16_at_0_1_mm_falls_back_to_1_cm(saved, tmp_path):
+    depth = np.full((2, 3, 4), 7.3456, dtype=np.float32)  # > 6.5535 m
+    calib = Calibration(K=np.eye(3), T_world_cam=np.eye(4), width=4, height=3)
+    ep = saved[0].with_depth(DepthVideo(depth_m=depth, fps=30), calib, None)
+    back = load_episode(save_episode(ep, tmp_path / "far.npz"))
+    np.testing.assert_allclose(back.depth.depth_m, depth, atol=0.005 + 1e-6)
+    assert back.labels is None

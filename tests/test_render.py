@@ -332,3 +332,22 @@ def test_render_rejects_a_sensor_with_another_noise():
 
     with pytest.raises(BenchmarkError, match="scenario's noise_m = 0.01"):
         R.render(synthetic_episode(0.01, 0), sensor=SensorModel(noise_m=0.02))
+
+
+def test_a_simulated_lift_renders_one_frame_per_truth_frame_and_shows_box_and_fingers(rendered_lift_episode):
+    ep = rendered_lift_episode
+    sc = ep.scenario
+    T = int(round(sc.duration_s * sc.fps)) + 1  # frames at t = k / fps from 0 to the duration
+    assert ep.depth.num_frames == len(ep.truth.t) == T == ep.labels.shape[0]
+    np.testing.assert_allclose(ep.depth.t, ep.truth.t, atol=1e-9)
+    box_px = (ep.labels == R.LABEL_BOX).sum(axis=(1, 2))
+    assert box_px.min() > 1500  # the box is in view all along the lift
+    fingers = {int(v) for v in np.unique(ep.labels[-1]) if v >= R.LABEL_FINGER0}
+    assert len(fingers) >= 4  # the camera faces the fingers on the box's far face
+    # the box's depth pixels back-project near the box's true pose (noise 1 cm, so a loose bound)
+    k = T - 1
+    pts = ep.calib.backproject(ep.depth.depth_m[k])[(ep.labels[k] == R.LABEL_BOX) & (ep.depth.depth_m[k] > 0)]
+    world_pts = pts @ ep.calib.T_world_cam[:3, :3].T + ep.calib.T_world_cam[:3, 3]
+    local = np.abs((world_pts - ep.truth.box_pos[k]) @ ep.truth.box_rot[k])
+    half = ep.object_model.half_extents
+    assert np.median(np.max(local / half, axis=1)) == pytest.approx(1.0, abs=0.1)  # on the surface
