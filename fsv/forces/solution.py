@@ -63,6 +63,8 @@ class ForceSolution:
         objective: Value of the program's cost (with its constant term, so eq. 6, 9 or 14
             exactly; plus the table and regularisation terms), shape (T,).
         iterations: Interior-point iterations of the last solve, shape (T,).
+        solve_time_s: Wall-clock time spent on the frame's program(s): assembly, solver update,
+            solve and unpacking, shape (T,), [s]; 0 for frames without a program.
     """
 
     kind: str
@@ -81,6 +83,7 @@ class ForceSolution:
     status: np.ndarray
     objective: np.ndarray
     iterations: np.ndarray
+    solve_time_s: np.ndarray
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -102,6 +105,7 @@ class ForceSolution:
             status=as_array("ForceSolution.status", self.status, (None,), np.int8),
             objective=as_array("ForceSolution.objective", self.objective, (None,)),
             iterations=as_array("ForceSolution.iterations", self.iterations, (None,), np.int64),
+            solve_time_s=as_array("ForceSolution.solve_time_s", self.solve_time_s, (None,)),
         )
         same_length("ForceSolution", **fields)
         object.__setattr__(self, "finger_names", names)

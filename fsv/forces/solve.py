@@ -26,6 +26,7 @@ the least-violation answer, flagged :attr:`FrameStatus.LEAST_VIOLATION`.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -245,6 +246,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     status = np.full(T, int(FrameStatus.OPTIMAL), np.int8)
     objective = np.zeros(T)
     iterations = np.zeros(T, np.int64)
+    seconds = np.zeros(T)
     programs: dict = {}
     keys = [row.tobytes() for row in np.concatenate([use, sliding, fitted, corners_on], axis=1)]
     touching = (use.any(axis=1) | corners_on.any(axis=1)).tolist()
@@ -256,6 +258,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
         if not touching[t]:
             status[t] = FrameStatus.NO_CONTACTS
             continue
+        t0 = time.perf_counter()
         prog = programs.get((keys[t], False))
         if prog is None:
             prog = programs[(keys[t], False)] = _program(False, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K)
@@ -269,6 +272,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
             if code not in OK:
                 forces, objective[t] = np.full((2 * K + 8, 3), np.nan), np.nan
         nominal[t], internal[t], corner[t] = forces[:K], forces[K : 2 * K], forces[2 * K :]
+        seconds[t] = time.perf_counter() - t0
     env = np.concatenate([corner.sum(axis=1), np.cross(table.point, corner).sum(axis=1)], axis=1)
     point = np.where(use[..., None], contacts.point, 0.0)
     achieved = np.concatenate([nominal.sum(axis=1), np.cross(point, nominal).sum(axis=1)], axis=1) + env
@@ -291,6 +295,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
         status=status,
         objective=objective,
         iterations=iterations,
+        solve_time_s=seconds,
     )
 
 
