@@ -63,11 +63,12 @@ def strip(depth_m: np.ndarray, t: np.ndarray, num: int = 6, near_m: float = 0.15
 
 
 def write_preview(
-    depth_m: np.ndarray, fps: float, out_dir, num: int = 6, gif: bool = True, gif_fps: float = 15.0
+    depth_m: np.ndarray, fps: float, out_dir, num: int = 6, gif: bool = True, gif_fps: float = 10.0
 ) -> list[pathlib.Path]:
     """Writes ``depth_preview.png`` (a strip of frames) and ``depth.gif`` (the video) to out_dir.
 
-    Both use a 64-colour palette, which keeps them small.
+    The strip is quantised to 64 colours; the animation uses the colour map's own 255-entry
+    palette (index = depth level, black = no measurement), which is exact and fast.
 
     Args:
         depth_m: Depth video, shape (T, H, W), [m].
@@ -92,7 +93,7 @@ def write_preview(
     _atomic(paths[0], lambda p: png.save(p, format="PNG", optimize=True))
     if gif:
         step = max(1, int(np.ceil(fps / gif_fps)))
-        frames = [_palette(f) for f in colorize(np.asarray(depth_m)[::step])]
+        frames = [_indexed(d) for d in np.asarray(depth_m)[::step]]
         paths.append(out_dir / "depth.gif")
         _atomic(
             paths[1],
@@ -101,6 +102,21 @@ def write_preview(
             ),
         )
     return paths
+
+
+def _indexed(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0):
+    """A depth image as a palette image: index 0 black (no measurement), 1..255 the turbo map."""
+    from matplotlib import colormaps
+    from PIL import Image
+
+    d = np.asarray(depth_m, dtype=np.float32)
+    idx = 1 + np.rint(np.clip((d - near_m) / (far_m - near_m), 0, 1) * 254).astype(np.uint8)
+    idx[d <= 0] = 0
+    palette = np.zeros((256, 3), dtype=np.uint8)
+    palette[1:] = np.round(colormaps["turbo"](np.linspace(0, 1, 255))[:, :3] * 255)
+    img = Image.fromarray(idx, mode="P")
+    img.putpalette(palette.ravel().tolist())
+    return img
 
 
 def _palette(rgb: np.ndarray):

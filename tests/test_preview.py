@@ -44,6 +44,9 @@ def test_write_preview_writes_a_png_strip_and_a_gif(tmp_path):
     with Image.open(paths[1]) as gif:
         assert gif.n_frames == 15  # every second frame of 30
         assert gif.info["duration"] == pytest.approx(1000 * 2 / 30, abs=10)  # GIF stores centiseconds
+        first = np.asarray(gif.convert("RGB"))
+    np.testing.assert_array_equal(first[0, 0], [0, 0, 0])  # no measurement
+    np.testing.assert_allclose(first[10, :], colorize(d[0])[10, :], atol=6)  # the colour map at 255 levels
     assert not list((tmp_path / "new").glob("*.tmp"))
 
 
