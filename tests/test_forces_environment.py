@@ -35,13 +35,18 @@ def _no_fingers(T, K=2):
 def test_corners_on_the_table_from_the_pose():
     model = box_model()
     h = model.half_extents
-    tip = np.deg2rad(10)
-    # Flat; flat on its side (rotated 90 deg about x); tipped 10 deg onto an edge; lifted by 1 cm.
-    rot = np.stack([np.eye(3), _rot_x(np.pi / 2), _rot_y(tip), np.eye(3)])
+    tip = np.deg2rad(15)
+    small = np.deg2rad(2)
+    # Flat; flat on its side (rotated 90 deg about x); tipped 15 deg onto an edge; lifted by 1 cm;
+    # seen tilted by 2 degrees (a pose error: the far end is 6 mm up) but still resting.
+    rot = np.stack([np.eye(3), _rot_x(np.pi / 2), _rot_y(tip), np.eye(3), _rot_y(small)])
     edge_z = h[0] * np.sin(tip) + h[2] * np.cos(tip)
-    pos = np.array([[0, 0, h[2] - 1e-4], [0, 0, h[1]], [0, 0, edge_z], [0, 0, h[2] + 0.01]])
+    small_z = h[0] * np.sin(small) + h[2] * np.cos(small)
+    pos = np.array([[0, 0, h[2] - 1e-4], [0, 0, h[1]], [0, 0, edge_z], [0, 0, h[2] + 0.01], [0, 0, small_z]])
     tc = table_contacts(_kin(pos, rot), model)
-    assert list(tc.active.sum(axis=1)) == [4, 4, 2, 0]
+    assert list(tc.active.sum(axis=1)) == [4, 4, 2, 0, 4]
+    assert np.array_equal(tc.active[4], tc.active[0])
+    assert table_contacts(_kin(pos, rot), model, max_tilt_deg=1.0).active[4].sum() == 2
     assert np.all(UNIT_CORNERS[tc.active[0]][:, 2] == -1)  # the bottom face
     assert np.all(UNIT_CORNERS[tc.active[1]][:, 1] == -1)  # +90 deg about x turns +y up, -y down
     low = UNIT_CORNERS[tc.active[2]]
@@ -49,6 +54,8 @@ def test_corners_on_the_table_from_the_pose():
     assert np.allclose(tc.normal[1], _rot_x(np.pi / 2).T @ [0, 0, 1])
     with pytest.raises(InputError, match="height_tol_m"):
         table_contacts(_kin(pos, rot), model, height_tol_m=-1.0)
+    with pytest.raises(InputError, match="max_tilt_deg"):
+        table_contacts(_kin(pos, rot), model, max_tilt_deg=60.0)
 
 
 def test_a_box_resting_on_the_table_is_carried_by_it():

@@ -48,6 +48,7 @@ class ForceSettings:
     Attributes:
         table: Model the table as an environment contact (see :mod:`fsv.forces.environment`).
         table_height_tol_m: Corner height [m] below which a corner touches the table.
+        table_max_tilt_deg: Tilt [deg] up to which the box's lowest face counts as flat (resting).
         table_weight: Weight of the table forces' squared norms in the cost (fingers have 1).
         slack_weight: Weight of the squared wrench violation in least-violation programs.
         regularization: Weight of the squared internal components without a target.
@@ -56,6 +57,7 @@ class ForceSettings:
 
     table: bool = True
     table_height_tol_m: float = 0.003
+    table_max_tilt_deg: float = 10.0
     table_weight: float = 0.01
     slack_weight: float = 1e6
     regularization: float = 1e-3
@@ -223,7 +225,9 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     with np.errstate(invalid="ignore"):
         required = to_object_frame(kinematics.rot, required_wrench(kinematics, model, gravity))
     if settings.table:
-        table = table_contacts(kinematics, model, height_tol_m=settings.table_height_tol_m)
+        table = table_contacts(
+            kinematics, model, height_tol_m=settings.table_height_tol_m, max_tilt_deg=settings.table_max_tilt_deg
+        )
     else:
         table = TableContacts.none(T, model)
     corners_on = table.active & valid[:, None]
