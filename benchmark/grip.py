@@ -179,6 +179,8 @@ class GripPolicy:
         response_s: Time constant of the grip force's first-order response, [s].
         share: Per finger share of the internal force, thumb first, (K,); the thumb opposes the
             fingers (its share is 1, the active fingers' shares are renormalised to sum to 1).
+        min_finger_force_n: Every digit in contact presses with at least this normal force, [N]
+            (people keep each digit of a grasp in firm contact).
     """
 
     friction: float
@@ -187,6 +189,7 @@ class GripPolicy:
     anticipation_s: float
     response_s: float
     share: np.ndarray
+    min_finger_force_n: float = 1.0
 
     @staticmethod
     def for_scenario(scenario: Scenario, world: World) -> "GripPolicy":
@@ -197,23 +200,28 @@ class GripPolicy:
                           response_s=float(user["response_s"]), share=share)
 
     def distribute(self, wrench: np.ndarray, points: np.ndarray, normals_in: np.ndarray,
-                   active: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+                   active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Nominal forces, the internal force pattern, and the grip needed to keep every pad from slipping.
 
+        All vectors in one frame (world or object), about the centre of mass.
+
         Args:
-            wrench: Force and torque (about the centre of mass) the hand must apply to the box,
-                (6,), world frame, [N], [N m].
-            points: Contact points relative to the centre of mass, (K, 3), world frame, [m].
-            normals_in: Unit normals into the box, (K, 3), world frame.
+            wrench: Force and torque the hand must apply to the box, (6,) or (N, 6), [N], [N m].
+            points: Contact points relative to the centre of mass, (K, 3), [m].
+            normals_in: Unit normals into the box, (K, 3).
             active: Digits in contact, (K,) bool.
 
         Returns:
-            ``(f_nom (K, 3), f_int (K, 3), grip_slip)``: the forces producing the wrench with the
-            least norm weighted by the inverse grip shares (a digit carries load in proportion to
-            its grip), the internal (workless) forces per newton of grip (thumb normal component 1),
-            and the smallest grip that keeps every active pad inside its friction cone shrunk by
-            the safety margin, [N].
+            ``(f_nom, f_int (K, 3), grip_slip)``: the forces producing the wrench with the least
+            norm weighted by the inverse grip shares (a digit carries load in proportion to its
+            grip), (K, 3) or (N, K, 3); the internal (workless) forces per newton of grip (thumb
+            normal component 1); and the smallest grip that keeps every active pad inside its
+            friction cone shrunk by the safety margin and every digit at or above
+            ``min_finger_force_n``, a float or (N,), [N].
         """
+        wrench = np.asarray(wrench, dtype=float)
+        single = wrench.ndim == 1
+        wrench = np.atleast_2d(wrench)
         K = len(active)
         idx = np.flatnonzero(active)
         G = np.zeros((6, 3 * len(idx)))
@@ -223,29 +231,34 @@ class GripPolicy:
             G[3:, 3 * i : 3 * i + 3] = [[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]]
         share = self.share[idx].copy()
         share[1:] /= share[1:].sum()
-        # Load shared in proportion to each digit's share of the grip (weighted least norm), so
-        # that every pad works at a similar fraction of its friction cone.
+        # Weighted least norm: every pad works at a similar fraction of its friction cone.
         W = np.repeat(share, 3)
         Gp = W[:, None] * G.T @ np.linalg.inv((G * W) @ G.T)
-        f_nom = np.zeros((K, 3))
-        f_nom[idx] = (Gp @ wrench).reshape(-1, 3)
+        f_nom = np.zeros((len(wrench), K, 3))
+        f_nom[:, idx] = (wrench @ Gp.T).reshape(len(wrench), -1, 3)
         d = (share[:, None] * normals_in[idx]).ravel()
         d_int = (d - Gp @ (G @ d)).reshape(-1, 3)
         d_int /= d_int[0] @ normals_in[idx[0]]
         f_int = np.zeros((K, 3))
         f_int[idx] = d_int
         mu = self.friction / (1.0 + self.safety_margin)
-        n0 = np.einsum("kj,kj->k", f_nom[idx], normals_in[idx])
-        n1 = np.einsum("kj,kj->k", d_int, normals_in[idx])
-        t0 = f_nom[idx] - n0[:, None] * normals_in[idx]
-        t1 = d_int - n1[:, None] * normals_in[idx]
+        nrm = normals_in[idx]
+        n0 = np.einsum("nkj,kj->nk", f_nom[:, idx], nrm)
+        n1 = np.einsum("kj,kj->k", d_int, nrm)
+        t0 = f_nom[:, idx] - n0[..., None] * nrm
+        t1 = d_int - n1[:, None] * nrm
         a = mu**2 * n1**2 - np.einsum("kj,kj->k", t1, t1)
-        b = 2 * (mu**2 * n0 * n1 - np.einsum("kj,kj->k", t0, t1))
-        c = mu**2 * n0**2 - np.einsum("kj,kj->k", t0, t0)
+        b = 2 * (mu**2 * n0 * n1 - np.einsum("nkj,kj->nk", t0, t1))
+        c = mu**2 * n0**2 - np.einsum("nkj,nkj->nk", t0, t0)
         ok = (c >= 0) & (n0 >= 0)
         root = (-b + np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))) / (2 * np.maximum(a, 1e-9))
-        grip = float(np.max(np.where(ok, 0.0, np.maximum(root, -n0 / np.maximum(n1, 1e-9)))))
-        return f_nom, f_int, max(grip, 0.0)
+        grip = np.max(np.where(ok, 0.0, np.maximum(root, -n0 / np.maximum(n1, 1e-9))), axis=1)
+        # every digit keeps pressing with at least min_finger_force_n
+        grip = np.maximum(grip, np.max((self.min_finger_force_n - n0) / np.maximum(n1, 1e-9), axis=1))
+        grip = np.maximum(grip, 0.0)
+        if single:
+            return f_nom[0], f_int, float(grip[0])
+        return f_nom, f_int, grip
 
 
 MAX_FINGER_FORCE_N = 40.0
@@ -260,9 +273,13 @@ def _quat_of(R: np.ndarray) -> np.ndarray:
 class Human:
     """The synthetic human acting in a world: moves the palm's mocap target and sets finger torques.
 
-    Each control tick (:meth:`act`) it writes ``data.mocap_pos/quat`` (the palm's target along
-    the task's motion), ``data.ctrl`` (posture targets of the fingers' position actuators) and
-    ``data.qfrc_applied`` on the finger joints (tau = J^T f of the grip policy's forces).
+    The human plans ahead (its motor plan is the task's motion): :meth:`__init__` computes, for
+    every physics step, the palm's target pose and the fingers' posture targets, and for every
+    control tick the fingertip forces of the grip policy in the object frame, anticipating the
+    planned load by the user's anticipation time and low-pass filtered by the user's response
+    time. At run time :meth:`act` writes ``data.mocap_pos/quat``, ``data.ctrl`` (position
+    actuators of the fingers) and, on control ticks, ``data.qfrc_applied`` on the finger joints:
+    tau = J^T (R f), with R the box's actual orientation.
 
     Args:
         scenario: The scenario (user, grasp).
@@ -270,103 +287,106 @@ class Human:
         motion: The planned box motion (world frame).
         phases: The prehension phases.
         releases: Whether the hand lets go at the end.
+        times: Times of the physics steps, (N,), [s].
+        ctrl_every: Control tick every this many steps.
     """
 
-    def __init__(self, scenario: Scenario, world: World, motion, phases, releases: bool):
+    def __init__(self, scenario: Scenario, world: World, motion, phases, releases: bool, times: np.ndarray,
+                 ctrl_every: int):
         self.world, self.motion, self.phases, self.releases = world, motion, phases, releases
-        self.plan = plan_grasp(scenario)
-        self.policy = GripPolicy.for_scenario(scenario, world)
-        self.grip = 0.0
-        self._last_t = 0.0
+        self.plan = plan = plan_grasp(scenario)
+        self.policy = pol = GripPolicy.for_scenario(scenario, world)
+        self.ctrl_every = ctrl_every
         self._jac = np.zeros((3, world.model.nv))
         m = world.model
-        self._mass = float(m.body_mass[world.box_body])
-        self._inertia = np.diag(m.body_inertia[world.box_body])
-        self._gravity = m.opt.gravity.copy()
-        self.R_palm_obj = np.zeros((3, 3))
-        self.R_palm_obj = _rot(self.plan.palm_quat)
-        start_pos, start_rot = motion.start_pos, motion.start_rot
-        self.grasp_palm_pos = start_pos + start_rot @ self.plan.palm_pos
+        mass = float(m.body_mass[world.box_body])
+        inertia = np.diag(m.body_inertia[world.box_body])
+        gravity = m.opt.gravity.copy()
+        self.R_palm_obj = _rot(plan.palm_quat)
         self.approach = np.array([0.0, -0.06, 0.12])
-        self.last_forces = np.zeros((len(world.hand.finger_names), 3))
-        self.last_grip_target = 0.0
+        ph = phases
+        t = np.asarray(times, dtype=float)
+
+        # Palm target and finger posture targets at every step.
+        pos, rot, *_ = motion.evaluate(t)
+        palm_pos = pos + rot @ plan.palm_pos
+        palm_rot = rot @ self.R_palm_obj
+        reach = _mj(t / ph.reach_end)
+        palm_pos += ((1 - reach) * (t < ph.reach_end))[:, None] * self.approach
+        closing = _mj((t - ph.reach_end) / (ph.close_end - ph.reach_end))
+        q = plan.q_open + closing[:, None] * (plan.q_grasp - plan.q_open)
+        if releases:
+            opening = _mj((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
+            q = np.where((t >= ph.unload_end)[:, None], plan.q_grasp + opening[:, None] * (plan.q_open - plan.q_grasp), q)
+            leave = _mj((t - ph.open_end) / max(ph.duration - ph.open_end, 1e-9))
+            palm_pos += (leave * (t >= ph.open_end))[:, None] * self.approach
+        self.palm_pos = palm_pos
+        self.palm_quat = np.array([_quat_of(R) for R in palm_rot])
+        self.ctrl = q[:, world.actuator_joint]
+
+        # Grip forces at every control tick, object frame.
+        tk = t[::ctrl_every]
+        ta = tk + pol.anticipation_s
+        _, rot_a, _, acc, omega, alpha = motion.evaluate(ta)
+        load = np.ones_like(ta)
+        load = np.where(ta < ph.close_end, 0.0, load)
+        load = np.where((ta >= ph.close_end) & (ta < ph.load_end), _mj((ta - ph.close_end) / (ph.load_end - ph.close_end)), load)
+        if releases:
+            load = np.where(ta >= ph.move_end, 1 - _mj((ta - ph.move_end) / max(ph.unload_end - ph.move_end, 1e-9)), load)
+        # wrench in the object frame: R^T m (a - g), and J_box R^T alpha + w_b x J_box w_b
+        force_obj = np.einsum("nji,nj->ni", rot_a, mass * (acc - gravity))
+        w_b = np.einsum("nji,nj->ni", rot_a, omega)
+        a_b = np.einsum("nji,nj->ni", rot_a, alpha)
+        torque_obj = a_b @ inertia + np.cross(w_b, w_b @ inertia)
+        wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
+        f_nom, f_int, grip_slip = pol.distribute(wrench, plan.spot, plan.normal_in, plan.active)
+        target = pol.baseline_grip_n + grip_slip
+        ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
+        target = np.where(tk < ph.close_end, pol.baseline_grip_n * ramp, target)
+        if releases:
+            fade = 1 - _mj((tk - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
+            target = np.where(tk >= ph.unload_end, pol.baseline_grip_n * fade, target)
+        grip = np.zeros_like(target)
+        keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
+        g = 0.0
+        for i, gt in enumerate(target):
+            g = keep * g + (1 - keep) * gt
+            grip[i] = g
+        forces = f_nom + grip[:, None, None] * f_int
+        norm = np.linalg.norm(forces, axis=2, keepdims=True)
+        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
+        off = (tk < ph.reach_end) | ((tk >= ph.open_end) if releases else False)
+        forces[off] = 0.0
+        self.forces_obj = forces
+        self._fingers = []
+        for k in np.flatnonzero(plan.active):
+            dofs = world.finger_dofs[k]
+            contiguous = np.array_equal(dofs, np.arange(dofs[0], dofs[-1] + 1))
+            self._fingers.append((int(k), int(world.tip_site[k]), slice(int(dofs[0]), int(dofs[-1]) + 1) if contiguous else dofs))
+        self.grip = grip
+        self.grip_target = target
 
     def palm_start(self) -> tuple[np.ndarray, np.ndarray]:
-        """Palm pose at t = 0: above and behind the grasp pose."""
-        R = self.motion.start_rot @ self.R_palm_obj
-        return self.grasp_palm_pos + self.approach, _quat_of(R)
+        """Palm pose at the first step."""
+        return self.palm_pos[0].copy(), self.palm_quat[0].copy()
 
-    def _load_fraction(self, t: float) -> float:
-        ph = self.phases
-        if t < ph.close_end:
-            return 0.0
-        if t < ph.load_end:
-            return float(min_jerk_scalar((t - ph.close_end) / (ph.load_end - ph.close_end)))
-        if self.releases and t >= ph.move_end:
-            return float(1.0 - min_jerk_scalar((t - ph.move_end) / max(ph.unload_end - ph.move_end, 1e-9)))
-        return 1.0
-
-    def act(self, data: mujoco.MjData, t: float) -> None:
-        """Writes the palm target, posture targets and finger torques for time t."""
-        w, ph, plan = self.world, self.phases, self.plan
-        m = w.model
-        pos, rot, _, _, _, _ = self.motion(t)
-        palm_pos = pos + rot @ self.plan.palm_pos
-        palm_rot = rot @ self.R_palm_obj
-        q_target = plan.q_grasp
-        if t < ph.reach_end:
-            s = min_jerk_scalar(t / ph.reach_end)
-            palm_pos = palm_pos + (1 - s) * self.approach
-            q_target = plan.q_open
-        elif t < ph.close_end:
-            s = min_jerk_scalar((t - ph.reach_end) / (ph.close_end - ph.reach_end))
-            q_target = plan.q_open + s * (plan.q_grasp - plan.q_open)
-        elif self.releases and t >= ph.unload_end:
-            s = min_jerk_scalar((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
-            q_target = plan.q_grasp + s * (plan.q_open - plan.q_grasp)
-            if t >= ph.open_end:
-                palm_pos = palm_pos + min_jerk_scalar((t - ph.open_end) / max(ph.duration - ph.open_end, 1e-9)) * self.approach
-        data.mocap_pos[w.mocap] = palm_pos
-        data.mocap_quat[w.mocap] = _quat_of(palm_rot)
-        data.ctrl[:] = q_target[w.actuator_joint]
-
-        # Grip policy: anticipate the planned load, distribute it, squeeze with a safety margin.
-        box_rot = data.xmat[w.box_body].reshape(3, 3)
-        com = data.xpos[w.box_body]
-        lam = self._load_fraction(t + self.policy.anticipation_s)
-        _, _, _, acc, omega, alpha = self.motion(t + self.policy.anticipation_s)
-        J_world = box_rot @ self._inertia @ box_rot.T
-        wrench = lam * np.concatenate([self._mass * (acc - self._gravity), J_world @ alpha + np.cross(omega, J_world @ omega)])
-        normals = (box_rot @ plan.normal_in.T).T
-        points = (box_rot @ plan.spot.T).T + com - com
-        f_nom, f_int, grip_slip = self.policy.distribute(wrench, points, normals, plan.active)
-        if t < ph.reach_end:
-            grip_target = 0.0
-        elif t < ph.close_end:
-            grip_target = self.policy.baseline_grip_n * min_jerk_scalar((t - ph.reach_end) / (ph.close_end - ph.reach_end))
-        elif self.releases and t >= ph.unload_end:
-            grip_target = self.policy.baseline_grip_n * (1 - min_jerk_scalar((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9)))
-        else:
-            grip_target = self.policy.baseline_grip_n + grip_slip
-        dt = t - self._last_t
-        self._last_t = t
-        self.grip += (1.0 - np.exp(-dt / self.policy.response_s)) * (grip_target - self.grip)
-        forces = f_nom + self.grip * f_int
-        norm = np.linalg.norm(forces, axis=1, keepdims=True)
-        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
-        if t < ph.reach_end or (self.releases and t >= ph.open_end):
-            forces[:] = 0.0
-        self.last_forces, self.last_grip_target = forces, grip_target
-        data.qfrc_applied[:] = 0.0
-        for k in np.flatnonzero(plan.active):
-            mujoco.mj_jacSite(m, data, self._jac, None, int(w.tip_site[k]))
-            dofs = w.finger_dofs[k]
-            data.qfrc_applied[dofs] = self._jac[:, dofs].T @ forces[k]
+    def act(self, data: mujoco.MjData, step: int) -> None:
+        """Writes the palm target, posture targets and (on control ticks) finger torques of a step."""
+        w = self.world
+        data.mocap_pos[w.mocap] = self.palm_pos[step]
+        data.mocap_quat[w.mocap] = self.palm_quat[step]
+        data.ctrl[:] = self.ctrl[step]
+        if step % self.ctrl_every:
+            return
+        f = self.forces_obj[step // self.ctrl_every] @ data.xmat[w.box_body].reshape(3, 3).T
+        m, jac = w.model, self._jac
+        for k, site, dofs in self._fingers:
+            mujoco.mj_jacSite(m, data, jac, None, site)
+            data.qfrc_applied[dofs] = f[k] @ jac[:, dofs]
 
 
-def min_jerk_scalar(s: float) -> float:
-    """The minimum-jerk profile 10 s^3 - 15 s^4 + 6 s^5 of a scalar s, clipped to [0, 1]."""
-    s = min(max(s, 0.0), 1.0)
+def _mj(s: np.ndarray) -> np.ndarray:
+    s = np.clip(s, 0.0, 1.0)
     return s * s * s * (10 - 15 * s + 6 * s * s)
 
 

@@ -123,13 +123,19 @@ def _fmt(v) -> str:
     return " ".join(repr(float(x)) for x in np.ravel(v))
 
 
+def pad_geoms(model: HandModel) -> np.ndarray:
+    """Mask of the model's primitives that are fingertip pads (the sphere of each distal segment), (G,)."""
+    sphere = np.all(np.isclose(model.geom_fromto[:, :3], model.geom_fromto[:, 3:]), axis=1)
+    return sphere & np.isin(model.geom_segment, model.fingertip_segment)
+
+
 def geom_name(model: HandModel, g: int) -> str:
     """MJCF name of the hand model's collision primitive ``g`` (``hand_<segment>_<index>``)."""
     return f"hand_{model.segment_names[model.geom_segment[g]]}_{g}"
 
 
 def hand_mjcf(model: HandModel, *, pos=(0.0, 0.0, 0.3), quat=(1.0, 0.0, 0.0, 0.0), contype: int = 2,
-              conaffinity: int = 0, friction: float = 1.0) -> ET.Element:
+              conaffinity: int = 0, friction: float = 1.0, colliding=None) -> ET.Element:
     """Writes a hand model as an MJCF ``<body>`` tree (palm with a free joint) for the worldbody.
 
     Body, joint and site names: ``hand_<segment>``, ``hand_<joint>``, ``hand_<finger>_tip``.
@@ -142,6 +148,8 @@ def hand_mjcf(model: HandModel, *, pos=(0.0, 0.0, 0.3), quat=(1.0, 0.0, 0.0, 0.0
         contype: MuJoCo collision type bits of every hand geom.
         conaffinity: MuJoCo collision affinity bits of every hand geom.
         friction: Sliding friction of the skin.
+        colliding: Which of the model's primitives collide, (G,) bool; None: all. The others
+            are written with contype = conaffinity = 0 (visual and kinematic only).
 
     Returns:
         The palm's ``<body>`` element.
@@ -160,17 +168,18 @@ def hand_mjcf(model: HandModel, *, pos=(0.0, 0.0, 0.3), quat=(1.0, 0.0, 0.0, 0.0
         ET.SubElement(bodies[model.joint_segment[j]], "joint", name=f"hand_{name}", type="hinge", pos="0 0 0",
                       axis=_fmt(model.joint_axis[j]), range=_fmt(model.joint_range[j]), limited="true",
                       damping=repr(float(spec["joint_damping"])), armature=repr(float(spec["joint_armature"])))
-    common = dict(contype=str(contype), conaffinity=str(conaffinity), condim="3", friction=f"{friction} 0.005 0.0001",
-                  density=repr(float(spec["density"])), group="1")
+    common = dict(condim="3", friction=f"{friction} 0.005 0.0001", density=repr(float(spec["density"])), group="1")
+    colliding = np.ones(len(model.geom_segment), bool) if colliding is None else np.asarray(colliding, bool)
     for g in range(len(model.geom_segment)):
+        bits = dict(contype=str(contype), conaffinity=str(conaffinity)) if colliding[g] else dict(contype="0", conaffinity="0")
         a, b = model.geom_fromto[g, :3], model.geom_fromto[g, 3:]
         body = bodies[model.geom_segment[g]]
         if np.allclose(a, b):
             ET.SubElement(body, "geom", name=geom_name(model, g), type="sphere", pos=_fmt(a),
-                          size=_fmt([model.geom_radius[g]]), **common)
+                          size=_fmt([model.geom_radius[g]]), **common, **bits)
         else:
             ET.SubElement(body, "geom", name=geom_name(model, g), type="capsule", fromto=_fmt(model.geom_fromto[g]),
-                          size=_fmt([model.geom_radius[g]]), **common)
+                          size=_fmt([model.geom_radius[g]]), **common, **bits)
     for k, finger in enumerate(model.finger_names):
         ET.SubElement(bodies[model.fingertip_segment[k]], "site", name=f"hand_{finger}_tip",
                       pos=_fmt(model.fingertip_offset[k]), size=_fmt([0.002]), group="4")

@@ -34,7 +34,7 @@ from benchmark.tasks import TASKS, Motion
 from benchmark.truth import Truth
 from benchmark.world import World, box_spec, build_world, validate
 
-CONTROL_PERIOD_S = 0.004  # the synthetic human updates the grip forces at ~250 Hz
+CONTROL_PERIOD_S = 0.004  # the synthetic human updates the finger torques at ~250 Hz
 SLIDING_SPEED_M_S = 0.005  # a pad slides when its tangential speed relative to the box exceeds this
 SETTLE_S = 0.2  # simulated before t = 0 so that the box rests in its table contact at the first frame
 STEP_S = 0.001  # the physics step is the largest divisor of the frame period not above this
@@ -66,8 +66,6 @@ class _Recorder:
             "fingertip_pos": np.zeros((T, K, 3)), "hand_qpos": np.zeros((T, len(world.hand_qadr))),
             "palm_force": np.zeros((T, 3)),
         }
-        self._f6 = np.zeros(6)
-        self._jacp = np.zeros((3, world.model.nv))
 
     def record(self, i: int, data: mujoco.MjData) -> None:
         w, a, m = self.w, self.a, self.w.model
@@ -88,36 +86,39 @@ class _Recorder:
         fn = np.zeros(K)
         cop = np.zeros((K, 3))
         slide = np.zeros(K, bool)
-        for c_i in range(data.ncon):
-            c = data.contact[c_i]
-            if c.efc_address < 0 or (c.geom1 != w.box_geom and c.geom2 != w.box_geom):
-                continue
-            mujoco.mj_contactForce(m, data, c_i, self._f6)
-            frame = c.frame.reshape(3, 3)
-            f = frame.T @ self._f6[:3]  # on geom2, world frame
-            other = c.geom1 if c.geom2 == w.box_geom else c.geom2
-            if c.geom1 == w.box_geom:
-                f = -f
-            p = c.pos.copy()
-            if other == w.table_geom:
-                a["env_force"][i] += f
-                a["env_torque"][i] += np.cross(p - com, f)
-                continue
-            k = int(w.geom_finger[other])
-            if k < 0:
-                a["palm_force"][i] += f
-                continue
-            n_in = frame[0] if c.geom2 == w.box_geom else -frame[0]
-            force[k] += f
-            fn[k] += max(f @ n_in, 0.0)
-            cop[k] += max(f @ n_in, 0.0) * p
-            # Relative velocity of the pad's material point and the box's at the contact.
-            mujoco.mj_jac(m, data, self._jacp, None, p, int(m.geom_bodyid[other]))
-            v_finger = self._jacp @ data.qvel
-            v_box = a["box_vel"][i] + np.cross(omega, p - com)
-            v_rel = v_finger - v_box
-            if np.linalg.norm(v_rel - (v_rel @ n_in) * n_in) > SLIDING_SPEED_M_S:
-                slide[k] = True
+        con = data.contact
+        g1, g2 = con.geom1, con.geom2
+        sel = np.flatnonzero(((g1 == w.box_geom) | (g2 == w.box_geom)) & (con.efc_address >= 0))
+        if len(sel):
+            f6 = np.zeros((len(sel), 6))
+            for j, c_i in enumerate(sel):
+                mujoco.mj_contactForce(m, data, int(c_i), f6[j])
+            frame = con.frame[sel].reshape(-1, 3, 3)
+            # mj_contactForce gives the force on geom2 in the contact frame (rows: normal, tangents).
+            sign = np.where(g2[sel] == w.box_geom, 1.0, -1.0)
+            f = sign[:, None] * np.einsum("cji,cj->ci", frame, f6[:, :3])  # on the box, world frame
+            n_in = sign[:, None] * frame[:, 0]
+            p = con.pos[sel]
+            other = np.where(g2[sel] == w.box_geom, g1[sel], g2[sel])
+            table = other == w.table_geom
+            a["env_force"][i] = f[table].sum(axis=0)
+            a["env_torque"][i] = _cross(p[table] - com, f[table]).sum(axis=0)
+            finger = w.geom_finger[other]
+            palm = ~table & (finger < 0)
+            a["palm_force"][i] = f[palm].sum(axis=0)
+            on = finger >= 0
+            k, f, p, n_in = finger[on], f[on], p[on], n_in[on]
+            fnc = np.maximum(np.einsum("cj,cj->c", f, n_in), 0.0)
+            np.add.at(force, k, f)
+            np.add.at(fn, k, fnc)
+            np.add.at(cop, k, fnc[:, None] * p)
+            # Slip speed: the pad's material point relative to the box's, tangential to the contact.
+            body = m.geom_bodyid[other[on]]
+            cvel = data.cvel[body]
+            v_finger = cvel[:, 3:] + _cross(cvel[:, :3], p - data.subtree_com[m.body_rootid[body]])
+            v_rel = v_finger - (a["box_vel"][i] + _cross(omega, p - com))
+            v_t = v_rel - np.einsum("cj,cj->c", v_rel, n_in)[:, None] * n_in
+            np.logical_or.at(slide, k, np.linalg.norm(v_t, axis=1) > SLIDING_SPEED_M_S)
         active = fn > 0
         a["contact_active"][i] = active
         a["contact_sliding"][i] = slide & active
@@ -186,25 +187,22 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
     start_pos = np.asarray(box_spec()["start_pos"], dtype=float)
     phases = task.phases(duration)
     motion = Motion(start_pos, np.eye(3), task.keyframes(phases, scenario.rng("task")))
-    human = Human(scenario, world, motion, phases, task.releases)
+    n_frames = int(math.floor(duration * scenario.fps + 1e-9)) + 1
+    n_steps = (n_frames - 1) * spf
+    ctrl_every = max(1, int(round(CONTROL_PERIOD_S / m.opt.timestep)))
+    human = Human(scenario, world, motion, phases, task.releases, np.arange(n_steps + 1) * m.opt.timestep, ctrl_every)
     palm_pos, palm_quat = human.palm_start()
     d.qpos[world.hand_qadr[:3]] = palm_pos
     d.qpos[world.hand_qadr[3:7]] = palm_quat
     d.qpos[world.joint_qadr] = human.plan.q_open
-    d.mocap_pos[world.mocap] = palm_pos
-    d.mocap_quat[world.mocap] = palm_quat
     mujoco.mj_forward(m, d)
     # Let the box settle into its contact with the table (and the hand hang still) before t = 0.
-    human.act(d, 0.0)
+    human.act(d, 0)
     for _ in range(int(round(SETTLE_S / m.opt.timestep))):
         mujoco.mj_step(m, d)
     d.time = 0.0
 
-    n_frames = int(math.floor(duration * scenario.fps + 1e-9)) + 1
-    n_steps = (n_frames - 1) * spf
-    ctrl_every = max(1, int(round(CONTROL_PERIOD_S / m.opt.timestep)))
     rec = _Recorder(world, n_frames)
-    grip_cmd = np.zeros((n_frames, len(world.hand.finger_names), 3))
     bar = None
     if progress:
         from tqdm import tqdm
@@ -212,21 +210,18 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
         bar = tqdm(total=n_frames, desc=f"simulate {scenario.task}", unit="frame", leave=False)
     t0 = time.perf_counter()
     for step in range(n_steps + 1):
-        t = step * m.opt.timestep
         frame, rem = divmod(step, spf)
-        if step % ctrl_every == 0 or rem == 0:
-            human.act(d, t)
+        human.act(d, step)
         if rem == 0:
             mujoco.mj_forward(m, d)
             rec.record(frame, d)
-            grip_cmd[frame] = human.last_forces
             if bar is not None:
                 bar.update(1)
             if step == n_steps:
                 break
         mujoco.mj_step(m, d)
         if step % 200 == 0 and not np.all(np.isfinite(d.qacc)):
-            raise SimulationError(f"the simulation diverged at t = {t:.3f} s ({scenario})")
+            raise SimulationError(f"the simulation diverged at t = {step * m.opt.timestep:.3f} s ({scenario})")
     wall = time.perf_counter() - t0
     if bar is not None:
         bar.close()
@@ -252,6 +247,16 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
     stats = SimStats(steps=n_steps, timestep_s=float(m.opt.timestep), wall_s=wall,
                      palm_force_max_n=float(np.linalg.norm(a["palm_force"], axis=1).max()))
     return ep, stats
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b along the last axis (np.cross is slow on the small arrays of one frame)."""
+    a, b = np.broadcast_arrays(a, b)
+    out = np.empty(a.shape)
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 def _rot(quat: np.ndarray) -> np.ndarray:

@@ -23,12 +23,16 @@ import numpy as np
 import yaml
 
 from benchmark.errors import ScenarioError
-from benchmark.hand import hand_mjcf
+from benchmark.hand import hand_mjcf, pad_geoms
 from benchmark.hand import hand_model as _hand_model_at_scale
 from benchmark.scenario import Scenario
 from fsv import HandModel, ObjectModel
 
-# Collision bits (see sim_assets/world.xml): the hand touches the box only.
+# Collision bits (see sim_assets/world.xml): the hand touches the box only, and only with its
+# fingertip pads and its palm. The phalanx shafts are kinematic and visual only: every finger then
+# touches the box at exactly one point (a sphere on a box gives one contact), where the paper's
+# force sensors sit, so the per-finger truth (one force, one point) is exact and Newton-Euler
+# holds; the grasp planner keeps the shafts clear of the box.
 HAND_CONTYPE, HAND_CONAFFINITY = 2, 0
 
 
@@ -172,8 +176,9 @@ def world_xml(user: int, mass: int, stiffness: float) -> str:
     geom.set("friction", f"{obj.table_friction} 0.005 0.0001")
     world.find("geom[@name='table']").set("friction", f"{obj.table_friction} 0.005 0.0001")
     start = np.array([0.0, -0.25, 0.25])
+    colliding = pad_geoms(hand) | (hand.geom_segment == 0)
     world.append(hand_mjcf(hand, pos=start, contype=HAND_CONTYPE, conaffinity=HAND_CONAFFINITY,
-                           friction=obj.friction))
+                           friction=obj.friction, colliding=colliding))
     target = ET.SubElement(world, "body", name="palm_target", mocap="true", pos=" ".join(repr(float(v)) for v in start))
     ET.SubElement(target, "site", name="palm_target", size="0.005", group="4")
     eq = ET.SubElement(root, "equality")

@@ -72,3 +72,41 @@ def test_grasp_plans_fit_every_hand(user, grasp):
     assert plan.tip_error_m < 0.01
     assert plan.clearance_m > 0.0  # no part but the pads touches the box or the table
     assert plan.active[0] and plan.active.sum() >= 4
+
+
+def _total_grip(ep):
+    """Sum of the normal forces over the held frames, (T_held,), and the load m |a - g| there."""
+    tr = ep.truth
+    fn = tr.normal_force()[tr.held].sum(axis=1)
+    load = tr.mass * np.linalg.norm(tr.box_acc[tr.held] - tr.gravity, axis=1)
+    return fn, load
+
+
+def test_users_grip_harder_than_needed_by_their_own_margin(episode_factory):
+    """Over a lift, the summed normal force exceeds the minimum (load / mu) by a user-dependent margin."""
+    ratios = {}
+    for user in (2, 3):
+        ep = episode_factory(task="lift", user=user, grasp=0, mass=2, duration_s=2.4)
+        fn, load = _total_grip(ep)
+        ratio = fn / (load / ep.object_model.friction)
+        assert ratio.min() > 1.0
+        ratios[user] = np.median(ratio)
+    # u3 (margin 0.9, baseline 3.5 N) squeezes clearly harder than u2 (margin 0.25, baseline 1 N)
+    assert users()[3]["safety_margin"] > users()[2]["safety_margin"]
+    assert ratios[3] > 1.3 * ratios[2]
+
+
+def test_grip_rises_with_load_across_masses_and_within_an_episode(episode_factory):
+    light = episode_factory(task="lift", user=2, grasp=0, mass=0, duration_s=2.4)
+    heavy = episode_factory(task="lift", user=2, grasp=0, mass=2, duration_s=2.4)
+    assert np.median(_total_grip(heavy)[0]) > 1.4 * np.median(_total_grip(light)[0])
+    # vertical shaking: the load swings, the grip follows it in parallel
+    ep = episode_factory(task="excite-tz", user=1, grasp=2, mass=5, duration_s=10.0 / 3)
+    fn, load = _total_grip(ep)
+    assert np.ptp(load) > 2.0
+    # grip and load rise together; the grip may lead the load by a few frames (anticipation)
+    best = max(np.corrcoef(fn[max(0, -lag) : len(fn) - max(0, lag)], load[max(0, lag) : len(load) - max(0, -lag)])[0, 1]
+               for lag in range(-3, 4))
+    assert best > 0.6
+    high = load > np.median(load)
+    assert fn[high].mean() > fn[~high].mean()

@@ -43,9 +43,9 @@ class Task:
 
 
 def _registry() -> dict:
-    from benchmark.tasks import lift
+    from benchmark.tasks import excite, free, lift, place, release, rotate
 
-    tasks = [lift.TASK]
+    tasks = [lift.TASK, place.TASK, release.TASK, rotate.TASK, free.TASK, *excite.TASKS]
     return {t.name: t for t in tasks}
 
 

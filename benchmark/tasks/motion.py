@@ -93,28 +93,44 @@ class Motion:
             self.seg_angle.append(angle)
 
     def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The planned box state at time t.
+        """The planned box state at time t: :meth:`evaluate` of one time."""
+        return tuple(v[0] for v in self.evaluate(np.array([float(t)])))
+
+    def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The planned box state at many times.
+
+        Args:
+            t: Times, (N,), [s].
 
         Returns:
-            ``(pos (3,), rot (3, 3), vel (3,), acc (3,), omega (3,), alpha (3,))``, world frame, SI units.
+            ``(pos (N, 3), rot (N, 3, 3), vel (N, 3), acc (N, 3), omega (N, 3), alpha (N, 3))``,
+            world frame, SI units.
         """
-        zero = np.zeros(3)
+        t = np.asarray(t, dtype=float)
+        N = t.shape[0]
+        pos = np.tile(self.start_pos, (N, 1))
+        rot = np.tile(self.start_rot, (N, 1, 1))
+        vel, acc, omega, alpha = (np.zeros((N, 3)) for _ in range(4))
         if len(self.t) == 0:
-            return self.start_pos.copy(), self.start_rot.copy(), zero, zero, zero, zero
-        if t <= self.t[0]:
-            return self.start_pos + self.d[0], self.R[0], zero, zero, zero, zero
-        if t >= self.t[-1]:
-            return self.start_pos + self.d[-1], self.R[-1], zero, zero, zero, zero
-        i = int(np.searchsorted(self.t, t, side="right") - 1)
-        T = self.t[i + 1] - self.t[i]
-        p, dp, ddp = min_jerk((t - self.t[i]) / T)
-        delta = self.d[i + 1] - self.d[i]
-        pos = self.start_pos + self.d[i] + p * delta
-        vel = dp / T * delta
-        acc = ddp / T**2 * delta
-        axis, angle = self.seg_axis[i], self.seg_angle[i]
-        rot = axis_angle_to_rot(axis, p * angle) @ self.R[i]
-        return pos, rot, vel, acc, axis * angle * dp / T, axis * angle * ddp / T**2
+            return pos, rot, vel, acc, omega, alpha
+        before, after = t <= self.t[0], t >= self.t[-1]
+        pos[before], rot[before] = self.start_pos + self.d[0], self.R[0]
+        pos[after], rot[after] = self.start_pos + self.d[-1], self.R[-1]
+        seg = np.clip(np.searchsorted(self.t, t, side="right") - 1, 0, len(self.t) - 2)
+        inside = ~before & ~after
+        for i in np.unique(seg[inside]):
+            sel = inside & (seg == i)
+            T = self.t[i + 1] - self.t[i]
+            p, dp, ddp = min_jerk((t[sel] - self.t[i]) / T)
+            delta = self.d[i + 1] - self.d[i]
+            pos[sel] = self.start_pos + self.d[i] + p[:, None] * delta
+            vel[sel] = (dp / T)[:, None] * delta
+            acc[sel] = (ddp / T**2)[:, None] * delta
+            axis, angle = self.seg_axis[i], self.seg_angle[i]
+            rot[sel] = axis_angle_to_rot(axis, p * angle) @ self.R[i]
+            omega[sel] = (angle * dp / T)[:, None] * axis
+            alpha[sel] = (angle * ddp / T**2)[:, None] * axis
+        return pos, rot, vel, acc, omega, alpha
 
 
 def _unit(v) -> np.ndarray:
@@ -131,3 +147,21 @@ def _log(R: np.ndarray) -> tuple[np.ndarray, float]:
         return np.array([1.0, 0.0, 0.0]), 0.0
     w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2 * np.sin(angle))
     return w / np.linalg.norm(w), angle
+
+
+def timed(t0: float, t1: float, waypoints: list, weights: list) -> list:
+    """Spreads waypoints over [t0, t1] with segment durations proportional to ``weights``.
+
+    Args:
+        t0: Time of the first waypoint, [s].
+        t1: Time of the last waypoint, [s].
+        waypoints: ``(displacement (3,), rotation vector (3,))`` pairs, the first at t0.
+        weights: Relative duration of each of the ``len(waypoints) - 1`` segments (> 0).
+
+    Returns:
+        Keyframes ``(t, displacement, rotation vector)`` for :class:`Motion`.
+    """
+    if len(weights) != len(waypoints) - 1 or min(weights) <= 0:
+        raise ValueError("need one positive weight per segment between waypoints")
+    cum = np.concatenate([[0.0], np.cumsum(weights)]) / np.sum(weights)
+    return [(t0 + c * (t1 - t0), np.asarray(d, float), np.asarray(r, float)) for c, (d, r) in zip(cum, waypoints)]
