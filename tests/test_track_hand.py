@@ -69,8 +69,9 @@ def test_fit_recovers_a_perturbed_hand_from_noisy_depth():
     p, r, _, _ = kin.pose(truth)
     a, b = kin.capsules(p, r)
     rays = CameraRays.from_calibration(CALIB)
-    scene = predict_box_depth(rays, np.arange(CALIB.width * CALIB.height), bp, bR, SIZE / 2, CALIB.K[0, 0])[0]
-    scene = scene.reshape(CALIB.height, CALIB.width)
+
+    def scene(index):
+        return predict_box_depth(rays, index, bp, bR, SIZE / 2, CALIB.K[0, 0])[0]
     tips_true = kin.fingertips(p, r)
     init = HandState(truth.palm_pos + [0.008, -0.006, 0.005], exp_so3([0.04, -0.04, 0.06]) @ truth.palm_rot,
                      np.clip(truth.joints + rng.normal(0.0, 0.12, HAND.num_joints), *HAND.joint_range.T))
@@ -97,7 +98,7 @@ def test_fingers_do_not_enter_the_box():
     tracker = HandTracker(CALIB, HAND, BOX, sunk)
     empty = np.zeros((CALIB.height, CALIB.width), np.float32)
     for _ in range(5):
-        fit = tracker.update(empty, np.full(empty.shape, np.inf), bp, bR, 0.01)
+        fit = tracker.update(empty, lambda index: np.full(index.shape, np.inf), bp, bR, 0.01)
     p, r, _, _ = kin.pose(fit.state)
     a, b = kin.capsules(p, r)
     s = np.linspace(0, 1, 5)[:, None, None]

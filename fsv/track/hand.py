@@ -75,6 +75,9 @@ class HandTrackerConfig:
         smooth_rot_rad: Same for its orientation, [rad].
         smooth_joint_rad: Same for every hinge, [rad].
         penetration_m: Tolerance of the no-interpenetration rows, [m] (smaller is stiffer).
+        closure_m: Tolerance of the grasp-closure rows of hidden fingers, [m].
+        closure_range_m: Hidden fingers whose pads are farther than this from the box are left
+            to the smoothness prior alone, [m].
         visible_min_points: A finger is observed when at least this many agreeing points fall
             on its two distal segments.
         lost_fraction: Below this fraction of candidates explained, the fit is re-initialised.
@@ -91,6 +94,8 @@ class HandTrackerConfig:
     smooth_rot_rad: float = 0.2
     smooth_joint_rad: float = 0.3
     penetration_m: float = 0.001
+    closure_m: float = 0.004
+    closure_range_m: float = 0.03
     visible_min_points: int = 6
     lost_fraction: float = 0.25
     particles: int = 16
@@ -100,7 +105,7 @@ class HandTrackerConfig:
             if int(getattr(self, name)) < 1:
                 raise InputError(f"HandTrackerConfig.{name} must be >= 1, got {getattr(self, name)!r}")
         for name in ("scene_k", "assign_max_m", "cauchy_k", "smooth_pos_m", "smooth_rot_rad",
-                     "smooth_joint_rad", "penetration_m"):
+                     "smooth_joint_rad", "penetration_m", "closure_m", "closure_range_m"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"HandTrackerConfig.{name} must be > 0, got {v!r}")
@@ -363,7 +368,9 @@ class HandTracker:
         lo, hi = hand_model.joint_range[:, 0], hand_model.joint_range[:, 1]
         self.lo, self.hi = lo, hi
         self.history = [HandState(init.palm_pos, init.palm_rot, np.clip(init.joints, lo, hi))]
-        self.first = True
+        self.hidden = np.zeros(len(hand_model.finger_names), dtype=bool)  # unseen in the last frame
+        # Flexion hinges turn about the segment's x axis (abduction about its z axis).
+        self.flexion = (np.abs(hand_model.joint_axis[:, 0]) > 0.9).astype(float)
         # Capsule samples for the no-interpenetration rows: ends and middle of every capsule.
         fromto = hand_model.geom_fromto
         s = np.array([0.0, 0.5, 1.0])
@@ -381,6 +388,7 @@ class HandTracker:
         return HandState(2 * last.palm_pos - prev.palm_pos, rot, last.joints)
 
     def _candidates(self, depth_m, scene_depth, state: HandState, sigma: float):
+        """Flat indices of the pixels near the predicted hand that lie in front of the scene."""
         pose = self.kin.pose(state)
         a, b = self.kin.capsules(pose[0], pose[1])
         uvz = self.rays.project(self.calib, np.concatenate([a, b]))
@@ -396,138 +404,188 @@ class HandTracker:
         vv, uu = np.mgrid[v0 : v1 + 1, u0 : u1 + 1]
         idx = (vv * W + uu).reshape(-1)
         z = depth_m.reshape(-1)[idx].astype(float)
-        zs = scene_depth.reshape(-1)[idx]
+        zs = np.asarray(scene_depth(idx), dtype=float)
         keep = (z > 0) & (z < zs - self.config.scene_k * sigma)
         idx = idx[keep]
         if idx.size > self.config.max_points:
             idx = idx[:: int(np.ceil(idx.size / self.config.max_points))]
         return idx
 
+    def _system(self, st: HandState, rays, z_obs, pts, prior: HandState, box_pos, box_rot, sigma: float):
+        """Normal equations (A, g), robust cost and explained fraction of a configuration."""
+        c = self.config
+        n = self.model.num_joints
+        pose = self.kin.pose(st)
+        a, b = self.kin.capsules(pose[0], pose[1])
+        A = np.zeros((6 + n, 6 + n))
+        g = np.zeros(6 + n)
+        cost = 0.0
+        explained = 0.0
+        k = c.cauchy_k * sigma
+
+        def add(J, r, w, scale=1.0):
+            nonlocal A, g
+            Jw = J * (scale * w)[:, None]
+            A += Jw.T @ J
+            g -= Jw.T @ r
+
+        if z_obs.size:
+            # Where a capsule is hit, the residual is along the ray (observed minus predicted
+            # depth): only the visible front surface explains a pixel, so depth noise cannot
+            # pull points onto the far side of a thin finger.
+            zh, geom, x, nrm = ray_capsules(self.rays.origin, rays, a, b, self.model.geom_radius)
+            r = z_obs - zh
+            front = (geom >= 0) & (r > -3 * sigma)
+            if np.any(front):
+                nd = np.einsum("ni,ni->n", nrm[front], rays[front])
+                seg = self.model.geom_segment[geom[front]]
+                J = -self.kin.point_jacobian(x[front], seg, nrm[front], pose) / nd[:, None]
+                rf = r[front]
+                add(J, rf, 1.0 / (1.0 + (rf / k) ** 2))
+                cost += 0.5 * k**2 * float(np.sum(np.log1p((rf / k) ** 2)))
+            explained = float(np.sum(front & (np.abs(r) < 2 * sigma)))
+            # Elsewhere (outside the model's silhouette, or well in front of it), ICP: the point
+            # pulls its nearest capsule surface.
+            rest = ~front
+            if np.any(rest):
+                gi, dist, cp, n2 = closest_on_capsules(pts[rest], a, b, self.model.geom_radius)
+                use = dist < c.assign_max_m
+                explained += float(np.sum(use & (np.abs(dist) < 2 * sigma)))
+                J = -self.kin.point_jacobian(cp, self.model.geom_segment[gi], n2, pose)
+                add(J, dist, np.where(use, 1.0 / (1.0 + (dist / k) ** 2), 0.0))
+                d_c = np.minimum(np.abs(dist), c.assign_max_m)
+                cost += 0.5 * k**2 * float(np.sum(np.log1p((d_c / k) ** 2)))
+            explained /= z_obs.size
+        # No interpenetration with the box: capsule samples at least their radius outside.
+        xs = pose[0][self.pen_segment] + np.einsum("pij,pj->pi", pose[1][self.pen_segment], self.pen_local)
+        sd, grad = box_signed_distance((xs - box_pos) @ box_rot, self.half)
+        pen = self.pen_radius - sd
+        hit = pen > 0
+        if np.any(hit):
+            Jp = -self.kin.point_jacobian(xs[hit], self.pen_segment[hit], grad[hit] @ box_rot.T, pose)
+            wp = (sigma / c.penetration_m) ** 2
+            add(Jp, pen[hit], np.ones(int(hit.sum())), wp)
+            cost += 0.5 * wp * float(np.sum(pen[hit] ** 2))
+        # Grasp closure for hidden fingers: a finger the camera cannot see whose pad is near the
+        # box flexes until the pad meets its surface (fingers wrap the object they hold).
+        if np.any(self.hidden):
+            tips = self.kin.fingertips(pose[0], pose[1])
+            sd_t, grad_t = box_signed_distance((tips - box_pos) @ box_rot, self.half)
+            gap = sd_t - self.model.fingertip_radius
+            close = self.hidden & (gap > 0) & (gap < c.closure_range_m)
+            if np.any(close):
+                seg = self.model.fingertip_segment[close]
+                Jc = self.kin.point_jacobian(tips[close], seg, grad_t[close] @ box_rot.T, pose)
+                # Only the finger's flexion closes it: the palm stays where the depth puts it and
+                # the abduction keeps its last observed value.
+                Jc[:, :6] = 0.0
+                Jc[:, 6:] *= self.flexion[None, :]
+                wc = (sigma / c.closure_m) ** 2
+                add(Jc, gap[close], np.ones(int(close.sum())), wc)
+                cost += 0.5 * wc * float(np.sum(gap[close] ** 2))
+        # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
+        for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, st.palm_pos - prior.palm_pos),
+                             (slice(3, 6), c.smooth_rot_rad, log_so3(st.palm_rot @ prior.palm_rot.T)),
+                             (slice(6, 6 + n), c.smooth_joint_rad, st.joints - prior.joints)):
+            ws = (sigma / sd_) ** 2
+            A[sl, sl] += ws * np.eye(res.shape[0])
+            g[sl] -= ws * res
+            cost += 0.5 * ws * float(res @ res)
+        return A, g, cost, explained
+
     def _solve(self, idx, z_obs, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):
+        """Levenberg-Marquardt from ``state``: a step is taken only if it lowers the robust cost."""
         c = self.config
         rays = self.rays.ray[idx]
         pts = self.rays.origin + z_obs[:, None] * rays
         n = self.model.num_joints
-        pos_w, rot_w = np.array(state.palm_pos), np.array(state.palm_rot)
-        q = np.array(state.joints)
+        args = (rays, z_obs, pts, prior, box_pos, box_rot, sigma)
+        A, g, cost, explained = self._system(state, *args)
         lam = 1e-3
-        explained = 0.0
         for _ in range(c.iterations):
-            st = HandState(pos_w, rot_w, q)
-            pose = self.kin.pose(st)
-            a, b = self.kin.capsules(pose[0], pose[1])
-            A = np.zeros((6 + n, 6 + n))
-            g = np.zeros(6 + n)
-            if idx.size:
-                # Where a capsule is hit, the residual is along the ray (observed minus predicted
-                # depth): only the visible front surface explains a pixel, so depth noise cannot
-                # pull points onto the far side of a thin finger.
-                zh, geom, x, nrm = ray_capsules(self.rays.origin, rays, a, b, self.model.geom_radius)
-                k = c.cauchy_k * sigma
-                r = z_obs - zh
-                front = (geom >= 0) & (r > -3 * sigma)
-                if np.any(front):
-                    nd = np.einsum("ni,ni->n", nrm[front], rays[front])
-                    seg = self.model.geom_segment[geom[front]]
-                    J = -self.kin.point_jacobian(x[front], seg, nrm[front], pose) / nd[:, None]
-                    w = 1.0 / (1.0 + (r[front] / k) ** 2)
-                    Jw = J * w[:, None]
-                    A += Jw.T @ J
-                    g -= Jw.T @ r[front]
-                # Elsewhere (outside the model's silhouette, or well in front of it), ICP: the
-                # point pulls its nearest capsule surface.
-                rest = ~front
-                explained = float(np.mean(front & (np.abs(r) < 2 * sigma)))
-                if np.any(rest):
-                    gi, dist, cp, n2 = closest_on_capsules(pts[rest], a, b, self.model.geom_radius)
-                    use = dist < c.assign_max_m
-                    explained += float(np.sum(use & (np.abs(dist) < 2 * sigma))) / idx.size
-                    w = np.where(use, 1.0 / (1.0 + (dist / k) ** 2), 0.0)
-                    J = -self.kin.point_jacobian(cp, self.model.geom_segment[gi], n2, pose)
-                    Jw = J * w[:, None]
-                    A += Jw.T @ J
-                    g -= Jw.T @ dist
-            # No interpenetration with the box: capsule samples at least their radius outside.
-            Rl = pose[1][self.pen_segment]
-            xs = pose[0][self.pen_segment] + np.einsum("pij,pj->pi", Rl, self.pen_local)
-            sd, grad = box_signed_distance((xs - box_pos) @ box_rot, self.half)
-            pen = self.pen_radius - sd
-            hit = pen > 0
-            if np.any(hit):
-                gw = grad[hit] @ box_rot.T
-                Jp = -self.kin.point_jacobian(xs[hit], self.pen_segment[hit], gw, pose)
-                wp = (sigma / c.penetration_m) ** 2
-                A += wp * Jp.T @ Jp
-                g -= wp * Jp.T @ pen[hit]
-            # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
-            for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, pos_w - prior.palm_pos),
-                                 (slice(3, 6), c.smooth_rot_rad, log_so3(rot_w @ prior.palm_rot.T)),
-                                 (slice(6, 6 + n), c.smooth_joint_rad, q - prior.joints)):
-                ws = (sigma / sd_) ** 2
-                A[sl, sl] += ws * np.eye(res.shape[0])
-                g[sl] -= ws * res
-            A += lam * np.diag(np.diag(A)) + 1e-12 * np.eye(6 + n)
-            step = np.linalg.solve(A, g)
+            step = np.linalg.solve(A + lam * np.diag(np.diag(A)) + 1e-12 * np.eye(6 + n), g)
             step[:3] = np.clip(step[:3], -0.02, 0.02)
             step[3:] = np.clip(step[3:], -0.3, 0.3)
-            pos_w = pos_w + step[:3]
-            rot_w = project_to_so3(exp_so3(step[3:6]) @ rot_w)
-            q = np.clip(q + step[6:], self.lo, self.hi)
-            if np.max(np.abs(step)) < 1e-5:
-                break
-        return HandState(pos_w, rot_w, q), explained
+            cand = HandState(state.palm_pos + step[:3], exp_so3(step[3:6]) @ state.palm_rot,
+                             np.clip(state.joints + step[6:], self.lo, self.hi))
+            A2, g2, cost2, expl2 = self._system(cand, *args)
+            if cost2 < cost:
+                state, A, g, cost, explained = cand, A2, g2, cost2, expl2
+                lam = max(lam / 3, 1e-6)
+                if np.max(np.abs(step)) < 1e-5:
+                    break
+            else:
+                lam *= 8
+        return state, explained, cost
 
-    def update(self, depth_m: np.ndarray, scene_depth: np.ndarray, box_pos, box_rot, sigma: float) -> HandFit:
+    def predicted_depth(self, index: np.ndarray, inflate_m: float = 0.004) -> np.ndarray:
+        """Depth of the predicted hand (capsules inflated by ``inflate_m``) at flat pixel indices,
+        (N,) -> (N,) in [m], +inf where it is absent: the occluder the box tracker leaves out."""
+        st = self.predict()
+        pos, rot, _, _ = self.kin.pose(st)
+        a, b = self.kin.capsules(pos, rot)
+        return ray_capsules(self.rays.origin, self.rays.ray[index], a, b, self.model.geom_radius + inflate_m)[0]
+
+    def update(self, depth_m: np.ndarray, scene_depth, box_pos, box_rot, sigma: float) -> HandFit:
         """Tracks one frame.
 
         Args:
             depth_m: Observed depth image, shape (H, W), [m].
-            scene_depth: Depth of the tracked box in front of the table, shape (H, W), [m]
-                (+inf where nothing is predicted).
+            scene_depth: Depth of the tracked box in front of the table: a function of flat
+                pixel indices (N,) returning depths (N,) in [m] (+inf where nothing is predicted).
             box_pos: Tracked box centre, shape (3,), [m].
             box_rot: Tracked world_R_object, shape (3, 3).
             sigma: Depth noise scale, [m].
         """
         depth_m = np.asarray(depth_m)
-        if depth_m.shape != (self.rays.height, self.rays.width) or np.shape(scene_depth) != depth_m.shape:
-            raise InputError(f"depth and scene depth must have shape ({self.rays.height}, {self.rays.width}), "
-                             f"got {depth_m.shape} and {np.shape(scene_depth)}")
+        if depth_m.shape != (self.rays.height, self.rays.width):
+            raise InputError(f"depth must have shape ({self.rays.height}, {self.rays.width}), got {depth_m.shape}")
+        if not callable(scene_depth):
+            raise InputError(f"scene_depth must be a function of pixel indices, got {type(scene_depth).__name__}")
         c = self.config
         prior = self.predict()
-        idx = self._candidates(depth_m, np.asarray(scene_depth), prior, sigma)
+        idx = self._candidates(depth_m, scene_depth, prior, sigma)
         z_obs = depth_m.reshape(-1)[idx].astype(float)
-        state, explained = self._solve(idx, z_obs, prior, prior, box_pos, box_rot, sigma)
+        # Two starts when the hand moves: the constant-velocity prediction and the last pose (the
+        # hand may have stopped); the lower robust cost wins.
+        state, explained, cost = self._solve(idx, z_obs, prior, prior, box_pos, box_rot, sigma)
+        last = self.history[-1]
+        if np.linalg.norm(prior.palm_pos - last.palm_pos) > 0.004:
+            alt = self._solve(idx, z_obs, last, prior, box_pos, box_rot, sigma)
+            if alt[2] < cost:
+                state, explained, cost = alt
         reinit = False
         if explained < c.lost_fraction and idx.size >= 50:
-            state, explained, reinit = self._search(idx, z_obs, state, explained, box_pos, box_rot, sigma)
-        pts = self.rays.origin + z_obs[:, None] * self.rays.ray[idx]
+            state, explained, reinit = self._search(idx, z_obs, state, explained, cost, prior, box_pos, box_rot, sigma)
         self.history = (self.history + [state])[-2:]
         pose = self.kin.pose(state)
         tips = self.kin.fingertips(pose[0], pose[1])
-        observed = self._observed(pts, pose, sigma)
+        observed = self._observed(idx, z_obs, pose, sigma)
+        self.hidden = ~observed
         return HandFit(state=state, fingertips=tips, observed=observed, explained=explained, reinitialised=reinit)
 
-    def _observed(self, pts, pose, sigma) -> np.ndarray:
+    def _observed(self, idx, z_obs, pose, sigma) -> np.ndarray:
+        """Fingers whose two distal segments are the first surface hit, at the observed depth,
+        on at least ``visible_min_points`` candidate pixels."""
         K = len(self.model.finger_names)
-        if pts.shape[0] == 0:
+        if idx.size == 0:
             return np.zeros(K, dtype=bool)
         a, b = self.kin.capsules(pose[0], pose[1])
-        geom, d, _, _ = closest_on_capsules(pts, a, b, self.model.geom_radius)
-        seg = self.model.geom_segment[geom]
-        good = np.abs(d) < 1.5 * sigma
+        zh, geom, _, _ = ray_capsules(self.rays.origin, self.rays.ray[idx], a, b, self.model.geom_radius)
+        seen = (geom >= 0) & (np.abs(z_obs - zh) < 2 * sigma)
+        seg = np.where(seen, self.model.geom_segment[np.maximum(geom, 0)], -1)
         counts = np.zeros(K, dtype=int)
         for k, tip in enumerate(self.model.fingertip_segment):
-            near_tip = (seg == tip) | (seg == self.model.parent[tip])
-            counts[k] = int(np.sum(good & near_tip))
+            counts[k] = int(np.sum((seg == tip) | (seg == self.model.parent[tip])))
         return counts >= self.config.visible_min_points
 
-    def _search(self, idx, z_obs, state, explained, box_pos, box_rot, sigma):
+    def _search(self, idx, z_obs, state, explained, cost, prior, box_pos, box_rot, sigma):
         """Particle search over the palm pose when the fit explains too few points."""
-        best, best_e, reinit = state, explained, False
+        best, best_e, best_cost, reinit = state, explained, cost, False
         for _ in range(self.config.particles):
             cand = HandState(state.palm_pos + self.rng.normal(0.0, 0.02, 3),
                              exp_so3(self.rng.normal(0.0, 0.2, 3)) @ state.palm_rot, state.joints)
-            fit, e = self._solve(idx, z_obs, cand, cand, box_pos, box_rot, sigma)
-            if e > best_e + 0.05:
-                best, best_e, reinit = fit, e, True
+            fit, e, cst = self._solve(idx, z_obs, cand, prior, box_pos, box_rot, sigma)
+            if cst < best_cost:
+                best, best_e, best_cost, reinit = fit, e, cst, True
         return best, best_e, reinit

@@ -322,8 +322,16 @@ class BoxTracker:
         frac = float(agree.sum() / max(on_box.sum(), 1))
         return pos, rot, frac, r[agree]
 
-    def update(self, depth_m: np.ndarray) -> BoxFit:
-        """Tracks one frame: prediction, robust fit, re-initialisation when lost."""
+    def update(self, depth_m: np.ndarray, occluder=None) -> BoxFit:
+        """Tracks one frame: prediction, robust fit, re-initialisation when lost.
+
+        Args:
+            depth_m: The depth frame, shape (H, W), [m].
+            occluder: Optional known occluder (the hand as predicted by its tracker): a function
+                of flat pixel indices (N,) returning its depth there, (N,) in [m], +inf where it
+                is absent. Pixels that see it (observed depth not behind it by more than
+                ``occluder_k`` sigma) are left out of the fit.
+        """
         depth_m = np.asarray(depth_m)
         if depth_m.shape != (self.rays.height, self.rays.width):
             raise InputError(f"depth frame must have shape ({self.rays.height}, {self.rays.width}), got {depth_m.shape}")
@@ -334,6 +342,9 @@ class BoxTracker:
         index = self.roi(pos_p, rot_p, c.roi_margin_px + (25 if first else 0))
         z_obs = z_all[index]
         sigma = self.sigma if self.sigma is not None else 0.01
+        if occluder is not None:
+            z_occ = np.asarray(occluder(index), dtype=float)
+            z_obs = np.where(np.isfinite(z_occ) & (z_obs < z_occ + c.occluder_k * sigma), 0.0, z_obs)
         prior = None if first else (pos_p, rot_p)
         pos, rot, frac, r_in = self.fit(z_obs, index, pos_p, rot_p, sigma, prior)
         reinit = False

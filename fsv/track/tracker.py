@@ -125,7 +125,6 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     boxes = BoxTracker(calib, object_model, init.box_pos, init.box_rot, config=cfg.box, rng=box_rng, table_z=cfg.table_z)
     hands = HandTracker(calib, hand_model, object_model, HandState(init.palm_pos, init.palm_rot, init.joints),
                         config=cfg.hand, rng=hand_rng, table_z=cfg.table_z)
-    all_px = np.arange(calib.width * calib.height)
     T, K = depth.num_frames, len(hand_model.finger_names)
     box_pos, box_rot, inl = np.zeros((T, 3)), np.zeros((T, 3, 3)), np.zeros(T)
     qpos = np.zeros((T, 7 + hand_model.num_joints))
@@ -133,11 +132,13 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     t_box = t_hand = 0.0
     for i, frame in enumerate(depth.depth_m):
         t0 = time.perf_counter()
-        fit = boxes.update(frame)
+        fit = boxes.update(frame, occluder=hands.predicted_depth)
         box_pos[i], box_rot[i], inl[i] = fit.pos, fit.rot, fit.inlier_fraction
         t1 = time.perf_counter()
-        scene = predict_box_depth(boxes.rays, all_px, fit.pos, fit.rot, boxes.half, boxes.fx)[0]
-        hf = hands.update(frame, scene.reshape(frame.shape), fit.pos, fit.rot, boxes.sigma or fit.sigma_m)
+        def scene(index, fit=fit):
+            return predict_box_depth(boxes.rays, index, fit.pos, fit.rot, boxes.half, boxes.fx)[0]
+
+        hf = hands.update(frame, scene, fit.pos, fit.rot, boxes.sigma or fit.sigma_m)
         s = hf.state
         qpos[i] = np.concatenate([s.palm_pos, rot_to_quat(s.palm_rot), s.joints])
         tips[i], observed[i], explained[i] = hf.fingertips, hf.observed, hf.explained
