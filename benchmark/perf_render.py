@@ -139,8 +139,8 @@ def main(argv=None) -> dict:
     diff = np.abs(mine - theirs)[both]
     rates["agreement_median_m"] = float(np.median(diff))
     rates["agreement_within_0.1mm"] = float(np.mean(diff < 1e-4))
-    n_nodes = len(ours.nodes)
-    print(f"scene: {model.ngeom} geoms, {n_nodes} pyrender nodes; {camera.width}x{camera.height}; {args.frames} frames, best of 3")
+    n_nodes = ours.draw_calls
+    print(f"scene: {model.ngeom} geoms, {n_nodes} draw calls per frame; {camera.width}x{camera.height}; {args.frames} frames, best of 3")
     print(f"pyrender depth + labels          : {rates['pyrender_depth_labels_fps']:7.1f} frames/s")
     print(f"pyrender depth + labels + sensor : {rates['pyrender_depth_labels_sensor_fps']:7.1f} frames/s")
     print(f"MuJoCo Renderer depth (peer)     : {rates['mujoco_depth_fps']:7.1f} frames/s")

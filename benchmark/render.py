@@ -260,13 +260,44 @@ def _offscreen(width: int, height: int):
     return _OFFSCREEN[key]
 
 
+class _MovingLabel:
+    """One label's moving geoms as one triangle mesh whose vertices are posed per frame.
+
+    Attributes:
+        local: Vertices in their bodies' frames, (V, 3).
+        ranges: ``(body, start, stop)`` rows of `local` per body.
+        world: Posed vertices, (V, 3) float32, rewritten per frame.
+        primitive: The pyrender primitive drawn (positions only).
+    """
+
+    def __init__(self, parts, pyrender):
+        import trimesh
+
+        self.ranges, start = [], 0
+        for body, mesh in parts:
+            self.ranges.append((body, start, start + len(mesh.vertices)))
+            start += len(mesh.vertices)
+        merged = trimesh.util.concatenate([mesh for _, mesh in parts])
+        self.local = np.asarray(merged.vertices, dtype=np.float64)
+        self.world = self.local.astype(np.float32)
+        self.primitive = pyrender.Primitive(
+            positions=self.world, indices=np.asarray(merged.faces, dtype=np.uint32), mode=pyrender.GLTF.TRIANGLES
+        )
+
+    def pose(self, xpos: np.ndarray, xmat: np.ndarray) -> None:
+        for body, start, stop in self.ranges:
+            self.world[start:stop] = self.local[start:stop] @ xmat[body].T + xpos[body]
+
+
 class DepthRenderer:
     """Exact depth and label images of a MuJoCo model's geoms from one camera.
 
-    Build once per model, then call :meth:`render` per frame with the bodies' world poses. The
-    geoms of one body that share a label are merged into one mesh in the body's frame (uploaded
-    once; one draw call per body and label), so a frame costs one pose update per body. The GL
-    context is the process's shared one (see :func:`_offscreen`).
+    Build once per model, then call :meth:`render` per frame with the bodies' world poses.
+    Geoms fixed to the world (the table) are static meshes. All moving geoms that share a label
+    (the box; the palm; each finger's segments) form one mesh whose vertices are posed on the
+    CPU and streamed into its vertex buffer each frame, so a frame costs one draw call per label
+    rather than per body (pyrender's per-draw cost dominates at this resolution). The GL context
+    is the process's shared one (see :func:`_offscreen`).
 
     Args:
         model: A compiled ``mujoco.MjModel``.
@@ -277,14 +308,13 @@ class DepthRenderer:
 
     def __init__(self, model, camera: Camera, labels: np.ndarray):
         import mujoco
+        import pyrender
         import trimesh
 
         labels = np.asarray(labels)
         if labels.shape != (model.ngeom,):
             raise BenchmarkError(f"labels must have shape ({model.ngeom},), one per geom, got {labels.shape}")
         self._gl = _offscreen(camera.width, camera.height)
-        import pyrender
-
         self.camera = camera
         self.scene = pyrender.Scene(bg_color=(0, 0, 0, 0), ambient_light=(0, 0, 0))
         K = camera.K
@@ -292,7 +322,8 @@ class DepthRenderer:
             fx=K[0, 0], fy=K[1, 1], cx=K[0, 2] + 0.5, cy=K[1, 2] + 0.5, znear=camera.znear, zfar=camera.zfar
         )
         self.scene.add(cam, pose=camera.T_world_cam @ GL_FROM_CV)
-        parts: dict[tuple[int, int], list] = {}
+        static: dict[int, list] = {}
+        moving: dict[int, list] = {}
         for g in np.flatnonzero(labels):
             T_body_geom = np.eye(4)
             mat = np.zeros(9)
@@ -301,14 +332,23 @@ class DepthRenderer:
             T_body_geom[:3, 3] = model.geom_pos[g]
             mesh = geom_trimesh(model, int(g))
             mesh.apply_transform(T_body_geom)
-            parts.setdefault((int(model.geom_bodyid[g]), int(labels[g])), []).append(mesh)
-        self.bodies = np.array([body for body, _ in parts], dtype=int)
-        self.nodes = []
+            body = int(model.geom_bodyid[g])
+            if model.body_weldid[body] == 0 and model.body_mocapid[body] < 0:  # welded to the world
+                mesh.apply_transform(_body_pose0(model, body))
+                static.setdefault(int(labels[g]), []).append(mesh)
+            else:
+                moving.setdefault(int(labels[g]), []).append((body, mesh))
         self._seg = {}
-        for (_, label), meshes in parts.items():
+        for label, meshes in static.items():
             node = self.scene.add(pyrender.Mesh.from_trimesh(trimesh.util.concatenate(meshes), smooth=False))
-            self.nodes.append(node)
             self._seg[node] = (label,) * 3
+        self._moving = []
+        for label, parts in moving.items():
+            group = _MovingLabel(parts, pyrender)
+            node = self.scene.add(pyrender.Mesh([group.primitive]))
+            self._seg[node] = (label,) * 3
+            self._moving.append(group)
+        self.draw_calls = len(self._seg)
         self._flags = pyrender.RenderFlags.SEG
 
     def render(self, xpos: np.ndarray, xmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -323,14 +363,32 @@ class DepthRenderer:
             (0 where nothing is seen), and the label of the geom seen at each pixel, (H, W) uint8
             (sampled at pixel centres, no anti-aliasing).
         """
+        from OpenGL import GL
+
+        xpos = np.asarray(xpos)
         xmat = np.asarray(xmat).reshape(-1, 3, 3)
-        for body, node in zip(self.bodies, self.nodes):
-            pose = np.eye(4)
-            pose[:3, :3] = xmat[body]
-            pose[:3, 3] = xpos[body]
-            self.scene.set_pose(node, pose)
+        self._gl._platform.make_current()
+        for group in self._moving:
+            group.pose(xpos, xmat)
+            prim = group.primitive
+            prim.positions = group.world  # uploaded with the mesh when it (re-)enters the GL context
+            if prim._vaid is not None:  # already in the context: stream the new vertices
+                GL.glBindBuffer(GL.GL_ARRAY_BUFFER, prim._buffers[0])
+                GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, group.world.nbytes, group.world)
         color, depth = self._gl.render(self.scene, flags=self._flags, seg_node_map=self._seg)
         return np.ascontiguousarray(depth, dtype=np.float32), np.ascontiguousarray(color[..., 0])
+
+
+def _body_pose0(model, body: int) -> np.ndarray:
+    """World pose (4, 4) of a body welded to the world, from the model alone."""
+    import mujoco
+
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    T = np.eye(4)
+    T[:3, :3] = data.xmat[body].reshape(3, 3)
+    T[:3, 3] = data.xpos[body]
+    return T
 
 
 def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: np.ndarray, sensor, rng):
