@@ -91,6 +91,11 @@ from benchmark.render import add_cli_arguments as _render_arguments, run_cli_sta
 
 STAGES.append(Stage(name="render", add_arguments=_render_arguments, run=_render))
 
+# kinematics (issue 4): Table 1, Fig. 4, and --kinematics for the later stages (benchmark/table1.py).
+from benchmark import table1 as _table1  # noqa: E402
+
+STAGES.append(Stage(name="kinematics", add_arguments=_table1.add_arguments, run=_table1.run_stage))
+
 # forces (issue 5): nominal contact forces, scored against the truth (benchmark/score_forces.py).
 from benchmark import score_forces as _score_forces  # noqa: E402
 

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmark.errors import ScenarioError
-from benchmark.motion import CALIBRATION_SEEDS, DECLARED, TUNING
+from benchmark.motion import CALIBRATION_SEEDS, CHOICES, DECLARED, TUNING, observed_poses
 from benchmark.truth import Truth
 from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses
@@ -278,6 +278,49 @@ def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | 
     _write_atomic(paths["csv"], table.csv().encode())
     plot_fig4(truth, kinematics, paths["plot"], title=f"Vision kinematics vs AHRS ({table.poses})")
     return paths
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The kinematics stage's ``fsv-bench`` option."""
+    parser.add_argument(
+        "--kinematics",
+        choices=CHOICES,
+        default="algebraic",
+        help="box kinematics the later stages use: a differentiator on the observed poses, or 'oracle' "
+        "(the true kinematics: an ablation, labelled as such in every report)",
+    )
+
+
+def run_stage(run) -> None:
+    """``fsv-bench`` stage: prints Table 1, writes it (MD, CSV, Fig. 4 PNG) and the summary blocks.
+
+    ``run`` is a ``benchmark.cli.Run`` (reads ``episode``, ``args.kinematics``, ``out``; extends
+    ``summary`` and ``lines``). Later stages get the selected kinematics from
+    ``benchmark.motion.episode_kinematics(run.episode, run.args.kinematics)``.
+    """
+    ep = run.episode
+    choice = getattr(run.args, "kinematics", "algebraic")
+    if choice not in CHOICES:
+        raise ScenarioError(f"kinematics must be one of {', '.join(CHOICES)}; got {choice!r}")
+    table, kins = score_table1(ep.truth, observed_poses(ep))
+    paths = write_outputs(table, ep.truth, kins, run.out)
+    run.summary["kinematics"] = table.summary()
+    oracle = choice == "oracle"
+    run.summary["kinematics_info"] = {
+        "selected": choice,
+        "oracle": oracle,
+        "selected_params": "true kinematics (oracle ablation)" if oracle else DECLARED[choice].describe(),
+        "poses": table.poses,
+        "scored_frames": table.frames,
+        "params": table.params,
+        "tuning": table.tuning,
+        "paper": PAPER,
+        "files": {k: str(v) for k, v in paths.items()},
+    }
+    run.lines.append("Table 1: kinematics errors vs the AHRS (ours / paper's), pooled over axes and frames")
+    run.lines.extend(table.markdown().splitlines())
+    used = "ORACLE (true kinematics, an ablation)" if oracle else f"{choice} ({DECLARED[choice].describe()})"
+    run.lines.append(f"kinematics used by later stages: {used}; Fig. 4: {paths['plot']}")
 
 
 def rms_errors(calibration: list[tuple[Truth, Poses]], config) -> tuple[float, float]:

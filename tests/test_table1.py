@@ -98,3 +98,42 @@ def test_table1_record_is_frozen():
     t = Table1({}, {}, {}, 0, "x")
     with pytest.raises(Exception):
         t.frames = 3
+
+
+def test_on_the_default_lift_algebraic_is_no_worse_than_central(lift_episode):
+    episode = lift_episode[0]
+    table, _ = score_table1(episode.truth, tracker_like_poses(episode.truth, episode.scenario))
+    alg, cen = table.stats["algebraic"], table.stats["central"]
+    assert alg["acc_std"] <= cen["acc_std"] and alg["gyro_std"] <= cen["gyro_std"]
+    assert abs(alg["acc_mean"]) < 0.2 and abs(alg["gyro_mean"]) < 0.05
+
+
+@pytest.mark.parametrize("choice", ["algebraic", "oracle"])
+def test_cli_stage_prints_and_writes_table1_and_labels_the_oracle(lift_episode, tmp_path, choice):
+    from argparse import Namespace
+    from types import SimpleNamespace
+
+    from benchmark.table1 import run_stage
+
+    run = SimpleNamespace(episode=lift_episode[0], args=Namespace(kinematics=choice), out=tmp_path, summary={}, lines=[])
+    run_stage(run)
+    block = run.summary["kinematics"]
+    assert set(block) == {"central", "gaussian", "algebraic"}
+    assert all(set(v) == {"acc_mean", "acc_std", "gyro_mean", "gyro_std"} for v in block.values())
+    info = run.summary["kinematics_info"]
+    assert info["selected"] == choice and info["oracle"] == (choice == "oracle")
+    text = "\n".join(run.lines)
+    assert "1.686" in text and "Algebraic (ours / paper)" in text
+    assert ("ORACLE" in text) == (choice == "oracle")
+    assert (tmp_path / "fig4_kinematics.png").stat().st_size > 20000
+    assert (tmp_path / "table1.md").read_text().startswith("| | Central")
+
+
+def test_cli_parser_offers_the_kinematics_choices():
+    from benchmark.cli import build_parser
+
+    args = build_parser().parse_args(["--kinematics", "oracle"])
+    assert args.kinematics == "oracle"
+    assert build_parser().parse_args([]).kinematics == "algebraic"
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["--kinematics", "kalman"])
