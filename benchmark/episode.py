@@ -127,7 +127,8 @@ Array entries are named ``<section>/<field>``. Sections of version 1:
     render/*   after rendering only: the arrays of :func:`depth_arrays` (uint16 depth counts and
                their quantum, fps, calibration, labels)
 
-A reader must refuse another format or version. Writers replace the file atomically.
+A reader must refuse another format or version. Writers replace the file atomically and use fixed
+zip timestamps, so the same episode always gives the same bytes.
 """
 
 
@@ -194,8 +195,13 @@ def save_episode(episode: Episode, path) -> pathlib.Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez_compressed(f, **arrays)
+        with os.fdopen(fd, "wb") as f, zipfile.ZipFile(f, "w", compression=zipfile.ZIP_DEFLATED) as z:
+            for name, value in arrays.items():
+                # fixed timestamps: the same episode gives the same bytes
+                info = zipfile.ZipInfo(name + ".npy", date_time=(1980, 1, 1, 0, 0, 0))
+                info.compress_type = zipfile.ZIP_DEFLATED
+                with z.open(info, "w", force_zip64=True) as out:
+                    np.lib.format.write_array(out, np.asanyarray(value), allow_pickle=False)
         os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:

@@ -58,10 +58,10 @@ class GraspPlan:
         q_grasp: Joint angles with every active pad on its spot, (n,), [rad].
         q_open: Pre-shape: the same posture opened so that the pads clear the box, (n,), [rad].
         tip_error_m: Largest distance of an active pad centre from its target, [m].
-        clearance_m: Smallest distance of any other hand part to the box or table, [m], counting
-            the distal shafts of the active digits from their own, smaller, required gap (so a
-            positive value means every part keeps at least its required gap... minus the
-            difference of the two required gaps).
+        clearance_m: Smallest margin of the other hand parts over their required gap to the box
+            and the table, expressed as a distance, [m]: ``min(distance - required gap) + 7 mm``,
+            where the gap is 7 mm, or 2.5 mm for the distal shafts next to the active pads.
+            Positive: no part other than the pads touches the box or the table.
     """
 
     active: np.ndarray
@@ -358,6 +358,7 @@ class Human:
         off = (tk < ph.reach_end) | ((tk >= ph.open_end) if releases else False)
         forces[off] = 0.0
         self.forces_obj = forces
+        self._views = None
         self._fingers = []
         for k in np.flatnonzero(plan.active):
             dofs = world.finger_dofs[k]
@@ -372,17 +373,21 @@ class Human:
 
     def act(self, data: mujoco.MjData, step: int) -> None:
         """Writes the palm target, posture targets and (on control ticks) finger torques of a step."""
-        w = self.world
-        data.mocap_pos[w.mocap] = self.palm_pos[step]
-        data.mocap_quat[w.mocap] = self.palm_quat[step]
-        data.ctrl[:] = self.ctrl[step]
+        if self._views is None or self._views[0] is not data:
+            w = self.world
+            self._views = (data, data.mocap_pos[w.mocap], data.mocap_quat[w.mocap], data.ctrl, data.qfrc_applied,
+                           data.xmat[w.box_body].reshape(3, 3))
+        _, mocap_pos, mocap_quat, ctrl, qfrc, box_rot = self._views
+        mocap_pos[:] = self.palm_pos[step]
+        mocap_quat[:] = self.palm_quat[step]
+        ctrl[:] = self.ctrl[step]
         if step % self.ctrl_every:
             return
-        f = self.forces_obj[step // self.ctrl_every] @ data.xmat[w.box_body].reshape(3, 3).T
-        m, jac = w.model, self._jac
+        f = self.forces_obj[step // self.ctrl_every] @ box_rot.T
+        m, jac = self.world.model, self._jac
         for k, site, dofs in self._fingers:
             mujoco.mj_jacSite(m, data, jac, None, site)
-            data.qfrc_applied[dofs] = f[k] @ jac[:, dofs]
+            qfrc[dofs] = f[k] @ jac[:, dofs]
 
 
 def _mj(s: np.ndarray) -> np.ndarray:

@@ -51,88 +51,106 @@ def duration_of(scenario: Scenario) -> float:
 
 
 class _Recorder:
-    """Reads the truth of one frame from an MjData evaluated by mj_forward."""
+    """Captures the raw state of each frame from an MjData evaluated by mj_forward.
+
+    :meth:`record` copies only what MuJoCo computed (state, accelerations, the box's contacts and
+    their forces); the arrays of the truth are derived afterwards, for all frames at once.
+    """
 
     def __init__(self, world: World, n_frames: int):
         self.w = world
-        K = len(world.hand.finger_names)
+        m = world.model
         T = n_frames
-        self.a = {
-            "box_pos": np.zeros((T, 3)), "box_quat": np.zeros((T, 4)), "box_vel": np.zeros((T, 3)),
-            "box_omega": np.zeros((T, 3)), "box_acc": np.zeros((T, 3)), "box_alpha": np.zeros((T, 3)),
-            "contact_active": np.zeros((T, K), bool), "contact_sliding": np.zeros((T, K), bool),
-            "contact_point": np.zeros((T, K, 3)), "contact_normal": np.zeros((T, K, 3)),
-            "contact_force": np.zeros((T, K, 3)), "env_force": np.zeros((T, 3)), "env_torque": np.zeros((T, 3)),
-            "fingertip_pos": np.zeros((T, K, 3)), "hand_qpos": np.zeros((T, len(world.hand_qadr))),
-            "palm_force": np.zeros((T, 3)),
-        }
+        self.qpos = np.zeros((T, m.nq))
+        self.qvel = np.zeros((T, m.nv))
+        self.qacc = np.zeros((T, m.nv))
+        self.box_R = np.zeros((T, 3, 3))
+        self.tips = np.zeros((T, len(world.tip_site), 3))
+        self.contacts = []  # per frame: (other geom, pos, frame, force6, sign, v_other)
 
     def record(self, i: int, data: mujoco.MjData) -> None:
-        w, a, m = self.w, self.a, self.w.model
-        qa, da = w.box_qadr, w.box_dadr
-        R = data.xmat[w.box_body].reshape(3, 3)
-        com = data.xpos[w.box_body].copy()
-        a["box_pos"][i] = data.qpos[qa : qa + 3]
-        a["box_quat"][i] = data.qpos[qa + 3 : qa + 7]
-        a["box_vel"][i] = data.qvel[da : da + 3]
-        omega = R @ data.qvel[da + 3 : da + 6]
-        a["box_omega"][i] = omega
-        a["box_acc"][i] = data.qacc[da : da + 3]
-        a["box_alpha"][i] = R @ data.qacc[da + 3 : da + 6]
-        a["fingertip_pos"][i] = data.site_xpos[w.tip_site]
-        a["hand_qpos"][i] = data.qpos[w.hand_qadr]
-        K = len(w.hand.finger_names)
-        force = np.zeros((K, 3))
-        fn = np.zeros(K)
-        cop = np.zeros((K, 3))
-        slide = np.zeros(K, bool)
+        w, m = self.w, self.w.model
+        self.qpos[i] = data.qpos
+        self.qvel[i] = data.qvel
+        self.qacc[i] = data.qacc
+        self.box_R[i] = data.xmat[w.box_body].reshape(3, 3)
+        self.tips[i] = data.site_xpos[w.tip_site]
         con = data.contact
         g1, g2 = con.geom1, con.geom2
         sel = np.flatnonzero(((g1 == w.box_geom) | (g2 == w.box_geom)) & (con.efc_address >= 0))
-        if len(sel):
-            f6 = np.zeros((len(sel), 6))
-            for j, c_i in enumerate(sel):
-                mujoco.mj_contactForce(m, data, int(c_i), f6[j])
-            frame = con.frame[sel].reshape(-1, 3, 3)
-            # mj_contactForce gives the force on geom2 in the contact frame (rows: normal, tangents).
-            sign = np.where(g2[sel] == w.box_geom, 1.0, -1.0)
-            f = sign[:, None] * np.einsum("cji,cj->ci", frame, f6[:, :3])  # on the box, world frame
-            n_in = sign[:, None] * frame[:, 0]
-            p = con.pos[sel]
-            other = np.where(g2[sel] == w.box_geom, g1[sel], g2[sel])
-            table = other == w.table_geom
-            a["env_force"][i] = f[table].sum(axis=0)
-            a["env_torque"][i] = _cross(p[table] - com, f[table]).sum(axis=0)
-            finger = w.geom_finger[other]
-            palm = ~table & (finger < 0)
-            a["palm_force"][i] = f[palm].sum(axis=0)
-            on = finger >= 0
-            k, f, p, n_in = finger[on], f[on], p[on], n_in[on]
-            fnc = np.maximum(np.einsum("cj,cj->c", f, n_in), 0.0)
-            np.add.at(force, k, f)
-            np.add.at(fn, k, fnc)
-            np.add.at(cop, k, fnc[:, None] * p)
-            # Slip speed: the pad's material point relative to the box's, tangential to the contact.
-            body = m.geom_bodyid[other[on]]
-            cvel = data.cvel[body]
-            v_finger = cvel[:, 3:] + _cross(cvel[:, :3], p - data.subtree_com[m.body_rootid[body]])
-            v_rel = v_finger - (a["box_vel"][i] + _cross(omega, p - com))
-            v_t = v_rel - np.einsum("cj,cj->c", v_rel, n_in)[:, None] * n_in
-            np.logical_or.at(slide, k, np.linalg.norm(v_t, axis=1) > SLIDING_SPEED_M_S)
+        f6 = np.zeros((len(sel), 6))
+        for j, c_i in enumerate(sel):
+            mujoco.mj_contactForce(m, data, int(c_i), f6[j])
+        on2 = g2[sel] == w.box_geom
+        other = np.where(on2, g1[sel], g2[sel])
+        body = m.geom_bodyid[other]
+        # velocity of the other body's material point at the contact (cvel is about the subtree com)
+        cvel = data.cvel[body]
+        p = con.pos[sel]
+        v_other = cvel[:, 3:] + _cross(cvel[:, :3], p - data.subtree_com[m.body_rootid[body]])
+        self.contacts.append((other, p.copy(), con.frame[sel].reshape(-1, 3, 3), f6, np.where(on2, 1.0, -1.0), v_other))
+
+    def arrays(self) -> dict:
+        """The truth's per-frame arrays (and the palm's force on the box), all frames at once."""
+        w = self.w
+        T, K = self.qpos.shape[0], len(w.hand.finger_names)
+        qa, da = w.box_qadr, w.box_dadr
+        R = self.box_R
+        com = self.qpos[:, qa : qa + 3]
+        vel = self.qvel[:, da : da + 3]
+        omega = np.einsum("tij,tj->ti", R, self.qvel[:, da + 3 : da + 6])
+        a = {
+            "box_pos": com.copy(), "box_quat": self.qpos[:, qa + 3 : qa + 7].copy(), "box_vel": vel.copy(),
+            "box_omega": omega, "box_acc": self.qacc[:, da : da + 3].copy(),
+            "box_alpha": np.einsum("tij,tj->ti", R, self.qacc[:, da + 3 : da + 6]),
+            "fingertip_pos": self.tips, "hand_qpos": self.qpos[:, w.hand_qadr],
+        }
+        frame_of = np.concatenate([np.full(len(c[0]), t) for t, c in enumerate(self.contacts)]).astype(np.int64)
+        other = np.concatenate([c[0] for c in self.contacts]).astype(np.int64)
+        p = np.concatenate([c[1] for c in self.contacts]).reshape(-1, 3)
+        cframe = np.concatenate([c[2] for c in self.contacts]).reshape(-1, 3, 3)
+        f6 = np.concatenate([c[3] for c in self.contacts]).reshape(-1, 6)
+        sign = np.concatenate([c[4] for c in self.contacts])
+        v_other = np.concatenate([c[5] for c in self.contacts]).reshape(-1, 3)
+        # mj_contactForce gives the force on geom2 in the contact frame (rows: normal, tangents).
+        f = sign[:, None] * np.einsum("cji,cj->ci", cframe, f6[:, :3])  # on the box, world frame
+        n_in = sign[:, None] * cframe[:, 0]
+        r = p - com[frame_of]
+        table = other == w.table_geom
+        finger = w.geom_finger[other]
+        palm = ~table & (finger < 0)
+        a["env_force"] = np.zeros((T, 3))
+        a["env_torque"] = np.zeros((T, 3))
+        a["palm_force"] = np.zeros((T, 3))
+        np.add.at(a["env_force"], frame_of[table], f[table])
+        np.add.at(a["env_torque"], frame_of[table], _cross(r[table], f[table]))
+        np.add.at(a["palm_force"], frame_of[palm], f[palm])
+        on = finger >= 0
+        t_k, k = frame_of[on], finger[on]
+        f, p, n_in, r = f[on], p[on], n_in[on], r[on]
+        force, fn, cop = np.zeros((T, K, 3)), np.zeros((T, K)), np.zeros((T, K, 3))
+        fnc = np.maximum(np.einsum("cj,cj->c", f, n_in), 0.0)
+        np.add.at(force, (t_k, k), f)
+        np.add.at(fn, (t_k, k), fnc)
+        np.add.at(cop, (t_k, k), fnc[:, None] * p)
+        # Slip: the pad's material point relative to the box's, tangential to the contact.
+        v_rel = v_other[on] - (vel[t_k] + _cross(omega[t_k], r))
+        v_t = v_rel - np.einsum("cj,cj->c", v_rel, n_in)[:, None] * n_in
+        slide = np.zeros((T, K), bool)
+        np.logical_or.at(slide, (t_k, k), np.linalg.norm(v_t, axis=1) > SLIDING_SPEED_M_S)
         active = fn > 0
-        a["contact_active"][i] = active
-        a["contact_sliding"][i] = slide & active
-        a["contact_force"][i] = force @ R
-        safe = np.where(fn > 0, fn, 1.0)
-        point = np.where(active[:, None], cop / safe[:, None], data.site_xpos[w.tip_site])
-        a["contact_point"][i] = (point - com) @ R
-        normal = np.zeros((K, 3))
-        # Normal into the box: the box face normal at the centre of pressure.
-        local = a["contact_point"][i]
-        half = w.obj.half_extents
-        axis = np.argmax(np.abs(local) / half, axis=1)
-        normal[np.arange(K), axis] = -np.sign(local[np.arange(K), axis])
-        a["contact_normal"][i] = normal
+        a["contact_active"] = active
+        a["contact_sliding"] = slide & active
+        a["contact_force"] = np.einsum("tji,tkj->tki", R, force)
+        point = np.where(active[..., None], cop / np.where(active, fn, 1.0)[..., None], self.tips)
+        local = np.einsum("tji,tkj->tki", R, point - com[:, None])
+        a["contact_point"] = local
+        # Normal into the box: the face normal at the centre of pressure (the face it is closest to).
+        axis = np.argmax(np.abs(local) / w.obj.half_extents, axis=-1)
+        normal = np.zeros((T, K, 3))
+        np.put_along_axis(normal, axis[..., None], -np.sign(np.take_along_axis(local, axis[..., None], -1)), -1)
+        a["contact_normal"] = normal
+        return a
 
 
 @dataclass(frozen=True)
@@ -209,23 +227,26 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
 
         bar = tqdm(total=n_frames, desc=f"simulate {scenario.task}", unit="frame", leave=False)
     t0 = time.perf_counter()
-    for step in range(n_steps + 1):
-        frame, rem = divmod(step, spf)
-        human.act(d, step)
-        if rem == 0:
-            mujoco.mj_forward(m, d)
-            rec.record(frame, d)
-            if bar is not None:
-                bar.update(1)
-            if step == n_steps:
-                break
-        mujoco.mj_step(m, d)
-        if step % 200 == 0 and not np.all(np.isfinite(d.qacc)):
+    act, step_fn = human.act, mujoco.mj_step
+    for frame in range(n_frames):
+        step = frame * spf
+        act(d, step)
+        mujoco.mj_forward(m, d)
+        rec.record(frame, d)
+        if not np.all(np.isfinite(d.qacc)):
             raise SimulationError(f"the simulation diverged at t = {step * m.opt.timestep:.3f} s ({scenario})")
+        if bar is not None:
+            bar.update(1)
+        if frame == n_frames - 1:
+            break
+        step_fn(m, d)
+        for s in range(step + 1, step + spf):
+            act(d, s)
+            step_fn(m, d)
     wall = time.perf_counter() - t0
     if bar is not None:
         bar.close()
-    a = rec.a
+    a = rec.arrays()
     if not np.all(np.isfinite(a["box_pos"])):
         raise SimulationError(f"the simulation diverged ({scenario})")
     g = m.opt.gravity.copy()
