@@ -111,7 +111,8 @@ def oracle(kind, required, contacts: Contacts, t: int, model: ObjectModel, targe
     """Solves one frame with cvxpy, formulated on 3-D force vectors (not on eq. 2's coordinates).
 
     Returns:
-        ``(nominal (K, 3), internal (K, 3), corner forces (len(corners), 3))``.
+        ``(nominal (K, 3), internal (K, 3), corner forces (len(corners), 3))``; the corner forces
+        are the totals (nominal + internal).
     """
     K = len(contacts.finger_names)
     mu, mut = model.friction, model.table_friction
@@ -150,12 +151,19 @@ def oracle(kind, required, contacts: Contacts, t: int, model: ObjectModel, targe
     half = model.half_extents
     from fsv.forces.environment import UNIT_CORNERS
 
+    Fci = []
     for j in corners:
         F = cp.Variable(3)
         nz = table_normal
         cons.append(cp.norm(F - (nz @ F) * nz) <= mut * (nz @ F))
         cost += table_weight * cp.sum_squares(F)
         Fc.append((UNIT_CORNERS[j] * half, F))
+        if internal:
+            G = cp.Variable(3)
+            tot = F + G
+            cons.append(cp.norm(tot - (nz @ tot) * nz) <= mut * (nz @ tot))
+            cost += eps * cp.sum_squares(G - (nz @ G) * nz) + eps * table_weight * cp.square(nz @ G)
+            Fci.append((UNIT_CORNERS[j] * half, G))
     pts = contacts.point[t]
     net_f = sum(Fn.values()) + sum(F for _, F in Fc) if (Fn or Fc) else np.zeros(3)
     net_m = sum(cp.hstack(_cross(pts[k], Fn[k])) for k in Fn) + sum(cp.hstack(_cross(p, F)) for p, F in Fc)
@@ -165,8 +173,8 @@ def oracle(kind, required, contacts: Contacts, t: int, model: ObjectModel, targe
     else:
         cost += slack_weight * cp.sum_squares(residual)
     if internal:
-        cons.append(sum(Fi.values()) == 0)
-        cons.append(sum(cp.hstack(_cross(pts[k], Fi[k])) for k in Fi) == 0)
+        cons.append(sum(Fi.values()) + sum(G for _, G in Fci) == 0)
+        cons.append(sum(cp.hstack(_cross(pts[k], Fi[k])) for k in Fi) + sum(cp.hstack(_cross(p, G)) for p, G in Fci) == 0)
     prob = cp.Problem(cp.Minimize(cost), cons)
     prob.solve(solver=cp.CLARABEL, tol_gap_abs=1e-10, tol_gap_rel=1e-12, tol_feas=1e-10)
     assert prob.status in ("optimal", "optimal_inaccurate"), prob.status
@@ -176,7 +184,10 @@ def oracle(kind, required, contacts: Contacts, t: int, model: ObjectModel, targe
         nominal[k] = np.asarray(Fn[k].value).reshape(3)
         if internal:
             inner[k] = np.asarray(Fi[k].value).reshape(3)
-    return nominal, inner, np.array([np.asarray(F.value).reshape(3) for _, F in Fc]).reshape(-1, 3)
+    corner = np.array([np.asarray(F.value).reshape(3) for _, F in Fc]).reshape(-1, 3)
+    if Fci:
+        corner = corner + np.array([np.asarray(G.value).reshape(3) for _, G in Fci])
+    return nominal, inner, corner
 
 
 def _cross(p, F):

@@ -5,7 +5,7 @@ import pytest
 
 from forces_oracle import box_model, oracle, random_grasp
 from fsv import Contacts, InputError, Kinematics
-from fsv.forces import ForceSettings, FrameStatus, nominal_forces, table_contacts
+from fsv.forces import ForceSettings, FrameStatus, decompose_forces, nominal_forces, table_contacts
 from fsv.forces.environment import UNIT_CORNERS
 
 
@@ -98,3 +98,27 @@ def test_table_and_fingers_share_the_load_as_the_oracle_says():
     assert np.abs(sol.env_wrench[0, :3] - corner.sum(axis=0)).max() <= 1e-3
     # The table is cheap (weight 0.01): it carries most of the weight.
     assert sol.env_wrench[0, 2] > 0.9 * 0.6 * 9.81
+
+
+def test_a_finger_pressing_the_box_onto_the_table_is_an_internal_squeeze():
+    """One finger presses 3 N down on the top face of a box at rest on the table: no finger force is
+    needed (nominal 0), and the measured 3 N is internal, balanced by the table's internal part."""
+    model = box_model(mass_kg=0.4)
+    h = model.half_extents
+    contacts = Contacts(finger_names=["index"], active=[[True]], sliding=[[False]], point=[[[0.02, 0.01, h[2]]]],
+                        normal=[[[0.0, 0.0, -1.0]]], slide_dir=np.zeros((1, 1, 3)))
+    kin = _kin(np.array([[0, 0, h[2]]]), np.eye(3)[None])
+    sol = decompose_forces(kin, contacts, model, [[3.0]])
+    assert sol.status[0] == FrameStatus.OPTIMAL
+    assert sol.normal_force[0, 0] == pytest.approx(3.0, abs=1e-3)
+    assert np.abs(sol.nominal[0]).max() < 1e-3
+    assert np.allclose(sol.internal_wrench, 0, atol=1e-7)
+    # The table reacts straight up (up to the regularisation's trade-off, about 1e-3 N of friction).
+    assert np.allclose(sol.env_internal_wrench[0, :3], [0, 0, 3.0], atol=3e-3)
+    assert np.allclose(sol.env_wrench[0, :3], [0, 0, 3.0 + 0.4 * 9.81], atol=3e-3)
+    assert np.allclose(sol.net_wrench, sol.required, atol=1e-6)
+    corners = np.flatnonzero(table_contacts(kin, model).active[0])
+    nom, inner, corner = oracle("decomposition", sol.required[0], contacts, 0, model, target=np.array([[3.0]]),
+                                corners=corners, table_normal=np.array([0.0, 0.0, 1.0]))
+    assert np.abs(sol.nominal[0] - nom).max() <= 1e-4 and np.abs(sol.internal[0] - inner).max() <= 1e-4
+    assert np.abs(sol.env_wrench[0, :3] - corner.sum(axis=0)).max() <= 1e-3

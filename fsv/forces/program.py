@@ -9,15 +9,15 @@ and structural zeros to be kept).
 
 Variables, in order (eq. 5 and 7):
     nominal part of each contact: (f, g, h) for a static contact, f for a sliding one;
-    internal part of each finger (decomposition and reconstruction only), the same way;
+    internal part of each contact (decomposition and reconstruction only), the same way;
     slack σ (6) on the nominal wrench equality (least-violation programs only).
 A static contact's force is f n + g t_x + h t_y (eq. 2); a sliding one's is f (n + μ s), with s
 the unit sliding direction: its friction lies on the cone's surface (eq. 3 as an equality).
 
 Rows, in order:
-    zero cone: Σ_c W_c x_c^(n) + σ = w (6 rows, eq. 1 and 8); Σ_k W_k x_k^(i) = 0 (6 rows, eq. 8);
+    zero cone: Σ_c W_c x_c^(n) + σ = w (6 rows, eq. 1 and 8); Σ_c W_c x_c^(i) = 0 (6 rows, eq. 8);
     second-order cones: (μ f, g, h) of each static contact's nominal part, then of each static
-        finger's total force (nominal + internal);
+        contact's total force (nominal + internal);
     non-negative cone: f of each sliding or frictionless contact, nominal part then total.
 """
 
@@ -91,8 +91,8 @@ class Program:
         mus = [weights.finger_friction] * len(layout.fingers) + [weights.table_friction] * len(layout.corners)
         wts = [1.0] * len(layout.fingers) + [weights.table_weight] * len(layout.corners)
 
-        cols_n, cols_i = [], []  # per contact (per finger): its column indices
-        gather, owner = [], []  # per wrench column: flat bank index; contact index (internal: -1 - finger)
+        cols_n, cols_i = [], []  # per contact: its nominal / internal column indices
+        gather, owner = [], []  # per wrench column: flat bank index; contact index (internal: -1 - contact)
         n = 0
         for c, (r, sl) in enumerate(zip(rows, slides)):
             slots = SLIDING_SLOTS if sl else STATIC_SLOTS
@@ -101,7 +101,7 @@ class Program:
             owner += [c] * len(slots)
             n += len(slots)
         if internal:
-            for c, sl in enumerate(layout.sliding):
+            for c, sl in enumerate(slides):
                 slots = SLIDING_SLOTS if sl else STATIC_SLOTS
                 cols_i.append(list(range(n, n + len(slots))))
                 gather += [4 * rows[c] + s for s in slots]
@@ -173,11 +173,14 @@ class Program:
         self._q_fit = []  # per fitted finger: (finger index, columns that carry -2 * target)
         if internal:
             eps = weights.regularization
+            nf = len(layout.fingers)
             for c, cols in enumerate(cols_i):
                 fn, fi = cols_n[c][0], cols[0]
                 for j in cols[1:]:
                     P[j, j] += 2.0 * eps
-                if not layout.fitted[c]:
+                if c >= nf:  # a table corner: spreading the reaction over the corners is cheap
+                    P[fi, fi] += 2.0 * eps * weights.table_weight
+                elif not layout.fitted[c]:
                     P[fi, fi] += 2.0 * eps
                 elif layout.kind == "decomposition":  # (f_n + f_i - target)^2
                     P[fn, fn] += 2.0
@@ -192,16 +195,16 @@ class Program:
             P[j, j] = 2.0 * weights.slack_weight
         self._P = sp.csc_matrix(np.triu(P))
 
-        # Unpacking: one matrix maps x * direction (per wrench column) to the K nominal finger
-        # forces, the K internal finger forces and the 8 corner forces.
-        S = np.zeros((2 * K + 8, num_w))
+        # Unpacking: one matrix maps x * direction (per wrench column) to the K nominal and the K
+        # internal finger forces, then the 8 nominal and the 8 internal table corner forces.
+        S = np.zeros((2 * K + 16, num_w))
+        nf = len(layout.fingers)
         for j, o in enumerate(owner):
-            if o < 0:
-                S[K + layout.fingers[-1 - o], j] = 1.0
-            elif o < len(layout.fingers):
-                S[layout.fingers[o], j] = 1.0
+            c, part = (o, 0) if o >= 0 else (-1 - o, 1)
+            if c < nf:
+                S[part * K + layout.fingers[c], j] = 1.0
             else:
-                S[2 * K + layout.corners[o - len(layout.fingers)], j] = 1.0
+                S[2 * K + part * 8 + layout.corners[c - nf], j] = 1.0
         self._S = S
         self._num_w = num_w
         self._data = self._A_data0.copy()
@@ -238,10 +241,10 @@ class Program:
                 predicted internal), shape (K,); only the fitted fingers' entries are read.
 
         Returns:
-            ``(forces, status, objective, iterations)``: forces shape (2K + 8, 3) stacking the
-            nominal finger forces (K), the internal finger forces (K) and the table corner forces
-            (8), zero where absent; Clarabel's status; the cost with its constant term [N^2];
-            the number of interior-point iterations.
+            ``(forces, status, objective, iterations)``: forces shape (2K + 16, 3) stacking the
+            nominal finger forces (K), the internal finger forces (K), the nominal table corner
+            forces (8) and the internal ones (8), zero where absent; Clarabel's status; the cost
+            with its constant term [N^2]; the number of interior-point iterations.
         """
         cols = bank.reshape(-1, 6)[self._gather]  # (num_w, 6)
         data = self._data

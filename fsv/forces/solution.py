@@ -39,9 +39,9 @@ KINDS = ("nominal", "decomposition", "reconstruction")
 class ForceSolution:
     """Contact forces per frame from one of the cone programs. Object frame throughout.
 
-    The finger force is F_k = F_k^(n) + F_k^(i) (eq. 7): its nominal part explains the motion with
-    the table's force, its internal part has zero net force and torque (eq. 8). The nominal program
-    has no internal part (``internal`` is zero). Inactive fingers have zero force; frames with
+    The finger force is F_k = F_k^(n) + F_k^(i) (eq. 7): the nominal parts (fingers and table)
+    explain the motion, the internal parts (fingers and table) have zero net force and torque
+    (eq. 8). The nominal program has no internal part (``internal`` is zero). Inactive fingers have zero force; frames with
     status NO_KINEMATICS or FAILED have NaN forces.
 
     Attributes:
@@ -55,9 +55,12 @@ class ForceSolution:
         nominal: Nominal part F_k^(n), shape (T, K, 3), [N].
         internal: Internal part F_k^(i), shape (T, K, 3), [N].
         env_active: Number of table corners in contact, shape (T,).
-        env_wrench: Table force and torque about the centre of mass, shape (T, 6), [N, N m].
+        env_wrench: Table force and torque about the centre of mass (nominal + internal part),
+            shape (T, 6), [N, N m].
+        env_internal_wrench: The table's internal part (it balances the fingers' internal parts,
+            e.g. when a finger presses the box onto the table), shape (T, 6); zero for "nominal".
         required: The wrench eq. 1 requires of the contacts, shape (T, 6), [N, N m].
-        residual: ``required`` minus the wrench of the nominal finger forces and the table,
+        residual: ``required`` minus the wrench of the nominal parts of the fingers and the table,
             shape (T, 6); zero up to solver tolerance where the status is OPTIMAL.
         status: :class:`FrameStatus` per frame, shape (T,), int8.
         objective: Value of the program's cost (with its constant term, so eq. 6, 9 or 14
@@ -78,6 +81,7 @@ class ForceSolution:
     internal: np.ndarray
     env_active: np.ndarray
     env_wrench: np.ndarray
+    env_internal_wrench: np.ndarray
     required: np.ndarray
     residual: np.ndarray
     status: np.ndarray
@@ -100,6 +104,7 @@ class ForceSolution:
             internal=as_array("ForceSolution.internal", self.internal, (None, K, 3)),
             env_active=as_array("ForceSolution.env_active", self.env_active, (None,), np.int64),
             env_wrench=as_array("ForceSolution.env_wrench", self.env_wrench, (None, 6)),
+            env_internal_wrench=as_array("ForceSolution.env_internal_wrench", self.env_internal_wrench, (None, 6)),
             required=as_array("ForceSolution.required", self.required, (None, 6)),
             residual=as_array("ForceSolution.residual", self.residual, (None, 6)),
             status=as_array("ForceSolution.status", self.status, (None,), np.int8),
@@ -157,11 +162,12 @@ class ForceSolution:
 
     @property
     def internal_wrench(self) -> np.ndarray:
-        """Net wrench of the internal parts, shape (T, 6); zero up to solver tolerance (eq. 8)."""
-        return np.concatenate(
+        """Net wrench of the internal parts (fingers and table), shape (T, 6); zero up to solver tolerance (eq. 8)."""
+        fingers = np.concatenate(
             [self.internal.sum(axis=1), np.cross(self.point * self.active[..., None], self.internal).sum(axis=1)],
             axis=1,
         )
+        return fingers + self.env_internal_wrench
 
     def count(self, status: FrameStatus) -> int:
         """Number of frames with the given status."""

@@ -12,12 +12,15 @@ plus ``table_weight`` Σ_j ||F_j||² over the table corners (their forces are pa
 wrench; the paper sums over fingers only, and a small weight keeps the problem strictly convex
 while letting the table carry what it can), and ``regularization`` times the squares of the
 internal components that no target fixes (the tangential ones, and the normal one of a finger
-without a target), which makes the decomposition unique without measurably moving it.
+without a target; a table corner's normal internal component gets ``regularization * table_weight``,
+so that a finger pressing the box onto the table is balanced by a table reaction under it rather
+than by friction), which makes the decomposition unique without measurably moving it.
 
 In the decomposition and reconstruction, the nominal part of each contact lies in its friction
 cone and so does the total F_k^(n) + F_k^(i) ("the distribution still obeys Coulomb's law"); the
 internal parts alone need not (a finger may press less than its nominal share). The internal
-parts have zero net force and torque (eq. 8). Table corners carry nominal force only.
+parts have zero net force and torque (eq. 8). Table corners take part in both: a finger pressing
+the box onto the table is a workless squeeze whose reaction is the table's internal part.
 
 A frame whose program is infeasible (e.g. a single contact that would have to pull) is solved
 again with a slack σ on the nominal wrench equality and ``slack_weight`` ||σ||² added to the cost:
@@ -247,6 +250,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     nominal = np.zeros((T, K, 3))
     internal = np.zeros((T, K, 3))
     corner = np.zeros((T, 8, 3))
+    corner_internal = np.zeros((T, 8, 3))
     status = np.full(T, int(FrameStatus.OPTIMAL), np.int8)
     objective = np.zeros(T)
     iterations = np.zeros(T, np.int64)
@@ -257,7 +261,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     for t, is_valid in enumerate(valid.tolist()):
         if not is_valid:
             status[t] = FrameStatus.NO_KINEMATICS
-            nominal[t] = internal[t] = corner[t] = objective[t] = np.nan
+            nominal[t] = internal[t] = corner[t] = corner_internal[t] = objective[t] = np.nan
             continue
         if not touching[t]:
             status[t] = FrameStatus.NO_CONTACTS
@@ -274,10 +278,14 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
             forces, code, objective[t], iterations[t] = retry.solve(bank[t], required[t], target[t])
             status[t] = FrameStatus.LEAST_VIOLATION if code in OK else FrameStatus.FAILED
             if code not in OK:
-                forces, objective[t] = np.full((2 * K + 8, 3), np.nan), np.nan
-        nominal[t], internal[t], corner[t] = forces[:K], forces[K : 2 * K], forces[2 * K :]
+                forces, objective[t] = np.full((2 * K + 16, 3), np.nan), np.nan
+        nominal[t], internal[t] = forces[:K], forces[K : 2 * K]
+        corner[t], corner_internal[t] = forces[2 * K : 2 * K + 8], forces[2 * K + 8 :]
         seconds[t] = time.perf_counter() - t0
     env = np.concatenate([corner.sum(axis=1), np.cross(table.point, corner).sum(axis=1)], axis=1)
+    env_internal = np.concatenate(
+        [corner_internal.sum(axis=1), np.cross(table.point, corner_internal).sum(axis=1)], axis=1
+    )
     point = np.where(use[..., None], contacts.point, 0.0)
     achieved = np.concatenate([nominal.sum(axis=1), np.cross(point, nominal).sum(axis=1)], axis=1) + env
     residual = np.where(status[:, None] == FrameStatus.NO_CONTACTS, required, required - achieved)
@@ -293,7 +301,8 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
         nominal=nominal,
         internal=internal,
         env_active=corners_on.sum(axis=1),
-        env_wrench=env,
+        env_wrench=env + env_internal,
+        env_internal_wrench=env_internal,
         required=required,
         residual=residual,
         status=status,
