@@ -40,6 +40,7 @@ class Run:
         summary: Blocks of ``summary.json``, in stage order.
         timing_s: Seconds spent per stage.
         lines: Human-readable lines printed at the end.
+        tracking: The tracker's output (box poses, hand, contacts), once tracked.
     """
 
     args: argparse.Namespace
@@ -49,6 +50,7 @@ class Run:
     summary: dict = field(default_factory=dict)
     timing_s: dict = field(default_factory=dict)
     lines: list = field(default_factory=list)
+    tracking: object = None  # fsv.track.tracker.Tracking, once the tracking stage ran
 
 
 @dataclass(frozen=True)
@@ -90,6 +92,11 @@ STAGES: list = [SIMULATE]
 from benchmark.render import add_cli_arguments as _render_arguments, run_cli_stage as _render  # noqa: E402
 
 STAGES.append(Stage(name="render", add_arguments=_render_arguments, run=_render))
+
+# tracking (issue 6): box and hand from depth alone, contacts; scores and overlay (benchmark/tracking.py).
+from benchmark import tracking as _tracking  # noqa: E402
+
+STAGES.append(Stage(name="track", add_arguments=_tracking.add_arguments, run=_tracking.run_stage))
 
 # kinematics (issue 4): Table 1, Fig. 4, and --kinematics for the later stages (benchmark/table1.py).
 from benchmark import table1 as _table1  # noqa: E402
