@@ -209,9 +209,9 @@ def stage_inputs(run) -> tuple:
 
     ep = run.episode
     choice = getattr(run.args, "kinematics", None) or "oracle"
-    kin = episode_kinematics(ep, choice)
-    truth_contacts = contacts_from_truth(ep.truth)
-    tracking = getattr(run, "tracking", None) or getattr(getattr(run, "estimate", None), "tracking", None)
+    tracking = getattr(run, "tracking", None)
+    kin = episode_kinematics(ep, choice, poses=None if tracking is None else tracking.box)
+    truth_contacts = contacts_from_truth(ep.truth) or getattr(getattr(run, "estimate", None), "tracking", None)
     if run.args.contacts == "oracle":
         contacts, source = truth_contacts, "oracle (truth)"
     elif tracking is not None and getattr(tracking, "contacts", None) is not None:

@@ -302,7 +302,10 @@ def run_stage(run) -> None:
     choice = getattr(run.args, "kinematics", "algebraic")
     if choice not in CHOICES:
         raise ScenarioError(f"kinematics must be one of {', '.join(CHOICES)}; got {choice!r}")
-    table, kins = score_table1(ep.truth, observed_poses(ep))
+    if getattr(run, "tracking", None) is not None:  # the tracker ran (issue 6): Table 1 on tracked poses
+        table, kins = score_table1(ep.truth, run.tracking.box, poses_label="tracked poses (fsv.track, from depth)")
+    else:
+        table, kins = score_table1(ep.truth, observed_poses(ep))
     paths = write_outputs(table, ep.truth, kins, run.out)
     run.summary["kinematics"] = table.summary()
     oracle = choice == "oracle"
