@@ -59,7 +59,6 @@ from benchmark.errors import BenchmarkError, DatasetError
 from benchmark.scenario import Scenario
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
-from fsv.learn import TrainingSet
 
 FORMAT = "fsv-bench-dataset"
 VERSION = 1
@@ -447,8 +446,10 @@ def finger_names_of(df: pd.DataFrame) -> tuple:
     return tuple(c[len("active_"):] for c in df.columns if c.startswith("active_"))
 
 
-def training_set(df: pd.DataFrame) -> TrainingSet:
-    """The networks' samples of a dataset table: features, decomposition targets, episode groups."""
+def training_set(df: pd.DataFrame):
+    """The networks' samples of a dataset table (:class:`fsv.learn.TrainingSet`): features,
+    decomposition targets, episode groups."""
+    from fsv.learn import TrainingSet  # torch: imported only where it is used, not in the workers
     names = finger_names_of(df)
     x = np.concatenate([
         df[["p1", "p3"]].to_numpy(float), df[[f"p2_{n}" for n in names]].to_numpy(float),
