@@ -1,7 +1,8 @@
 """The learning block of ``fsv-bench``: learned human-like forces on the command's scenario.
 
 The shipped model (:func:`fsv.learn.default_model`, or ``--internal-model FILE``) predicts the
-internal forces from the episode's kinematics and contacts; the reconstruction SOCP (eq. 14)
+internal forces from the episode's kinematics and contacts (the same inputs as the force stage,
+``benchmark.score_forces.stage_inputs``, labelled the same way); the reconstruction SOCP (eq. 14)
 turns them into full forces (:func:`fsv.learn.learned_forces`). The score is the paper's Table 2
 metric on the frames the paper's sample rule keeps (valid kinematics, at least two fingers in
 contact, vision and tactile net forces within 1.5 N, see :func:`benchmark.dataset.sample_mask`)
@@ -15,66 +16,68 @@ import argparse
 
 import numpy as np
 
-from benchmark.dataset import measured_normal_forces, oracle_contacts, sample_mask
+from benchmark.dataset import sample_mask, true_normal_forces
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
 from fsv.forces import FrameStatus
 from fsv.learn import InternalForceModel, default_model, learned_forces, load, relative_errors_pct
 
 
-def score_episode(episode, model: InternalForceModel, kinematics: Kinematics, contacts: Contacts | None = None) -> dict:
+def score_episode(episode, model: InternalForceModel, kinematics: Kinematics, contacts: Contacts) -> tuple:
     """Learned forces on one episode, scored against the truth's normal forces.
 
     Args:
         episode: A simulated ``benchmark.Episode``.
         model: The internal-force networks.
-        kinematics: The object kinematics the method estimated (or the oracle, labelled by its
-            ``method``).
-        contacts: The contacts the method found; None uses the truth's (*oracle*, labelled).
+        kinematics: The object kinematics the method uses (estimated, or the oracle).
+        contacts: The contacts the method uses (tracked, vision-like, or the oracle).
 
     Returns:
-        ``(block, solution, predicted)``: the ``learning`` block of summary.json
-        (``rel_err_pct_mean``, ``rel_err_pct_std``, ``scored`` finger-frames, ``frames``,
-        ``solver_failures``, ``residual_rel_max``, ``kinematics``, ``contacts`` and ``model``, what
-        it was trained on), the reconstruction (:class:`fsv.forces.ForceSolution`) and the
-        predicted internal normal forces, shape (T, K), [N].
+        ``(block, solution, predicted)``: the scores (``rel_err_pct_mean``, ``rel_err_pct_std``,
+        ``scored`` finger-frames, ``frames``, ``solver_failures``, ``residual_rel_max``, and
+        ``model``: what it was trained on), the reconstruction (:class:`fsv.forces.ForceSolution`)
+        and the predicted internal normal forces, shape (T, K), [N].
     """
     tr = episode.truth
-    con = oracle_contacts(tr) if contacts is None else contacts
-    sol, pred = learned_forces(model, kinematics, con, episode.object_model, gravity=tr.gravity)
-    feats = grasp_features(kinematics, con, episode.object_model, gravity=tr.gravity)
-    _, keep, _ = sample_mask(kinematics, con, feats, tr)
+    sol, pred = learned_forces(model, kinematics, contacts, episode.object_model, gravity=tr.gravity)
+    feats = grasp_features(kinematics, contacts, episode.object_model, gravity=tr.gravity)
+    _, keep, _ = sample_mask(kinematics, contacts, feats, tr)
     ok = keep & (sol.status == int(FrameStatus.OPTIMAL))
-    measured = measured_normal_forces(tr)
-    err = relative_errors_pct(sol.normal_force, measured, con.active & tr.contact_active & ok[:, None])
+    err = relative_errors_pct(sol.normal_force, true_normal_forces(tr), contacts.active & tr.contact_active & ok[:, None])
     scale = np.maximum(np.linalg.norm(sol.required[ok], axis=1), 1.0)
     resid = float(np.max(np.linalg.norm(sol.residual[ok], axis=1) / scale)) if ok.any() else float("nan")
     meta = model.metadata
-    return dict(
+    block = dict(
         rel_err_pct_mean=float(np.mean(err)) if err.size else float("nan"),
         rel_err_pct_std=float(np.std(err)) if err.size else float("nan"),
         scored=int(err.size), frames=int(ok.sum()),
         solver_failures=int(np.sum(keep & (sol.status != int(FrameStatus.OPTIMAL)))),
-        residual_rel_max=resid, kinematics=kinematics.method or "estimated",
-        contacts="oracle" if contacts is None else "tracked",
+        residual_rel_max=resid,
         model=dict(episodes=meta.get("episodes"), samples=meta.get("samples"), command=meta.get("command")),
-    ), sol, pred
+    )
+    return block, sol, pred
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Adds ``--internal-model FILE`` to ``fsv-bench``."""
     p.add_argument("--internal-model", default=None,
-                   help="internal-force model file from `fsv-bench train` (default: the shipped model)")
+                   help="internal-force model from `fsv-bench train` (default: the model shipped in fsv/data)")
 
 
-def model_from_args(args: argparse.Namespace) -> InternalForceModel:
-    path = getattr(args, "internal_model", None)
-    return default_model() if path is None else load(path)
+def run_stage(run) -> None:
+    """The ``learning`` block of summary.json and one printed line for a ``benchmark.cli.Run``."""
+    from benchmark.score_forces import stage_inputs
 
-
-def format_block(block: dict) -> str:
-    """One line for the printed summary."""
-    return (
-        f"learned forces (ANN + eq. 14): rel. error {block['rel_err_pct_mean']:.1f} ± {block['rel_err_pct_std']:.1f} % "
-        f"over {block['scored']} finger-frames (paper: 9.7-10.9 %); kinematics={block['kinematics']}, "
-        f"contacts={block['contacts']}" + (" (oracle = from the truth)" if "oracle" in (block["kinematics"], block["contacts"]) else "")
+    path = getattr(run.args, "internal_model", None)
+    model = default_model() if path is None else load(path)
+    kin, contacts, labels = stage_inputs(run)
+    block, _, _ = score_episode(run.episode, model, kin, contacts)
+    block = {**labels, "program": "ANN_L2 + ANN_decomp -> reconstruction (eq. 14)",
+             "internal_model": path or "fsv/data/internal_forces.pt", **block}
+    run.summary["learning"] = block
+    tag = f"ORACLE {', '.join(labels['oracle'])}" if labels["oracle"] else "no oracle input"
+    run.lines.append(
+        f"learning [{tag}] (kinematics {labels['kinematics']}, contacts {labels['contacts']}): learned forces' "
+        f"relative error {block['rel_err_pct_mean']:.1f} ± {block['rel_err_pct_std']:.1f} % over {block['scored']} "
+        f"finger-frames (paper, Table 2: 9.7-10.9 %); {block['solver_failures']} solver failures"
     )

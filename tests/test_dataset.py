@@ -75,7 +75,7 @@ SHORT = dict(tasks=("lift",), duration_s=3.0)
 @pytest.fixture(scope="module")
 def oracle_dataset(tmp_path_factory):
     out = tmp_path_factory.mktemp("oracle")
-    spec = DatasetSpec(seeds=(0, 1), kinematics="oracle", **SHORT)
+    spec = DatasetSpec(seeds=(0, 1), kinematics="oracle", contacts="oracle", tactile_noise_n=0.0, **SHORT)
     return spec, out, generate(spec, out, workers=1, progress=False)
 
 
@@ -84,10 +84,12 @@ def test_targets_split_the_tactile_forces_and_features_follow_the_truth(oracle_d
 
     spec, out, man = oracle_dataset
     assert list(man["status"]) == ["ok", "ok"] and man["rows"].min() > 20
+    assert set(man["kinematics"]) == {"oracle"} and set(man["contacts"]) == {"oracle"}
     df = load_dataset(out)
     names = finger_names_of(df)
     act = df[[f"active_{n}" for n in names]].to_numpy()
     meas = df[[f"f_meas_{n}" for n in names]].to_numpy()
+    np.testing.assert_array_equal(meas, df[[f"f_true_{n}" for n in names]].to_numpy())  # noise-free sensors
     nom = df[[f"f_nom_{n}" for n in names]].to_numpy()
     internal = df[[f"f_int_{n}" for n in names]].to_numpy()
     # oracle kinematics, box off the table: the true forces are a feasible total, so eq. 9 splits them exactly
