@@ -104,3 +104,18 @@ def rendered_lift_episode(lift_episode):
     from benchmark.render import render
 
     return render(lift_episode[0])
+
+
+# --- learning (issue 7): a small dataset of short, simulated episodes -------------------------
+
+
+@pytest.fixture(scope="session")
+def learn_oracle_dataset(tmp_path_factory):
+    """Two 3 s lift episodes (seeds 0, 1) with oracle kinematics, oracle contacts and noise-free
+    tactile sensors: ``(spec, folder, manifest)``."""
+    from benchmark.dataset import DatasetSpec, generate
+
+    out = tmp_path_factory.mktemp("learn-oracle")
+    spec = DatasetSpec(tasks=("lift",), seeds=(0, 1), duration_s=3.0, kinematics="oracle", contacts="oracle",
+                       tactile_noise_n=0.0)
+    return spec, out, generate(spec, out, workers=1, progress=False)

@@ -69,20 +69,10 @@ def test_bad_spec_and_ranges():
 
 # --- the real world: short episodes -------------------------------------------------------------
 
-SHORT = dict(tasks=("lift",), duration_s=3.0)
-
-
-@pytest.fixture(scope="module")
-def oracle_dataset(tmp_path_factory):
-    out = tmp_path_factory.mktemp("oracle")
-    spec = DatasetSpec(seeds=(0, 1), kinematics="oracle", contacts="oracle", tactile_noise_n=0.0, **SHORT)
-    return spec, out, generate(spec, out, workers=1, progress=False)
-
-
-def test_targets_split_the_tactile_forces_and_features_follow_the_truth(oracle_dataset):
+def test_targets_split_the_tactile_forces_and_features_follow_the_truth(learn_oracle_dataset):
     from benchmark.dataset import finger_names_of
 
-    spec, out, man = oracle_dataset
+    spec, out, man = learn_oracle_dataset
     assert list(man["status"]) == ["ok", "ok"] and man["rows"].min() > 20
     assert set(man["kinematics"]) == {"oracle"} and set(man["contacts"]) == {"oracle"}
     df = load_dataset(out)
@@ -108,10 +98,10 @@ def test_targets_split_the_tactile_forces_and_features_follow_the_truth(oracle_d
     assert om.mass_kg == pytest.approx(0.30)  # masses.yaml entry 0
 
 
-def test_pool_output_equals_in_process_output(oracle_dataset, tmp_path):
+def test_pool_output_equals_in_process_output(learn_oracle_dataset, tmp_path):
     import pandas as pd
 
-    spec, out, _ = oracle_dataset
+    spec, out, _ = learn_oracle_dataset
     man = generate(spec, tmp_path, workers=2, progress=False)
     assert sorted(man["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1"]
     pd.testing.assert_frame_equal(load_dataset(tmp_path), load_dataset(out))
