@@ -108,6 +108,36 @@ from benchmark import score_forces as _score_forces  # noqa: E402
 
 STAGES.append(Stage(name="forces", add_arguments=_score_forces.add_arguments, run=_score_forces.run_stage))
 
+# learning (issue 7): learned internal forces with the shipped model (benchmark/learning.py), and the
+# subcommands `fsv-bench generate | train | table2` (benchmark/dataset.py, training.py, table2.py).
+from benchmark import learning as _learning  # noqa: E402
+
+STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_learning.run_stage))
+SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2"}
+
+
+def _subcommand(argv: list) -> int:
+    """Runs ``fsv-bench <subcommand> ...``; bad input exits 2, Ctrl-C 130 (re-run to resume)."""
+    import importlib
+
+    module = importlib.import_module(SUBCOMMANDS[argv[0]])
+    p = _Parser(prog=f"fsv-bench {argv[0]}", description=module.__doc__.strip().splitlines()[0])
+    module.add_arguments(p)
+    args = p.parse_args(argv[1:])
+    try:
+        module.run(args)
+    except (ScenarioError, InputError, ValueError) as e:
+        print(f"fsv-bench {argv[0]}: error: {e}", file=sys.stderr)
+        return 2
+    except BenchmarkError as e:
+        print(f"fsv-bench {argv[0]}: failed: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"fsv-bench {argv[0]}: interrupted; complete files are kept, run the same command to resume",
+              file=sys.stderr)
+        return 130
+    return 0
+
 
 class _Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line and exit status 2."""
@@ -146,6 +176,9 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
 
 def main(argv: list | None = None) -> int:
     """Entry point of ``fsv-bench``; returns the exit status."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in SUBCOMMANDS:
+        return _subcommand(argv)
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

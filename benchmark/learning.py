@@ -20,15 +20,14 @@ from benchmark.dataset import sample_mask, true_normal_forces
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
 from fsv.forces import FrameStatus
-from fsv.learn import InternalForceModel, default_model, learned_forces, load, relative_errors_pct
 
 
-def score_episode(episode, model: InternalForceModel, kinematics: Kinematics, contacts: Contacts) -> tuple:
+def score_episode(episode, model, kinematics: Kinematics, contacts: Contacts) -> tuple:
     """Learned forces on one episode, scored against the truth's normal forces.
 
     Args:
         episode: A simulated ``benchmark.Episode``.
-        model: The internal-force networks.
+        model: The internal-force networks (:class:`fsv.learn.InternalForceModel`).
         kinematics: The object kinematics the method uses (estimated, or the oracle).
         contacts: The contacts the method uses (tracked, vision-like, or the oracle).
 
@@ -38,6 +37,8 @@ def score_episode(episode, model: InternalForceModel, kinematics: Kinematics, co
         ``model``: what it was trained on), the reconstruction (:class:`fsv.forces.ForceSolution`)
         and the predicted internal normal forces, shape (T, K), [N].
     """
+    from fsv.learn import learned_forces, relative_errors_pct  # torch: only when the stage runs
+
     tr = episode.truth
     sol, pred = learned_forces(model, kinematics, contacts, episode.object_model, gravity=tr.gravity)
     feats = grasp_features(kinematics, contacts, episode.object_model, gravity=tr.gravity)
@@ -67,6 +68,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run_stage(run) -> None:
     """The ``learning`` block of summary.json and one printed line for a ``benchmark.cli.Run``."""
     from benchmark.score_forces import stage_inputs
+    from fsv.learn import default_model, load
 
     path = getattr(run.args, "internal_model", None)
     model = default_model() if path is None else load(path)

@@ -262,6 +262,7 @@ class InternalForceModel:
                 torch.save(self.state(), fh)
                 fh.flush()
                 os.fsync(fh.fileno())
+            os.chmod(tmp, 0o644)  # mkstemp makes it private; a model is shared like any data file
             os.replace(tmp, path)
         except BaseException:
             if os.path.exists(tmp):

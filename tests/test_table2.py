@@ -45,7 +45,7 @@ def test_score_writes_the_table_and_the_figure(learn_oracle_dataset, tmp_path):
     rows = result["rows"]
     assert len(rows) == 5 and result["samples"]["partial"] == result["samples"]["full"]
     # one combination only: partial and full training see the same data and give the same errors
-    assert rows[0]["partial_avg"] == pytest.approx(rows[0]["full_avg"])
+    assert rows[0]["partial_avg"] == pytest.approx(rows[0]["full_avg"]) == pytest.approx(rows[0]["same_user_avg"])
     assert 0 < rows[0]["full_avg"] < 25 and rows[0]["full_residual_rel"] <= 1e-6
     write(result, tmp_path)
     assert {p.name for p in tmp_path.iterdir()} == {"table2.md", "table2.csv", "table2.json", "fig6.png"}
