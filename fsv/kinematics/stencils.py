@@ -168,8 +168,8 @@ def algebraic_weights(order: int, window_frames: int, kappa: float, mu: float, e
 class AlgebraicConfig:
     """Minimal (kappa, mu) algebraic numerical differentiator (Mboup, Join, Fliess 2009).
 
-    The defaults are the parameters tuned on the benchmark's calibration episodes (30 fps lift with
-    tracker-like pose errors, at most 15 frames; see ``benchmark.motion``).
+    The defaults are the parameters tuned on the benchmark's calibration episodes (30 fps six-axis
+    excitations with tracker-like pose errors; see ``benchmark.motion``).
 
     Attributes:
         window_frames: Samples per window L >= 3 (T = L / fps).
@@ -180,9 +180,9 @@ class AlgebraicConfig:
             kappa != mu (see the module docstring); no effect for kappa = mu.
     """
 
-    window_frames: int = 15
-    kappa: float = 0.0
-    mu: float = 0.0
+    window_frames: int = 13
+    kappa: float = 1.0
+    mu: float = 1.0
     causal: bool = False
     exact_moments: bool = True
 
@@ -256,7 +256,7 @@ class GaussianConfig:
         causal: Real-time estimates, radius + 1 frames late.
     """
 
-    sigma_frames: float = 3.0
+    sigma_frames: float = 2.75
     truncate: float = 2.0
     causal: bool = False
 
