@@ -251,7 +251,7 @@ def tune(calibration: list[tuple[Truth, Poses]], grids: dict | None = None) -> t
     return best, scores
 
 
-def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: str = "") -> Path:
+def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: str = "", panels: list | None = None) -> Path:
     """A figure like the paper's Fig. 4: vision kinematics against the AHRS, six axes.
 
     Args:
@@ -259,6 +259,9 @@ def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: st
         kinematics: label -> Kinematics to draw (e.g. the three methods).
         path: Where to write the PNG (atomically).
         title: Figure title.
+        panels: Optional six (truth, kinematics, subtitle) triples, one per panel in the order
+            acc x, y, z, gyro x, y, z (e.g. each axis from the excitation of that axis); they
+            replace ``truth`` and ``kinematics`` panel by panel.
 
     Returns:
         The written path.
@@ -268,21 +271,25 @@ def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: st
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, 3, figsize=(13, 6), sharex=True)
-    styles = {"algebraic": ("tab:blue", 1.6), "gaussian": ("tab:green", 0.9), "central": ("tab:red", 0.6)}
-    for row, (name, unit, key) in enumerate((("acc", "m/s$^2$", "imu_acc"), ("gyro", "rad/s", "imu_gyro"))):
+    if panels is not None and len(panels) != 6:
+        raise ScenarioError(f"plot_fig4 needs 6 panels (acc x, y, z, gyro x, y, z), got {len(panels)}")
+    fig, axes = plt.subplots(2, 3, figsize=(13, 6))
+    styles = {"central": ("tab:red", 0.6, "-"), "algebraic": ("tab:blue", 1.6, "-"), "gaussian": ("tab:green", 1.0, ":")}
+    for row, (unit, key) in enumerate((("m/s$^2$", "imu_acc"), ("rad/s", "imu_gyro"))):
         for ax_i, axis in enumerate("xyz"):
+            tr, kins, sub = panels[3 * row + ax_i] if panels is not None else (truth, kinematics, "")
             ax = axes[row, ax_i]
-            for label, kin in kinematics.items():
-                acc, gyro = kin.imu(truth.gravity)
+            for label in sorted(kins, key=lambda m: list(styles).index(m) if m in styles else 9):
+                kin = kins[label]
+                acc, gyro = kin.imu(tr.gravity)
                 est = (acc if row == 0 else gyro)[:, ax_i]
-                color, width = styles.get(label, ("tab:purple", 1.0))
-                ax.plot(kin.t[kin.valid], est[kin.valid], color=color, lw=width, label=f"vision, {label}")
-            ax.plot(truth.t, getattr(truth, key)[:, ax_i], color="k", lw=1.2, ls="--", label="AHRS (truth)")
-            ax.set_title(f"{'Translational acceleration' if row == 0 else 'Rotational velocity'} {axis}")
+                color, width, ls = styles.get(label, ("tab:purple", 1.0, "-"))
+                ax.plot(kin.t[kin.valid], est[kin.valid], color=color, lw=width, ls=ls, label=f"vision, {label}")
+            ax.plot(tr.t, getattr(tr, key)[:, ax_i], color="k", lw=1.2, ls="--", label="AHRS (truth)")
+            name = "Translational acceleration" if row == 0 else "Rotational velocity"
+            ax.set_title(f"{name} {axis}" + (f" ({sub})" if sub else ""), fontsize=10)
             ax.set_ylabel(unit)
-            if row == 1:
-                ax.set_xlabel("t [s]")
+            ax.set_xlabel("t [s]")
     axes[0, 0].legend(fontsize=7)
     if title:
         fig.suptitle(title)
@@ -301,6 +308,7 @@ def _write_atomic(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
+        os.chmod(tmp, 0o644)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
@@ -308,14 +316,17 @@ def _write_atomic(path: Path, data: bytes) -> None:
         raise
 
 
-def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | os.PathLike) -> dict:
-    """Writes table1.md, table1.csv and fig4_kinematics.png into ``out_dir``; returns their paths."""
+def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | os.PathLike, panels: list | None = None) -> dict:
+    """Writes table1.md, table1.csv and fig4_kinematics.png into ``out_dir``; returns their paths.
+
+    ``panels`` is passed to :func:`plot_fig4` (e.g. one excitation episode per axis).
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"markdown": out / "table1.md", "csv": out / "table1.csv", "plot": out / "fig4_kinematics.png"}
     _write_atomic(paths["markdown"], (table.markdown() + "\n").encode())
     _write_atomic(paths["csv"], table.csv().encode())
-    plot_fig4(truth, kinematics, paths["plot"], title=f"Vision kinematics vs AHRS ({table.poses})")
+    plot_fig4(truth, kinematics, paths["plot"], title=f"Vision kinematics vs AHRS ({table.poses})", panels=panels)
     return paths
 
 
@@ -451,8 +462,13 @@ def main(argv=None) -> int:
         print(f"Table 1 on tasks {','.join(tasks)}, seeds {','.join(map(str, seeds))}, noise {args.noise} m")
         print(table.markdown())
         if args.out is not None:
-            paths = write_outputs(table, episodes[0][0], kins[0], args.out)
-            print(f"wrote {', '.join(str(p) for p in paths.values())} (Fig. 4 shows the first episode)")
+            panels = None
+            by_task = {task: i * len(seeds) for i, task in enumerate(tasks)}  # first seed of each task
+            wanted = [f"excite-{kind}{axis}" for kind in "tr" for axis in "xyz"]
+            if all(t in by_task for t in wanted):
+                panels = [(episodes[by_task[t]][0], kins[by_task[t]], t) for t in wanted]
+            paths = write_outputs(table, episodes[0][0], kins[0], args.out, panels=panels)
+            print(f"wrote {', '.join(str(p) for p in paths.values())}")
     return 0
 
 
