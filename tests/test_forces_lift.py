@@ -73,3 +73,26 @@ def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
     assert (tmp_path / "forces_fig5.png").stat().st_size > 10_000
     assert "ORACLE" in run.lines[0]
     json.dumps(block)  # summary.json must be able to hold it
+
+
+def test_stage_inputs_follow_the_flags_and_label_oracles(lift):
+    import argparse
+
+    from benchmark.score_forces import stage_inputs
+
+    episode = lift[0]
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    parser.add_argument("--kinematics", default="algebraic")
+    run = types.SimpleNamespace(args=parser.parse_args([]), episode=episode, out=None, summary={}, lines=[])
+    kin, contacts, labels = stage_inputs(run)
+    assert labels["oracle"] == [] and kin.method == "algebraic" and labels["contacts"].startswith("vision model")
+    moved = np.linalg.norm(contacts.point - episode.truth.contact_point, axis=-1)[contacts.active]
+    assert 1e-3 < np.median(moved) < 2e-2  # the paper's contact error, a few millimetres
+    run.args = parser.parse_args(["--contacts", "oracle", "--kinematics", "oracle"])
+    kin, contacts, labels = stage_inputs(run)
+    assert labels["oracle"] == ["kinematics", "contacts"]
+    assert np.array_equal(contacts.point[contacts.active], episode.truth.contact_point[contacts.active])
+    run.tracking = types.SimpleNamespace(contacts=contacts_from_truth(episode.truth))
+    run.args = parser.parse_args([])
+    assert stage_inputs(run)[2]["contacts"] == "vision (tracker)"
