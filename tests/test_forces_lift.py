@@ -87,12 +87,37 @@ def test_stage_inputs_follow_the_flags_and_label_oracles(lift):
     run = types.SimpleNamespace(args=parser.parse_args([]), episode=episode, out=None, summary={}, lines=[])
     kin, contacts, labels = stage_inputs(run)
     assert labels["oracle"] == [] and kin.method == "algebraic" and labels["contacts"].startswith("vision model")
+    assert labels["kinematics"] == "algebraic on tracker-like poses"
     moved = np.linalg.norm(contacts.point - episode.truth.contact_point, axis=-1)[contacts.active]
     assert 1e-3 < np.median(moved) < 2e-2  # the paper's contact error, a few millimetres
     run.args = parser.parse_args(["--contacts", "oracle", "--kinematics", "oracle"])
     kin, contacts, labels = stage_inputs(run)
     assert labels["oracle"] == ["kinematics", "contacts"]
     assert np.array_equal(contacts.point[contacts.active], episode.truth.contact_point[contacts.active])
-    run.tracking = types.SimpleNamespace(contacts=contacts_from_truth(episode.truth))
+    from benchmark.motion import observed_poses
+
+    run.tracking = types.SimpleNamespace(contacts=contacts_from_truth(episode.truth), box=observed_poses(episode))
     run.args = parser.parse_args([])
-    assert stage_inputs(run)[2]["contacts"] == "vision (tracker)"
+    labels = stage_inputs(run)[2]
+    assert labels["contacts"] == "vision (tracker)" and labels["kinematics"] == "algebraic on tracked poses"
+
+
+def test_with_the_tracker_the_stage_also_scores_its_contacts(lift, tmp_path):
+    import argparse
+
+    from benchmark.contact_error import vision_like_contacts
+    from benchmark.motion import observed_poses
+
+    episode = lift[0]
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    tracked = vision_like_contacts(contacts_from_truth(episode.truth), episode.object_model,
+                                   np.random.default_rng(1), mean_m=0.0, std_m=0.01)
+    run = types.SimpleNamespace(args=parser.parse_args([]), episode=episode, out=tmp_path, summary={}, lines=[],
+                                tracking=types.SimpleNamespace(contacts=tracked, box=observed_poses(episode)))
+    run_stage(run)
+    block = run.summary["forces"]
+    assert block["contacts"] == "vision (tracker)" and block["oracle"] == ["kinematics"]
+    assert block["sensitivity_tracker"]["pairs"] > 0
+    assert block["sensitivity_tracker"]["force_diff_n_rms"] > block["sensitivity"]["force_diff_n_rms"]  # 10 mm vs 6 mm
+    assert "with the tracker's contacts" in run.lines[0]
