@@ -261,7 +261,7 @@ class GripPolicy:
         return f_nom, f_int, grip
 
 
-MAX_FINGER_FORCE_N = 40.0
+MAX_FINGER_FORCE_N = 35.0
 
 
 def _quat_of(R: np.ndarray) -> np.ndarray:

@@ -21,6 +21,7 @@ import numpy as np
 
 from benchmark.scenario import Scenario
 from benchmark.simulate import run
+from benchmark.tasks import TASKS
 from benchmark.world import build_world, set_frame
 
 
@@ -47,7 +48,7 @@ def main(argv=None) -> None:
     p.add_argument("--repeat", type=int, default=3)
     args = p.parse_args(argv)
     sc = Scenario(task=args.task, duration_s=args.duration)
-    run(Scenario(task=args.task, duration_s=0.5))  # warm caches (grasp plan, XML)
+    run(Scenario(task=args.task, duration_s=TASKS[args.task].min_duration_s))  # warm caches (grasp plan, XML)
     best = None
     for _ in range(args.repeat):
         t0, c0 = time.perf_counter(), time.process_time()

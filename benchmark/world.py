@@ -84,11 +84,19 @@ def mass_of(scenario: Scenario) -> dict:
 
 
 def validate(scenario: Scenario) -> None:
-    """Checks that the scenario's task, user, grasp and mass exist (ScenarioError otherwise)."""
+    """Checks that the scenario's task, user, grasp and mass exist and its duration suits the task.
+
+    Raises:
+        ScenarioError: Naming the bad value and the accepted ones.
+    """
     from benchmark.tasks import TASKS
 
     if scenario.task not in TASKS:
         raise ScenarioError(f"unknown task {scenario.task!r}; accepted: {', '.join(TASKS)}")
+    task = TASKS[scenario.task]
+    if scenario.duration_s is not None and scenario.duration_s < task.min_duration_s:
+        raise ScenarioError(f"duration {scenario.duration_s!r} s is too short for task {task.name!r}; "
+                            f"accepted: >= {task.min_duration_s} s")
     user_of(scenario)
     grasp_of(scenario)
     mass_of(scenario)

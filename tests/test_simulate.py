@@ -132,17 +132,36 @@ def test_hand_qpos_follows_the_documented_layout(lift_episode):
 
 def test_frames_are_exact_multiples_of_the_frame_period():
     assert steps_per_frame(30.0) == 34  # 1 / (30 * 34) s = 0.98 ms
-    ep = simulate(Scenario(task="lift", duration_s=0.5, fps=20.0))
-    np.testing.assert_array_equal(ep.truth.t, np.arange(11) / 20.0)
+    ep = simulate(Scenario(task="lift", duration_s=1.0, fps=20.0))
+    np.testing.assert_array_equal(ep.truth.t, np.arange(21) / 20.0)
 
 
 def test_same_seed_same_bits(tmp_path):
     from benchmark.episode import save_episode
 
-    a = simulate(Scenario(task="free", duration_s=1.5, seed=3))
-    b = simulate(Scenario(task="free", duration_s=1.5, seed=3))
+    a = simulate(Scenario(task="free", duration_s=2.0, seed=3))
+    b = simulate(Scenario(task="free", duration_s=2.0, seed=3))
     for name, value in a.truth.as_dict().items():
         assert np.asarray(value).tobytes() == np.asarray(getattr(b.truth, name)).tobytes(), name
     assert save_episode(a, tmp_path / "a").read_bytes() == save_episode(b, tmp_path / "b").read_bytes()
-    c = simulate(Scenario(task="free", duration_s=1.5, seed=4))  # another seed, another random motion
+    c = simulate(Scenario(task="free", duration_s=2.0, seed=4))  # another seed, another random motion
     assert not np.array_equal(a.truth.box_pos, c.truth.box_pos)
+
+
+def test_a_dropped_box_or_a_palm_contact_is_an_error():
+    from benchmark.errors import SimulationError
+    from benchmark.simulate import _check_outcome
+
+    T = 5
+    t = np.arange(T) / 30
+    held = np.array([False, True, True, True, False])
+    planned = np.tile([0, 0, 0.2], (T, 1))
+    a = {"box_pos": planned.copy(), "palm_force": np.zeros((T, 3))}
+    _check_outcome(Scenario(), t, held, a, planned)
+    a["box_pos"][3, 2] = 0.15
+    with pytest.raises(SimulationError, match="dropped the box at t = 0.10 s"):
+        _check_outcome(Scenario(), t, held, a, planned)
+    a["box_pos"][3, 2] = 0.2
+    a["palm_force"][4] = [0, 0, 1.0]
+    with pytest.raises(SimulationError, match="palm touched the box"):
+        _check_outcome(Scenario(), t, held, a, planned)

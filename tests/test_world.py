@@ -61,6 +61,7 @@ def test_set_frame_poses_box_and_hand_for_a_frame_of_the_truth(lift_episode):
     (dict(user=4), "user 4 does not exist; accepted: 0 (u0-average)"),
     (dict(grasp=9), "grasp 9 does not exist"),
     (dict(mass=6), "mass 6 does not exist; accepted: 0 (light), 1 (medium)"),
+    (dict(task="rotate", duration_s=2.0), "duration 2.0 s is too short for task 'rotate'; accepted: >= 2.5 s"),
 ])
 def test_validate_names_bad_value_and_accepted_ones(kw, needle):
     with pytest.raises(ScenarioError, match=needle.replace("(", r"\(").replace(")", r"\)")):

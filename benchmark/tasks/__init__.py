@@ -28,6 +28,8 @@ class Task:
         releases: Whether the hand puts the box down and lets go at the end.
         keyframes: ``keyframes(phases, rng)`` -> list of ``(t, displacement (3,), rotation vector (3,))``
             of the box relative to its start pose, world frame, within [phases.load_end, phases.move_end].
+        min_duration_s: Shortest episode the task accepts, [s]: phases and motions compress with
+            the duration, and below this the hand cannot keep up with its own plan.
     """
 
     name: str
@@ -36,6 +38,7 @@ class Task:
     lifts: bool
     releases: bool
     keyframes: Callable[[Phases, np.random.Generator], list]
+    min_duration_s: float = 2.0
 
     def phases(self, duration_s: float) -> Phases:
         """The prehension phases of an episode of this length."""

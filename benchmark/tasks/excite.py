@@ -15,7 +15,7 @@ import numpy as np
 from benchmark.tasks import Task
 from benchmark.tasks.motion import Phases, timed
 
-AMPLITUDE_M = 0.06
+AMPLITUDE_M = 0.04
 AMPLITUDE_RAD = 0.35
 HALF_PERIOD_S = 0.45
 

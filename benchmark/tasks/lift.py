@@ -20,4 +20,4 @@ def keyframes(phases: Phases, rng: np.random.Generator) -> list:
 
 
 TASK = Task(name="lift", description="lift the box ~15 cm and hold it", default_duration_s=10.0,
-            lifts=True, releases=False, keyframes=keyframes)
+            lifts=True, releases=False, keyframes=keyframes, min_duration_s=1.0)

@@ -26,4 +26,4 @@ def keyframes(phases: Phases, rng: np.random.Generator) -> list:
 
 
 TASK = Task(name="rotate", description="lift, then rotate about each box axis and back", default_duration_s=10.0,
-            lifts=True, releases=False, keyframes=keyframes)
+            lifts=True, releases=False, keyframes=keyframes, min_duration_s=2.5)
