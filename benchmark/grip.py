@@ -261,7 +261,7 @@ class GripPolicy:
         return f_nom, f_int, grip
 
 
-MAX_FINGER_FORCE_N = 35.0
+MAX_FINGER_FORCE_N = 35.0  # commanded fingertip forces are capped here (human range of such grips: < 40 N)
 
 
 def _quat_of(R: np.ndarray) -> np.ndarray:

@@ -16,12 +16,12 @@ from benchmark.tasks import Task
 from benchmark.tasks.motion import Phases, timed
 
 AMPLITUDE_M = 0.04
-AMPLITUDE_RAD = 0.35
-HALF_PERIOD_S = 0.45
+AMPLITUDE_RAD = 0.3
+HALF_PERIOD_S = 0.5
 
 
 def keyframes(axis: int, rotation: bool, phases: Phases, rng: np.random.Generator) -> list:
-    """Lift 14 cm, then as many back-and-forth strokes of ~0.45 s as fit, back to centre, hold."""
+    """Lift 14 cm, then as many back-and-forth strokes of ~0.5 s as fit, back to centre, hold."""
     zero = np.zeros(3)
     up = np.array([0.0, 0.0, 0.14])
     t0, t1 = phases.load_end, phases.move_end
