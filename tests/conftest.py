@@ -119,3 +119,20 @@ def learn_oracle_dataset(tmp_path_factory):
     spec = DatasetSpec(tasks=("lift",), seeds=(0, 1), duration_s=3.0, kinematics="oracle", contacts="oracle",
                        tactile_noise_n=0.0)
     return spec, out, generate(spec, out, workers=1, progress=False)
+
+
+# --- tracking (issue 6): the whole method on the rendered 2.5 s lift, once per session ------------
+
+
+@pytest.fixture(scope="session")
+def tracked_lift(rendered_lift_episode):
+    """``(episode, estimate)``: ``fsv.run_pipeline`` (tracking, kinematics, nominal forces) on
+    ``rendered_lift_episode`` from the benchmark's seeded first-frame initialisation."""
+    from benchmark.tracking import tracker_init
+    from fsv import run_pipeline
+
+    ep = rendered_lift_episode
+    init = tracker_init(ep.truth, ep.scenario, ep.hand_model)
+    est = run_pipeline(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, gravity=ep.truth.gravity,
+                       rng=ep.scenario.rng("tracker"))
+    return ep, est

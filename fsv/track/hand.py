@@ -84,8 +84,8 @@ class HandTrackerConfig:
         particles: Hypotheses of the re-initialisation search.
     """
 
-    iterations: int = 6
-    max_points: int = 1200
+    iterations: int = 5
+    max_points: int = 700
     roi_margin_px: int = 12
     scene_k: float = 1.0
     assign_max_m: float = 0.03

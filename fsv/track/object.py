@@ -56,7 +56,7 @@ class BoxTrackerConfig:
     occluder_k: float = 3.0
     iterations: int = 8
     roi_margin_px: int = 10
-    max_pixels: int = 5000
+    max_pixels: int = 3000
     silhouette_px: float = 0.5
     prior_pos_m: float = 0.01
     prior_rot_rad: float = 0.05
