@@ -40,7 +40,7 @@ def _check_kinetic(sol, contacts, mu, part, signed=False):
     assert signed or np.all(f[sl] >= -1e-9)
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=25, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**32 - 1), K=st.integers(1, 5), mu=st.floats(0.3, 1.2))
 def test_nominal_is_feasible_minimal_and_matches_the_oracle(seed, K, mu):
     rng = np.random.default_rng(seed)
@@ -63,7 +63,7 @@ def test_nominal_is_feasible_minimal_and_matches_the_oracle(seed, K, mu):
         assert np.abs(sol.force[t] - nom).max() <= 1e-4
 
 
-@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=15, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**32 - 1), K=st.integers(2, 5))
 def test_decomposition_has_zero_internal_wrench_and_matches_the_oracle(seed, K):
     rng = np.random.default_rng(seed)
@@ -107,7 +107,7 @@ def test_decomposition_of_consistent_measurements_recovers_them_and_the_nominal_
         assert np.abs(sol.nominal - nominal.force).max() < tol
 
 
-@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=15, derandomize=True, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(seed=st.integers(0, 2**32 - 1), K=st.integers(2, 5))
 def test_reconstruction_follows_the_predictions_and_matches_the_oracle(seed, K):
     rng = np.random.default_rng(seed)

@@ -57,7 +57,7 @@ def test_a_box_at_rest_needs_its_weight_and_no_torque():
         required_wrench(kin, model, gravity=[0, -9.81])
 
 
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50, derandomize=True, deadline=None)
 @given(st.lists(st.floats(-1, 1), min_size=3, max_size=3).filter(lambda v: np.linalg.norm(v) > 1e-3))
 def test_tangent_basis_is_right_handed_and_orthonormal(v):
     n = np.asarray(v) / np.linalg.norm(v)
