@@ -1,6 +1,6 @@
 """Speed of the nominal force program: ours (Clarabel, direct API) against cvxpy with parameters.
 
-    python -m benchmark.perf_forces [--frames N] [--repeats R] [--seed S]
+    python -m benchmark.perf_forces [--frames N] [--repeats R] [--seed S] [--grasp G]
 
 Frames: a simulated lift with the truth's contacts and kinematics (an oracle input: speed does not
 depend on where the contacts come from), restricted to the frames where 4-5 fingers touch, none
@@ -30,14 +30,14 @@ TARGET_MS = 0.15
 TARGET_RATIO = 10.0
 
 
-def _frames(seed: int):
+def _frames(seed: int, grasp: int = 0):
     from benchmark.contact_error import contacts_from_truth
     from benchmark.motion import oracle_kinematics
     from benchmark.scenario import Scenario
     from benchmark.simulate import simulate
     from fsv.forces import table_contacts
 
-    ep = simulate(Scenario(task="lift", seed=seed))
+    ep = simulate(Scenario(task="lift", seed=seed, grasp=grasp))
     tr = ep.truth
     kin, con = oracle_kinematics(tr), contacts_from_truth(tr)
     n = con.active.sum(axis=1)
@@ -80,12 +80,13 @@ def main(argv=None) -> int:
     p.add_argument("--frames", type=int, default=200, help="at most this many frames")
     p.add_argument("--repeats", type=int, default=7, help="timed repetitions of our sequence solve")
     p.add_argument("--seed", type=int, default=0, help="scenario seed of the lift")
+    p.add_argument("--grasp", type=int, default=0, help="grasp of the lift (2: five fingers, see sim_assets/grasps.yaml)")
     args = p.parse_args(argv)
     import cvxpy as cp
 
     from fsv.forces import FrameStatus, nominal_forces, required_wrench, tangent_basis, to_object_frame
 
-    ep, kin, con, idx = _frames(args.seed)
+    ep, kin, con, idx = _frames(args.seed, args.grasp)
     idx = idx[: args.frames]
     k, c = _subset(kin, con, idx)
     model = ep.object_model
