@@ -7,8 +7,8 @@ the episode's length), our stencils (velocity and acceleration) and, as peers, A
 differentiator (``analytic`` weights, same (kappa, mu, L); velocity and acceleration) and pynumdiff's
 ``finitediff``, ``kerneldiff``, ``savgoldiff`` and ``rtsdiff`` (velocity only: that is what they
 return). The full ``differentiate_poses`` call (3 position + 3 rotation channels, SO(3) included)
-is reported per channel too; the target is < 1 ms per channel for a 300-frame episode. Timings on
-a shared machine are noisy: compare the ratios within one run. Velocity RMS errors against the
+is reported per channel too; the target is < 1 ms per channel for a 300-frame episode. Times are
+CPU times (medians of batches); on a shared machine compare the ratios within one run. Velocity RMS errors against the
 truth are printed beside the timings so that speed is not bought with accuracy. Peers are optional
 (``pip install .[peers]``); a missing one is reported and skipped.
 """
@@ -28,14 +28,19 @@ from fsv.kinematics import differentiate_poses
 
 
 def _best_time(fn, repeat: int) -> float:
-    """Median wall time of ``fn()`` over ``repeat`` calls, in seconds."""
+    """Median CPU time of one ``fn()`` call, in seconds, over batches of 10 calls.
+
+    CPU time (``time.process_time``) rather than wall time: on a machine shared with other jobs
+    it does not count the time this process waits for a core.
+    """
     fn()
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+    batches = []
+    for _ in range(max(3, repeat // 10)):
+        t0 = time.process_time()
+        for _ in range(10):
+            fn()
+        batches.append((time.process_time() - t0) / 10)
+    return float(np.median(batches))
 
 
 def _centred(offsets: np.ndarray, coeffs: np.ndarray) -> np.ndarray:

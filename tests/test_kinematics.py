@@ -286,3 +286,15 @@ def test_rejects_short_or_uneven_sequences():
         sampling_period(np.array([0, 0.1, 0.3]))
     with pytest.raises(InputError, match="config"):
         differentiate_poses(_rotating_poses(T=20), "algebraic")
+
+
+def test_relative_log_matches_the_composed_operations():
+    rng = np.random.default_rng(7)
+    q = so3.quat_exp(rng.normal(scale=2.0, size=(50, 3)))
+    q[::3] *= -1  # either sign of a quaternion
+    ref = so3.quat_exp(rng.normal(size=(20, 3)))
+    index = rng.integers(0, 50, size=(20, 6))
+    index[0, 0] = 0
+    ref[0] = q[0]  # identity relative rotation (the small-angle branch)
+    slow = so3.quat_log(so3.quat_mul(so3.quat_conj(ref)[:, None, :], q[index]))
+    np.testing.assert_allclose(np.moveaxis(so3.relative_log(ref, q, index), 0, -1), slow, atol=1e-12)

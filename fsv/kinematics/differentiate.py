@@ -152,8 +152,8 @@ def _reference(quats: np.ndarray, offsets: np.ndarray, coeffs: np.ndarray, lo: i
     if offsets.size == 1:
         return quats[k + offsets[0]]
     q_r = quats[k + offsets[np.argmax(coeffs)]]
-    rel = so3.quat_mul(so3.quat_conj(q_r)[:, None, :], quats[k[:, None] + offsets[None, :]])
-    mean = np.einsum("j,tjd->td", coeffs, so3.quat_log(rel)) / coeffs.sum()
+    phi = so3.relative_log(q_r, quats, k[:, None] + offsets[None, :])  # (3, T, taps)
+    mean = (phi @ coeffs).T / coeffs.sum()
     return so3.quat_mul(q_r, so3.quat_exp(mean))
 
 
@@ -164,14 +164,13 @@ def _rotation_rates(
     T = quats.shape[0]
     offsets = np.unique(np.concatenate([o for o, _ in taps]))
     k = np.arange(lo, hi)
-    rel = so3.quat_mul(so3.quat_conj(q_ref[lo:hi])[:, None, :], quats[k[:, None] + offsets[None, :]])
-    phi = so3.quat_log(rel)  # (n, len(offsets), 3)
+    phi = so3.relative_log(q_ref[lo:hi], quats, k[:, None] + offsets[None, :])  # (3, n, len(offsets))
     out = []
     for o, c in taps:
         coeff = np.zeros(offsets.size)
         coeff[np.searchsorted(offsets, o)] = c
         full = np.zeros((T, 3))
-        full[lo:hi] = np.einsum("j,njd->nd", coeff, phi)
+        full[lo:hi] = (phi @ coeff).T
         out.append(full)
     return out[0], out[1]
 

@@ -180,9 +180,9 @@ class AlgebraicConfig:
             kappa != mu (see the module docstring); no effect for kappa = mu.
     """
 
-    window_frames: int = 13
-    kappa: float = 1.0
-    mu: float = 1.0
+    window_frames: int = 15
+    kappa: float = 0.5
+    mu: float = 0.5
     causal: bool = False
     exact_moments: bool = True
 
@@ -256,7 +256,7 @@ class GaussianConfig:
         causal: Real-time estimates, radius + 1 frames late.
     """
 
-    sigma_frames: float = 2.75
+    sigma_frames: float = 3.0
     truncate: float = 2.0
     causal: bool = False
 
