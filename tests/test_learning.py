@@ -1,0 +1,24 @@
+import numpy as np
+
+from benchmark.contact_error import contacts_from_truth
+from benchmark.learning import score_episode
+from benchmark.motion import oracle_kinematics
+from fsv.learn import default_model
+
+
+def test_shipped_model_was_trained_by_the_documented_command():
+    model = default_model()
+    assert model.finger_names == ("thumb", "index", "middle", "ring", "little")
+    assert model.metadata["command"] == "fsv-bench train --data data/default --out fsv/data/internal_forces.pt"
+    assert model.metadata["episodes"] == 48 and model.metadata["samples"] > 10000
+    assert model.config.hidden_l2 == (6, 7) and model.config.hidden_decomp == (8, 13)
+
+
+def test_learning_block_on_a_short_lift(episode_factory):
+    ep = episode_factory(task="lift", duration_s=3.0)
+    block, sol, pred = score_episode(ep, default_model(), oracle_kinematics(ep.truth), contacts_from_truth(ep.truth))
+    assert block["scored"] > 100 and block["solver_failures"] == 0
+    assert block["residual_rel_max"] <= 1e-6  # the learned forces explain the motion
+    assert 0 < block["rel_err_pct_mean"] < 60
+    held = ep.truth.contact_active.sum(axis=1) >= 2
+    assert np.all(pred[held][ep.truth.contact_active[held]] >= 0)  # internal grip, never a pull
