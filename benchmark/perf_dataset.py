@@ -1,6 +1,6 @@
 """Speed of dataset generation: episodes per minute with 1 and 2 workers, and the scaling.
 
-    python -m benchmark.perf_dataset [--episodes 4] [--duration 5]
+    python -m benchmark.perf_dataset [--episodes 12] [--duration 10]
 
 Generates the same grid of episodes twice into temporary folders: once in this process
 (1 worker) and once with a pool of 2 worker processes (which pays for spawning them and importing
