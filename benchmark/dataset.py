@@ -363,9 +363,22 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
     return write_manifest(out)
 
 
+def _exit_with_parent(parent_pid: int) -> None:
+    """Worker initializer: end the worker if this process (its parent) dies, e.g. on SIGKILL."""
+    import threading
+
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, daemon=True).start()
+
+
 def _run_pool(todo, spec, build, workers, done) -> None:
     ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx)
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_exit_with_parent,
+                               initargs=(os.getpid(),))
     try:
         pending = {pool.submit(_run_one, sc, spec, build) for sc in todo}
         while pending:
