@@ -173,18 +173,14 @@ def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
         w = np.where(z > 0, np.float32(1) / z, np.float32(np.nan))
 
     def slope(axis):
-        d = np.diff(w, axis=axis)
-        a = np.abs(d)
-        np.nan_to_num(a, copy=False, nan=np.inf)
+        nan = np.float32(np.nan)
+        d = np.diff(w, axis=axis, prepend=nan, append=nan)  # d[i] = w[i] - w[i-1], nan at the ends
+        a = np.fmin(np.abs(d), np.float32(np.inf))  # nan -> inf
         n = w.shape[axis]
         fwd, bwd = [slice(None)] * 2, [slice(None)] * 2
-        fwd[axis], bwd[axis] = slice(0, n - 1), slice(1, n)
-        out = np.full(w.shape, np.nan, dtype=np.float32)
-        cost = np.full(w.shape, np.inf, dtype=np.float32)
-        out[tuple(fwd)], cost[tuple(fwd)] = d, a
-        better = a < cost[tuple(bwd)]
-        out[tuple(bwd)][better] = d[better]
-        return out
+        fwd[axis], bwd[axis] = slice(1, n + 1), slice(0, n)
+        fwd, bwd = tuple(fwd), tuple(bwd)
+        return np.where(a[fwd] <= a[bwd], d[fwd], d[bwd])
 
     x = ((np.arange(W) - K[0, 2]) / K[0, 0]).astype(np.float32)[None, :]
     y = ((np.arange(H) - K[1, 2]) / K[1, 1]).astype(np.float32)[:, None]
