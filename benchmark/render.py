@@ -1,9 +1,10 @@
 """Depth rendering: what a DS325-like depth camera sees of the simulated scene.
 
 A pyrender scene mirrors the MuJoCo geoms one to one (the table, the box, every capsule and
-sphere of the hand): each geom's mesh is built once from the MjModel, and per frame only the
-nodes' poses are set from ``data.geom_xpos`` / ``data.geom_xmat``. One off-screen pass per frame
-gives the exact depth along the optical axis and a label image (which geom is seen where).
+sphere of the hand): each geom's mesh is built once from the MjModel in its body's frame, and
+per frame only the bodies' poses (``data.xpos`` / ``data.xmat``) are applied. One off-screen pass
+per frame gives the exact depth along the optical axis and a label image (which geom is seen
+where).
 The sensor model (:mod:`benchmark.sensor`) then turns the exact depth into a measurement.
 
 Camera conventions: `fsv` and :class:`fsv.Calibration` use OpenCV's pinhole camera (x right,
