@@ -137,3 +137,17 @@ def test_cli_parser_offers_the_kinematics_choices():
     assert build_parser().parse_args([]).kinematics == "algebraic"
     with pytest.raises(SystemExit):
         build_parser().parse_args(["--kinematics", "kalman"])
+
+
+def test_pose_error_stats_recover_the_error_model(analytic_truth_factory):
+    from benchmark.pose_error import PoseErrorModel
+    from benchmark.table1 import pose_error_stats
+
+    truth = analytic_truth_factory(duration_s=60.0)
+    model = PoseErrorModel(pos_std_m=0.002, rot_std_rad=np.radians(2.0), corr_time_s=0.1)
+    episodes = [(truth, model.corrupt(truth.t, truth.box_pos, truth.box_rot, np.random.default_rng(s))) for s in (0, 1)]
+    s = pose_error_stats(episodes)
+    assert s["pos_std_mm"] == pytest.approx(2.0, rel=0.1)
+    assert s["rot_std_deg"] == pytest.approx(2.0, rel=0.1)
+    assert s["pos_lag1_corr"] == pytest.approx(np.exp(-1 / 3), abs=0.05)
+    assert s["rot_lag1_corr"] == pytest.approx(np.exp(-1 / 3), abs=0.05)
