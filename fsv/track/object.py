@@ -312,7 +312,7 @@ class BoxTracker:
             step[3:] = np.clip(step[3:], -0.2, 0.2)
             pos = pos + step[:3]
             rot = project_to_so3(exp_so3(step[3:]) @ rot)
-            if np.linalg.norm(step[:3]) < 1e-5 and np.linalg.norm(step[3:]) < 1e-4:
+            if np.linalg.norm(step[:3]) < 5e-5 and np.linalg.norm(step[3:]) < 5e-4:
                 break
         zp, cover, plane = predict_box_depth(self.rays, index, pos, rot, self.half, self.fx, c.silhouette_px)
         r = z_obs - zp
