@@ -93,3 +93,28 @@ def test_bad_init_is_named():
     with pytest.raises(InputError, match="init.joints"):
         run_pipeline(DepthVideo(np.zeros((3, 240, 320), np.float32), 30.0), CALIB, BOX, HAND,
                      TrackInit(np.zeros(3), np.eye(3), np.zeros(3), np.eye(3), np.zeros(3)))
+
+
+def test_a_trained_model_adds_the_learned_forces(lift):
+    from fsv.learn import default_model
+
+    est, video, init = lift[0], lift[4], lift[5]
+    n = 8
+    k = est.kinematics
+    kin = Kinematics(t=k.t[:n], pos=k.pos[:n], rot=k.rot[:n], vel=np.zeros((n, 3)), acc=np.zeros((n, 3)),
+                     omega=np.zeros((n, 3)), alpha=np.zeros((n, 3)), valid=np.ones(n, bool), method="oracle")
+    K = len(HAND.finger_names)
+    active = np.zeros((n, K), bool)
+    active[:, :2] = True  # thumb and index pinch the box's y faces
+    point = np.zeros((n, K, 3))
+    point[:, 0] = [0.0, -SIZE[1] / 2, 0.0]
+    point[:, 1] = [0.0, SIZE[1] / 2, 0.0]
+    normal = np.zeros((n, K, 3))
+    normal[:, 0] = [0.0, 1.0, 0.0]
+    normal[:, 1] = [0.0, -1.0, 0.0]
+    contacts = Contacts(HAND.finger_names, active, np.zeros((n, K), bool), point, normal, np.zeros((n, K, 3)))
+    out = run_pipeline(DepthVideo(video.depth_m[:n], video.fps), CALIB, BOX, HAND, init, kinematics=kin,
+                       contacts=contacts, internal_model=default_model())
+    assert out.forces is not None and out.internal_pred.shape == (n, K)
+    assert np.all(out.internal_pred[:, 2:] == 0) and np.all(out.internal_pred[:, :2] >= 0)
+    assert out.timing_s["learn"] > 0
