@@ -136,12 +136,25 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
 
     T = depth.num_frames
     idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
-    fig, axes = plt.subplots(1, len(idx), figsize=(3.2 * len(idx), 2.8), squeeze=False)
+    fig, axes = plt.subplots(1, len(idx), figsize=(3.2 * len(idx), 3.0), squeeze=False)
     half = object_model.half_extents
     signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    # One crop for the whole strip: the tracked box and hand over the shown frames, plus a margin.
+    pts = []
+    for i in idx:
+        pts.append(_project(calib, tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T))
+        ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, tracking.hand_qpos[i]))
+        pts.append(_project(calib, ends.reshape(-1, 3)))
+    uv = np.concatenate(pts)
+    uv = uv[np.all(np.isfinite(uv), axis=1)]
+    lo = np.maximum(np.floor(uv.min(0)) - 25, 0) if uv.size else np.zeros(2)
+    hi = np.minimum(np.ceil(uv.max(0)) + 25, [calib.width - 1, calib.height - 1]) if uv.size else np.array(
+        [calib.width - 1, calib.height - 1])
     for ax, i in zip(axes[0], idx):
         d = np.where(depth.depth_m[i] > 0, depth.depth_m[i], np.nan)
-        ax.imshow(d, cmap="Greys_r", vmin=np.nanpercentile(d, 1), vmax=np.nanpercentile(d, 99))
+        crop = d[int(lo[1]) : int(hi[1]) + 1, int(lo[0]) : int(hi[0]) + 1]
+        vmin, vmax = (np.nanpercentile(crop, 1), np.nanpercentile(crop, 99)) if np.isfinite(crop).any() else (0, 1)
+        ax.imshow(d, cmap="Greys_r", vmin=vmin, vmax=vmax)
         corners = tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T
         uv = _project(calib, corners)
         for a, b in _BOX_EDGES:
@@ -161,8 +174,8 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
             uv = _project(calib, pts)
             ax.scatter(uv[:, 0], uv[:, 1], marker="x", s=30, c="cyan", zorder=4)
         ax.set_title(f"t = {depth.t[i]:.2f} s", fontsize=8)
-        ax.set_xlim(0, calib.width - 1)
-        ax.set_ylim(calib.height - 1, 0)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(hi[1], lo[1])
         ax.axis("off")
     fig.tight_layout()
     buf = io.BytesIO()
