@@ -100,7 +100,8 @@ class SensorModel:
         if self.edge_jump_m is not None:
             ok &= ~_edges(z, self.edge_jump_m)
         if self.grazing_deg is not None:
-            ok &= _incidence_cos(z, K) >= np.cos(np.deg2rad(self.grazing_deg))
+            z2, den = _incidence_terms(z, K)  # cos^2 = z2 / den; nan den: no neighbour, not grazing
+            ok &= ~(z2 < np.float32(np.cos(np.deg2rad(self.grazing_deg)) ** 2) * den)
         return ok
 
     def measure(self, depth_m: np.ndarray, K: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -160,12 +161,25 @@ def _edges(z: np.ndarray, jump_m: float) -> np.ndarray:
 def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
     """|cos| of the angle between viewing ray and surface normal per pixel, shape (H, W).
 
+    1 where a pixel has no neighbour that shows something (not grazing); see
+    :func:`_incidence_terms`.
+    """
+    z2, den = _incidence_terms(z, K)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        c = np.sqrt(z2 / den)
+    c[~np.isfinite(c)] = 1.0
+    return c
+
+
+def _incidence_terms(z: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(z^2, |m|^2 |r|^2)`` per pixel, whose ratio is the squared incidence cosine, (H, W) each.
+
     With P(u, v) = z r, r = ((u - cx) / fx, (v - cy) / fy, 1), the normal dP/du x dP/dv is
     parallel to m = (-fx z_u, -fy z_v, fx x z_u + fy y z_v + z) with m . r = z, so
     cos = z / (|m| |r|). The depth derivatives come from one-sided differences of the inverse
     depth w = 1/z (affine in (u, v) on a plane, so exact there): z_u = -z^2 w_u, taken towards
-    the neighbour of closer depth (so they do not straddle an edge). A pixel without a neighbour
-    that shows something gets cos = 1 (not grazing).
+    the neighbour of closer depth (so they do not straddle an edge). The second term is nan
+    where a pixel shows nothing or has no neighbour in a direction that shows something.
     """
     H, W = z.shape
     z = np.asarray(z, dtype=np.float32)
@@ -184,12 +198,10 @@ def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
 
     x = ((np.arange(W) - K[0, 2]) / K[0, 0]).astype(np.float32)[None, :]
     y = ((np.arange(H) - K[1, 2]) / K[1, 1]).astype(np.float32)[:, None]
+    z2 = z * z
     mx = slope(1)
-    mx *= z * z * np.float32(K[0, 0])  # -fx z_u = fx z^2 w_u
+    mx *= z2 * np.float32(K[0, 0])  # -fx z_u = fx z^2 w_u
     my = slope(0)
-    my *= z * z * np.float32(K[1, 1])
+    my *= z2 * np.float32(K[1, 1])
     mz = z - x * mx - y * my
-    with np.errstate(invalid="ignore"):
-        c = z / np.sqrt((mx * mx + my * my + mz * mz) * (x * x + y * y + 1))
-    c[~np.isfinite(c)] = 1.0
-    return c
+    return z2, (mx * mx + my * my + mz * mz) * (x * x + y * y + 1)
