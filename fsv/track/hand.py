@@ -1,19 +1,29 @@
 """The articulated hand fitted to the depth the box and the table leave unexplained.
 
 Articulated ICP with Levenberg-Marquardt, as in model-based hand trackers: the hand is the known
-capsule model (`fsv.HandModel`, palm pose plus n >= 20 hinge angles); every observed point in front
-of the predicted box-and-table depth is matched to its nearest capsule surface, and the residual is
-the signed point-to-surface distance (robust Cauchy weights). The Jacobian is analytic: a surface
-point x on segment s moves by dt + dw x (x - palm) + sum_j dq_j a_j x (x - pivot_j) over the hinges j
-of s and its ancestors. Extra residual rows keep the fit physical and coherent in time:
+capsule model (`fsv.HandModel`, palm pose plus n >= 20 hinge angles). The data are the pixels near
+the predicted hand that lie ``scene_k`` noise sigmas in front of the predicted box-and-table depth:
+
+* where the camera ray of such a pixel hits a capsule, the residual is observed minus predicted
+  depth along the ray (ray-capsule casting: only the visible front surface explains a pixel, so
+  depth noise cannot pull points onto the far side of a thin finger);
+* elsewhere it is the signed distance of the observed point to its nearest capsule surface.
+
+Both use robust Cauchy weights and analytic Jacobians: a surface point x on segment s moves by
+dt + dw x (x - palm) + sum_j dq_j a_j x (x - pivot_j) over the hinges j of s and its ancestors.
+Extra residual rows keep the fit physical and coherent in time:
 
 * temporal smoothness: palm and joints stay near a constant-velocity prediction (a finger that
   cannot be seen keeps its last pose: the paper's occlusion prior at the level of the hand);
 * no hand-box interpenetration: capsule samples are pushed out of the tracked box;
+* grasp closure: a finger hidden from the camera whose pad is near the box flexes until the pad
+  meets the surface (fingers wrap the object they hold);
 * joint limits: every step is projected onto the model's joint ranges.
 
-When few observed points agree with the fit, a small particle search over the palm's pose
-re-initialises it (the paper's tracker is a particle swarm over the whole configuration).
+A step is taken only if it lowers the robust cost (Levenberg-Marquardt). When the hand moves, a
+second start from the last pose competes with the constant-velocity prediction, and when few
+observed points agree with the fit a small particle search over the palm's pose re-initialises it
+(the paper's tracker is a particle swarm over the whole configuration).
 """
 
 from __future__ import annotations

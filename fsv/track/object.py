@@ -2,17 +2,19 @@
 
 For a pose hypothesis the tracker predicts the depth every pixel near the box should see: the
 box's visible faces (exact ray-plane depths, with a sub-pixel soft silhouette) in front of the
-known table plane z = 0. The residual of a pixel is observed minus predicted depth, and the pose
-minimises a robust sum of squared residuals by Gauss-Newton with the analytic Jacobian:
+known table plane z = 0. The residual r of a pixel is observed minus predicted depth, and the pose
+minimises the robust (Cauchy) cost sum 0.5 k^2 log(1 + (r / k)^2), k = ``robust_k`` sigma, by
+iteratively reweighted Gauss-Newton with the analytic Jacobian of the predicted depth:
 
-* ``|r| <= k sigma``: the pixel sees the predicted surface (quadratic cost);
-* ``r > k sigma``: the pixel sees *behind* the predicted surface: free space the box cannot
-  occupy (Huber: linear cost, so silhouettes push the box where it is);
-* ``r < -occluder sigma``: something (the hand) occludes the prediction: the pixel is ignored.
+* small residuals: the pixel sees the predicted surface;
+* ``r > 0`` and large: the pixel sees *behind* the predicted surface, free space the box cannot
+  occupy; through the soft silhouette these pixels push the box towards where it is;
+* ``r < -occluder_k sigma`` and in front of the nearest face's extended plane too: something (the
+  hand) occludes the box and the pixel is left out; so are the pixels the predicted hand covers.
 
 Each frame starts from a constant-velocity prediction from the previous two frames, which also
-acts as a weak prior. When few pixels agree with the result (the fit is lost), a small particle
-search around the prediction re-initialises it.
+acts as a weak prior. When few pixels agree with the result (the fit is lost), and in the first
+frame, a small particle search around the prediction re-initialises it.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ class BoxTrackerConfig:
 
     Attributes:
         sigma_m: Depth noise standard deviation in [m]; None estimates it from the first frame.
-        huber_k: Residuals beyond ``huber_k * sigma`` cost linearly.
+        robust_k: Scale of the Cauchy weights, in noise sigmas.
         occluder_k: Residuals below ``-occluder_k * sigma`` are occlusions and are ignored.
         iterations: Gauss-Newton iterations per frame (at most).
         roi_margin_px: Pixels added around the predicted box's bounding rectangle.
@@ -52,7 +54,7 @@ class BoxTrackerConfig:
     """
 
     sigma_m: float | None = None
-    huber_k: float = 1.5
+    robust_k: float = 1.5
     occluder_k: float = 3.0
     iterations: int = 8
     roi_margin_px: int = 10
@@ -68,7 +70,7 @@ class BoxTrackerConfig:
     def __post_init__(self):
         if self.sigma_m is not None and not (np.isfinite(self.sigma_m) and self.sigma_m > 0):
             raise InputError(f"sigma_m must be None or > 0 metres, got {self.sigma_m!r}")
-        for name in ("huber_k", "occluder_k", "silhouette_px", "prior_pos_m", "prior_rot_rad",
+        for name in ("robust_k", "occluder_k", "silhouette_px", "prior_pos_m", "prior_rot_rad",
                      "search_pos_m", "search_rot_rad"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
@@ -270,7 +272,7 @@ class BoxTracker:
     # -- fitting ------------------------------------------------------------------------------
     def _weights(self, r: np.ndarray, occluded: np.ndarray, valid: np.ndarray, sigma: float) -> np.ndarray:
         c = self.config
-        w = 1.0 / (1.0 + (r / (c.huber_k * sigma)) ** 2)
+        w = 1.0 / (1.0 + (r / (c.robust_k * sigma)) ** 2)
         return np.where(valid & ~occluded, w, 0.0)
 
     def _occluded(self, z_obs: np.ndarray, zp: np.ndarray, plane: np.ndarray, sigma: float) -> np.ndarray:
@@ -282,7 +284,7 @@ class BoxTracker:
         zp, _, plane = predict_box_depth(self.rays, index, pos, rot, self.half, self.fx, self.config.silhouette_px)
         r = z_obs - zp
         valid = z_obs > 0
-        k = self.config.huber_k * sigma
+        k = self.config.robust_k * sigma
         rho = 0.5 * k**2 * np.log1p((r / k) ** 2)
         occluded = self._occluded(z_obs, zp, plane, sigma)
         rho = np.where(occluded, 0.5 * k**2 * np.log1p((self.config.occluder_k * sigma / k) ** 2), rho)
@@ -357,7 +359,8 @@ class BoxTracker:
         return BoxFit(pos=pos, rot=rot, inlier_fraction=frac, sigma_m=sigma, reinitialised=reinit)
 
     def _search(self, z_obs, index, pos_p, rot_p, sigma, prior, best, first):
-        """Particle search around the prediction; keeps the fit with the most agreeing pixels."""
+        """Particle search around the fit; the four cheapest hypotheses are refined and the one with
+        the lowest robust cost wins."""
         c = self.config
         hyps = [(pos_p, rot_p), (best[0], best[1])]
         for _ in range(c.particles):
