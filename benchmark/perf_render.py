@@ -65,9 +65,10 @@ def scene_frames(num: int):
     """
     from benchmark.scenario import Scenario
     from benchmark.simulate import simulate
+    from benchmark.tasks import TASKS
     from benchmark.world import build_world, set_frame
 
-    sc = Scenario(duration_s=(num - 1) / Scenario().fps)
+    sc = Scenario(duration_s=max((num - 1) / Scenario().fps, TASKS[Scenario().task].min_duration_s))
     truth = simulate(sc).truth
     world = build_world(sc)
 

@@ -81,8 +81,6 @@ def write_preview(
     Returns:
         Paths of the files written.
     """
-    from PIL import Image
-
     if not (fps > 0 and gif_fps > 0):
         raise BenchmarkError(f"frame rates must be > 0, got fps={fps}, gif_fps={gif_fps}")
     out_dir = pathlib.Path(out_dir)
