@@ -148,7 +148,12 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser, with every stage's options."""
-    p = _Parser(prog="fsv-bench", description="Simulate a hand-box manipulation and score force sensing from vision.")
+    p = _Parser(
+        prog="fsv-bench",
+        description="Simulate a hand-box manipulation and score force sensing from vision.",
+        epilog="sub-commands: " + ", ".join(f"'fsv-bench {name} --help'" for name in SUBCOMMANDS)
+        + " (training data, internal-force networks, the paper's Table 2)",
+    )
     p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
     p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres")
     p.add_argument("--user", type=int, default=0, help="index into sim_assets/users.yaml")
