@@ -46,7 +46,6 @@ import glob
 import json
 import os
 import sys
-import tempfile
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import asdict, dataclass, fields
@@ -57,6 +56,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from benchmark.atomic import atomic_path, write_text
 from benchmark.errors import BenchmarkError, DatasetError
 from benchmark.scenario import Scenario
 from fsv import Contacts, Kinematics
@@ -274,29 +274,8 @@ def _run_one(scenario: Scenario, spec: DatasetSpec, build) -> pa.Table:
 
 
 def _atomic_write_table(table: pa.Table, path: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".tmp-", suffix=".parquet")
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         pq.write_table(table, tmp)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def _atomic_write_text(text: str, path: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".tmp-", suffix=".json")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def _prepare(spec: DatasetSpec, out: str) -> str:
@@ -315,7 +294,7 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
                 f"use a new folder or the same arguments ({header['spec']})"
             )
     else:
-        _atomic_write_text(json.dumps(header, indent=1), path)
+        write_text(path, json.dumps(header, indent=1))
     return episodes
 
 

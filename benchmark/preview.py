@@ -6,12 +6,11 @@ far = red); pixels without a measurement are black.
 
 from __future__ import annotations
 
-import os
 import pathlib
-import tempfile
 
 import numpy as np
 
+from benchmark.atomic import atomic_path
 from benchmark.errors import BenchmarkError
 
 
@@ -124,15 +123,8 @@ def _palette(rgb: np.ndarray):
 
 
 def _atomic(path: pathlib.Path, write) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         write(tmp)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
 
 
 def _stamp(img: np.ndarray, text: str) -> np.ndarray:

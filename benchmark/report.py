@@ -8,12 +8,11 @@ blocks that were really computed are written.
 from __future__ import annotations
 
 import json
-import os
 import pathlib
-import tempfile
 
 import numpy as np
 
+from benchmark.atomic import write_text
 from benchmark.episode import Episode
 
 
@@ -88,16 +87,5 @@ def format_world(block: dict) -> str:
 
 def write_json(path, data: dict) -> pathlib.Path:
     """Writes JSON atomically (temp file in the same directory, then os.replace)."""
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(data, f, indent=2, sort_keys=False)
-            f.write("\n")
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        pathlib.Path(tmp).unlink(missing_ok=True)
-        raise
+    path = write_text(path, json.dumps(data, indent=2, sort_keys=False) + "\n")
     return path

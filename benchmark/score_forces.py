@@ -21,12 +21,11 @@ Metric definitions (DESIGN.md):
 
 from __future__ import annotations
 
-import os
 import pathlib
-import tempfile
 
 import numpy as np
 
+from benchmark.atomic import save_figure
 from benchmark.truth import Truth
 from fsv import Contacts, Kinematics, ObjectModel
 from fsv.forces import ForceSettings, ForceSolution, FrameStatus, nominal_forces, to_world_frame
@@ -166,18 +165,10 @@ def plot_fig5(solution: ForceSolution, truth: Truth, rot: np.ndarray, path, titl
     if title:
         fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".png")
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
+        return save_figure(fig, path)
     finally:
         plt.close(fig)
-        if os.path.exists(tmp):
-            os.remove(tmp)
-    return path
 
 
 # --- the ``forces`` stage of fsv-bench -----------------------------------------------------------

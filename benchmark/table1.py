@@ -18,12 +18,12 @@ from __future__ import annotations
 import argparse
 import io
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from benchmark.atomic import write_bytes
 from benchmark.errors import ScenarioError
 from benchmark.motion import CALIBRATION_SEEDS, CHOICES, DECLARED, TUNING, observed_poses
 from benchmark.truth import Truth
@@ -299,21 +299,8 @@ def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: st
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
-    _write_atomic(path, buf.getvalue())
+    write_bytes(path, buf.getvalue())
     return path
-
-
-def _write_atomic(path: Path, data: bytes) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | os.PathLike, panels: list | None = None) -> dict:
@@ -324,8 +311,8 @@ def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"markdown": out / "table1.md", "csv": out / "table1.csv", "plot": out / "fig4_kinematics.png"}
-    _write_atomic(paths["markdown"], (table.markdown() + "\n").encode())
-    _write_atomic(paths["csv"], table.csv().encode())
+    write_bytes(paths["markdown"], (table.markdown() + "\n").encode())
+    write_bytes(paths["csv"], table.csv().encode())
     plot_fig4(truth, kinematics, paths["plot"], title=f"Vision kinematics vs AHRS ({table.poses})", panels=panels)
     return paths
 

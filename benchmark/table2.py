@@ -33,13 +33,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import tempfile
 import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
 
+from benchmark.atomic import save_figure, write_text
 from benchmark.dataset import finger_names_of, frames_of, load_dataset, training_set
 from benchmark.errors import DatasetError
 from fsv import ObjectModel
@@ -246,44 +246,18 @@ def plot_fig6(result: dict, path: str) -> None:
     np.atleast_1d(axes)[-1].set_xlabel("t [s]")
     fig.suptitle(f"Normal force per finger, episode {ep} (other user, +10 % mass, other grasp)", fontsize=9)
     fig.tight_layout()
-    _atomic_savefig(fig, path)
+    save_figure(fig, path)
     plt.close(fig)
-
-
-def _atomic_savefig(fig, path: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".tmp-", suffix=".png")
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=110)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-
-
-def _atomic_text(text: str, path: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(path)), prefix=".tmp-")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def write(result: dict, out) -> None:
     """Writes table2.md, table2.csv, table2.json and fig6.png to folder ``out``."""
     out = os.fspath(out)
     os.makedirs(out, exist_ok=True)
-    _atomic_text(markdown(result), os.path.join(out, "table2.md"))
-    _atomic_text(pd.DataFrame(result["rows"]).to_csv(index=False), os.path.join(out, "table2.csv"))
+    write_text(os.path.join(out, "table2.md"), markdown(result))
+    write_text(os.path.join(out, "table2.csv"), pd.DataFrame(result["rows"]).to_csv(index=False))
     slim = {k: v for k, v in result.items() if k != "fig6"}
-    _atomic_text(json.dumps(slim, indent=1), os.path.join(out, "table2.json"))
+    write_text(os.path.join(out, "table2.json"), json.dumps(slim, indent=1))
     plot_fig6(result, os.path.join(out, "fig6.png"))
 
 

@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import io
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from benchmark.atomic import write_bytes
 from benchmark.scenario import Scenario
 from benchmark.truth import Truth
 from fsv import Calibration, DepthVideo, HandModel, ObjectModel
@@ -181,17 +181,7 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(buf.getvalue())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    path = write_bytes(path, buf.getvalue())
     return path
 
 
