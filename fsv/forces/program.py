@@ -256,14 +256,15 @@ class Program:
         for k, js in self._q_fit:
             q[js] = -2.0 * target[k]
             const += target[k] ** 2
+        # Clarabel's update reads Python lists several times faster than NumPy arrays (same values).
         if self._solver is None:
             A = sp.csc_matrix((data.copy(), self._A_indices, self._A_indptr), shape=(self.m, self.n))
             self._solver = clarabel.DefaultSolver(self._P, q, A, b, self.cones, self._settings)
         elif self._q_fit:
-            self._solver.update(A=data, b=b, q=q)
+            self._solver.update(A=data.tolist(), b=b.tolist(), q=q.tolist())
         else:
-            self._solver.update(A=data, b=b)
+            self._solver.update(A=data.tolist(), b=b.tolist())
         sol = self._solver.solve()
-        x = np.asarray(sol.x)
-        forces = self._S @ (x[: self._num_w, None] * cols[:, :3])
+        x = np.array(sol.x[: self._num_w])
+        forces = self._S @ (x[:, None] * cols[:, :3])
         return forces, sol.status, sol.obj_val + const, sol.iterations

@@ -247,10 +247,9 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     fitted = use & np.isfinite(target) & (kind != "nominal")
     target = np.where(fitted, target, 0.0)
 
-    nominal = np.zeros((T, K, 3))
-    internal = np.zeros((T, K, 3))
-    corner = np.zeros((T, 8, 3))
-    corner_internal = np.zeros((T, 8, 3))
+    # Per frame the rows of Program.solve: nominal fingers (K), internal fingers (K), nominal table
+    # corners (8), internal corners (8); one row block per frame keeps the loop to a single copy.
+    out = np.zeros((T, 2 * K + 16, 3))
     status = np.full(T, int(FrameStatus.OPTIMAL), np.int8)
     objective = np.zeros(T)
     iterations = np.zeros(T, np.int64)
@@ -261,7 +260,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     for t, is_valid in enumerate(valid.tolist()):
         if not is_valid:
             status[t] = FrameStatus.NO_KINEMATICS
-            nominal[t] = internal[t] = corner[t] = corner_internal[t] = objective[t] = np.nan
+            out[t] = objective[t] = np.nan
             continue
         if not touching[t]:
             status[t] = FrameStatus.NO_CONTACTS
@@ -279,9 +278,10 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
             status[t] = FrameStatus.LEAST_VIOLATION if code in OK else FrameStatus.FAILED
             if code not in OK:
                 forces, objective[t] = np.full((2 * K + 16, 3), np.nan), np.nan
-        nominal[t], internal[t] = forces[:K], forces[K : 2 * K]
-        corner[t], corner_internal[t] = forces[2 * K : 2 * K + 8], forces[2 * K + 8 :]
+        out[t] = forces
         seconds[t] = time.perf_counter() - t0
+    nominal, internal = out[:, :K], out[:, K : 2 * K]
+    corner, corner_internal = out[:, 2 * K : 2 * K + 8], out[:, 2 * K + 8 :]
     env = np.concatenate([corner.sum(axis=1), np.cross(table.point, corner).sum(axis=1)], axis=1)
     env_internal = np.concatenate(
         [corner_internal.sum(axis=1), np.cross(table.point, corner_internal).sum(axis=1)], axis=1
