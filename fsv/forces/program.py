@@ -207,8 +207,6 @@ class Program:
                 S[2 * K + part * 8 + layout.corners[c - nf], j] = 1.0
         self._S = S
         self._num_w = num_w
-        self._data = self._A_data0.copy()
-        self._b = np.zeros(m)
         self._q = np.zeros(n)
         self._settings = clarabel.DefaultSettings()
         self._settings.verbose = False
@@ -246,25 +244,48 @@ class Program:
             forces (8) and the internal ones (8), zero where absent; Clarabel's status; the cost
             with its constant term [N^2]; the number of interior-point iterations.
         """
-        cols = bank.reshape(-1, 6)[self._gather]  # (num_w, 6)
-        data = self._data
-        data[self._wpos] = cols.ravel()
-        b = self._b
-        b[:6] = wrench
-        q = self._q
-        const = 0.0
+        return self.run(self.assemble(bank[None], wrench[None], target[None])[0])
+
+    def assemble(self, bank: np.ndarray, wrench: np.ndarray, target: np.ndarray) -> list:
+        """The solver data of F frames at once (one NumPy pass for all of them).
+
+        Args:
+            bank: Direction columns per frame, shape (F, K + 8, 4, 6) (see :meth:`solve`).
+            wrench: Required wrench per frame, object frame, shape (F, 6).
+            target: Target normal force per frame and finger, shape (F, K) (see :meth:`solve`).
+
+        Returns:
+            Per frame the input of :meth:`run`: the values of A (CSC order), b and q (None when
+            the program has no target) as Python lists, which Clarabel's update reads several
+            times faster than arrays; the cost's constant term [N^2]; and the directions of the
+            wrench columns, shape (num_w, 3).
+        """
+        F = bank.shape[0]
+        cols = bank.reshape(F, -1, 6)[:, self._gather]  # (F, num_w, 6)
+        data = np.repeat(self._A_data0[None], F, axis=0)
+        data[:, self._wpos] = cols.reshape(F, -1)
+        b = np.zeros((F, self.m))
+        b[:, :6] = wrench
+        q = np.zeros((F, self.n))
+        const = np.zeros(F)
         for k, js in self._q_fit:
-            q[js] = -2.0 * target[k]
-            const += target[k] ** 2
-        # Clarabel's update reads Python lists several times faster than NumPy arrays (same values).
+            q[:, js] = -2.0 * target[:, k, None]
+            const += target[:, k] ** 2
+        qs = q.tolist() if self._q_fit else [None] * F
+        return list(zip(data.tolist(), b.tolist(), qs, const.tolist(), cols[:, :, :3]))
+
+    def run(self, frame: tuple) -> tuple:
+        """Solves the program for one frame assembled by :meth:`assemble`; returns as :meth:`solve`."""
+        data, b, q, const, dirs = frame
         if self._solver is None:
-            A = sp.csc_matrix((data.copy(), self._A_indices, self._A_indptr), shape=(self.m, self.n))
-            self._solver = clarabel.DefaultSolver(self._P, q, A, b, self.cones, self._settings)
-        elif self._q_fit:
-            self._solver.update(A=data.tolist(), b=b.tolist(), q=q.tolist())
+            A = sp.csc_matrix((np.array(data), self._A_indices, self._A_indptr), shape=(self.m, self.n))
+            q0 = self._q if q is None else np.array(q)
+            self._solver = clarabel.DefaultSolver(self._P, q0, A, np.array(b), self.cones, self._settings)
+        elif q is None:
+            self._solver.update(A=data, b=b)
         else:
-            self._solver.update(A=data.tolist(), b=b.tolist())
+            self._solver.update(A=data, b=b, q=q)
         sol = self._solver.solve()
         x = np.array(sol.x[: self._num_w])
-        forces = self._S @ (x[:, None] * cols[:, :3])
+        forces = self._S @ (x[:, None] * dirs)
         return forces, sol.status, sol.obj_val + const, sol.iterations

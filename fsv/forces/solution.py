@@ -67,7 +67,9 @@ class ForceSolution:
             exactly; plus the table and regularisation terms), shape (T,).
         iterations: Interior-point iterations of the last solve, shape (T,).
         solve_time_s: Wall-clock time spent on the frame's program(s): assembly, solver update,
-            solve and unpacking, shape (T,), [s]; 0 for frames without a program.
+            solve and unpacking, shape (T,), [s]; 0 for frames without a program. The frames of
+            one layout are assembled together (with their program's construction) and share that
+            time equally.
     """
 
     kind: str
