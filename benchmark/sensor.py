@@ -23,6 +23,7 @@ the same scenario gives bit-identical frames.
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -96,12 +97,25 @@ class SensorModel:
             Boolean mask, shape (H, W).
         """
         z = np.asarray(depth_m, dtype=np.float32)
-        ok = (z > 0) & (z >= self.min_range_m) & (z <= self.max_range_m)
+        if z.ndim != 2:
+            raise BenchmarkError(f"measurable takes one depth image of shape (H, W), got shape {z.shape}")
+        return self._measurable(z, K, _workspace(z.shape)).copy()
+
+    def _measurable(self, z: np.ndarray, K: np.ndarray, ws: "_Workspace") -> np.ndarray:
+        """:meth:`measurable` of a float32 (H, W) image into the workspace's ``ok`` mask."""
+        ok = np.greater(z, 0, out=ws.ok)
+        if self.min_range_m > 0:
+            ok &= np.greater_equal(z, np.float32(self.min_range_m), out=ws.b1)
+        if np.isfinite(self.max_range_m):
+            ok &= np.less_equal(z, np.float32(self.max_range_m), out=ws.b1)
         if self.edge_jump_m is not None:
-            ok &= ~_edges(z, self.edge_jump_m)
+            ok &= np.logical_not(_edges(z, self.edge_jump_m, ws), out=ws.b1)
         if self.grazing_deg is not None:
-            z2, den = _incidence_terms(z, K)  # cos^2 = z2 / den; nan den: no neighbour, not grazing
-            ok &= ~(z2 < np.float32(np.cos(np.deg2rad(self.grazing_deg)) ** 2) * den)
+            cos2 = np.cos(np.deg2rad(self.grazing_deg)) ** 2
+            w2, den, near = _incidence_terms(z, K, ws, scale=cos2)  # cos^2 = w2 / den
+            grazing = np.less(w2, den, out=ws.b1)
+            grazing &= near  # no neighbour that shows something: not grazing
+            ok &= np.logical_not(grazing, out=grazing)
         return ok
 
     def measure(self, depth_m: np.ndarray, K: np.ndarray, rng: np.random.Generator) -> np.ndarray:
@@ -119,16 +133,28 @@ class SensorModel:
         z = np.asarray(depth_m, dtype=np.float32)
         if z.ndim != 2:
             raise BenchmarkError(f"measure takes one depth image of shape (H, W), got shape {z.shape}")
-        ok = self.measurable(z, K)
-        out = rng.standard_normal(z.shape, dtype=np.float32)
+        ws = _workspace(z.shape)
+        ok = self._measurable(z, K, ws)
+        out = np.empty(z.shape, dtype=np.float32)
+        rng.standard_normal(dtype=np.float32, out=out)
         if self.dropout > 0:
-            ok &= rng.random(z.shape, dtype=np.float32) >= self.dropout
-        out *= self.sigma(z).astype(np.float32) if self.noise_quad_per_m > 0 else np.float32(self.noise_m)
+            u = rng.random(dtype=np.float32, out=ws.t1)
+            ok &= np.greater_equal(u, np.float32(self.dropout), out=ws.b1)
+        if self.noise_quad_per_m > 0:
+            sigma = np.multiply(z, z, out=ws.t1)
+            sigma *= np.float32(self.noise_quad_per_m)
+            sigma += np.float32(self.noise_m)
+            out *= sigma
+        else:
+            out *= np.float32(self.noise_m)
         out += z
         if self.quantum_m is not None:
-            out = dequantise(np.rint(out / np.float32(self.quantum_m)), self.quantum_m)
-        ok &= out > 0
-        out[~ok] = 0.0
+            out /= np.float32(self.quantum_m)
+            np.rint(out, out=out)
+            np.multiply(out, self.quantum_m, out=ws.f64, dtype=np.float64)  # as dequantise(out)
+            out[...] = ws.f64
+        ok &= np.greater(out, 0, out=ws.b1)
+        out *= ok  # out > 0 where ok holds: no negative zeros
         return out
 
 
@@ -142,66 +168,142 @@ def dequantise(counts: np.ndarray, quantum_m: float) -> np.ndarray:
     return (np.asarray(counts, dtype=np.float64) * quantum_m).astype(np.float32)
 
 
-def _edges(z: np.ndarray, jump_m: float) -> np.ndarray:
-    """Pixels whose depth differs from a 4-neighbour's by more than jump_m (nothing = infinitely far)."""
-    zz = np.where(z > 0, z, np.inf)
-    edge = np.zeros(z.shape, dtype=bool)
-    with np.errstate(invalid="ignore"):
-        dx = ~(np.abs(np.diff(zz, axis=1)) <= jump_m)  # inf - inf is nan: both empty is not an edge
-        dy = ~(np.abs(np.diff(zz, axis=0)) <= jump_m)
-    dx &= np.isfinite(zz[:, 1:]) | np.isfinite(zz[:, :-1])
-    dy &= np.isfinite(zz[1:, :]) | np.isfinite(zz[:-1, :])
-    edge[:, 1:] |= dx
-    edge[:, :-1] |= dx
-    edge[1:, :] |= dy
-    edge[:-1, :] |= dy
-    return edge & (z > 0)
+class _Workspace:
+    """Scratch arrays for one image shape, reused across frames (fresh large arrays per frame
+    cost more in page faults than the arithmetic on them)."""
+
+    def __init__(self, shape: tuple[int, int]):
+        H, W = shape
+        f32 = np.float32
+        self.ok, self.b1, self.b2, self.b3, self.near = (np.empty((H, W), dtype=bool) for _ in range(5))
+        self.t1, self.t2, self.t3, self.t4 = (np.empty((H, W), dtype=f32) for _ in range(4))
+        self.f64 = np.empty((H, W), dtype=np.float64)
+        self.K = None  # intrinsics of the pixel grids below
+        self.u, self.v, self.r2 = (np.empty((H, W), dtype=f32) for _ in range(3))
+        self.pad_u = np.full((H, W + 2), _FAR_W, dtype=f32)  # inverse depth, nothing outside the image
+        self.pad_v = np.full((H + 2, W), _FAR_W, dtype=f32)
+        self.d_u, self.a_u = np.empty((H, W + 1), dtype=f32), np.empty((H, W + 1), dtype=f32)
+        self.d_v, self.a_v = np.empty((H + 1, W), dtype=f32), np.empty((H + 1, W), dtype=f32)
+        self.step_u, self.step_v = np.empty((H, W - 1), dtype=bool), np.empty((H - 1, W), dtype=bool)
+        self.jump_u, self.jump_v = np.empty((H, W - 1), dtype=f32), np.empty((H - 1, W), dtype=f32)
+
+    def grids(self, K: np.ndarray):
+        """``(u - cx, v - cy, |r|^2)`` per pixel for intrinsics K, (H, W) float32 each."""
+        K = np.asarray(K, dtype=np.float64)
+        if self.K is None or not np.array_equal(self.K, K):
+            H, W = self.u.shape
+            u, v = np.arange(W) - K[0, 2], np.arange(H) - K[1, 2]
+            self.u[...] = u[None, :]
+            self.v[...] = v[:, None]
+            self.r2[...] = 1 + (u[None, :] / K[0, 0]) ** 2 + (v[:, None] / K[1, 1]) ** 2
+            self.K = K.copy()
+        return self.u, self.v, self.r2
+
+
+_local = threading.local()
+
+
+def _workspace(shape: tuple[int, int]) -> _Workspace:
+    """This thread's workspace for images of `shape`."""
+    spaces = _local.__dict__.setdefault("spaces", {})
+    if shape not in spaces:
+        if len(spaces) > 4:
+            spaces.clear()
+        spaces[shape] = _Workspace(shape)
+    return spaces[shape]
+
+
+def _edges(z: np.ndarray, jump_m: float, ws: _Workspace) -> np.ndarray:
+    """Pixels whose depth differs from a 4-neighbour's by more than jump_m (nothing = infinitely far).
+
+    Returns the workspace's ``b2`` mask; it may be set on pixels that show nothing.
+    """
+    empty = np.less_equal(z, 0, out=ws.b2)
+    zz = np.multiply(empty, _FAR_Z, out=ws.t1)  # nothing: equal to each other, far from any depth
+    zz += z
+    jump = np.float32(jump_m)
+    edge = ws.b2
+    du = np.subtract(zz[:, 1:], zz[:, :-1], out=ws.jump_u)
+    step_u = np.greater(np.abs(du, out=du), jump, out=ws.step_u)
+    dv = np.subtract(zz[1:], zz[:-1], out=ws.jump_v)
+    step_v = np.greater(np.abs(dv, out=dv), jump, out=ws.step_v)
+    edge[:, 0] = False
+    edge[:, 1:] = step_u
+    edge[:, :-1] |= step_u
+    edge[1:] |= step_v
+    edge[:-1] |= step_v
+    return edge
 
 
 def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
     """|cos| of the angle between viewing ray and surface normal per pixel, shape (H, W).
 
-    1 where a pixel has no neighbour that shows something (not grazing); see
-    :func:`_incidence_terms`.
+    1 where a pixel shows nothing or has no neighbour that shows something in a direction
+    (not grazing); see :func:`_incidence_terms`.
     """
-    z2, den = _incidence_terms(z, K)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        c = np.sqrt(z2 / den)
-    c[~np.isfinite(c)] = 1.0
+    z = np.asarray(z, dtype=np.float32)
+    w2, den, near = _incidence_terms(z, K, _workspace(z.shape), scale=1.0)
+    c = np.sqrt(w2 / den)
+    c[~(near & (z > 0))] = 1.0
     return c
 
 
-def _incidence_terms(z: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(z^2, |m|^2 |r|^2)`` per pixel, whose ratio is the squared incidence cosine, (H, W) each.
+# Stand-ins for "nothing in view" in finite float32 arithmetic (masked numpy operations and
+# nan/inf special cases cost more than plain arithmetic on whole images).
+_FAR_Z = np.float32(1e10)  # depth, [m]: farther than any edge threshold from any real depth
+_NEAR_Z = np.float32(1e-15)  # depths at or below this (incl. 0 = nothing) count as nothing
+_FAR_W = np.float32(1) / _NEAR_Z  # inverse depth of nothing, [1/m]
 
-    With P(u, v) = z r, r = ((u - cx) / fx, (v - cy) / fy, 1), the normal dP/du x dP/dv is
-    parallel to m = (-fx z_u, -fy z_v, fx x z_u + fy y z_v + z) with m . r = z, so
-    cos = z / (|m| |r|). The depth derivatives come from one-sided differences of the inverse
-    depth w = 1/z (affine in (u, v) on a plane, so exact there): z_u = -z^2 w_u, taken towards
-    the neighbour of closer depth (so they do not straddle an edge). The second term is nan
-    where a pixel shows nothing or has no neighbour in a direction that shows something.
+
+def _incidence_terms(z: np.ndarray, K: np.ndarray, ws: _Workspace, scale: float):
+    """``(w^2, scale |m|^2 |r|^2, near)`` per pixel, (H, W) each, in the workspace.
+
+    The ratio of the first two terms is the squared incidence cosine over `scale`. With
+    P(u, v) = z r, r = ((u - cx) / fx, (v - cy) / fy, 1) and the inverse depth w = 1/z, the
+    normal dP/du x dP/dv is parallel to m = (fx w_u, fy w_v, w - x fx w_u - y fy w_v) (the
+    normal z^2 (-fx z_u, -fy z_v, fx x z_u + fy y z_v + z) with z_u = -z^2 w_u, over z^2),
+    with m . r = w, so cos = w / (|m| |r|). The inverse depth is affine in (u, v) on a plane,
+    so its one-sided differences are exact there; each is taken towards the neighbour whose
+    inverse depth is closer (so they do not straddle an edge). ``near`` is False where a pixel
+    has, in one direction, no neighbour that shows something (the terms are meaningless there).
     """
-    H, W = z.shape
-    z = np.asarray(z, dtype=np.float32)
-    with np.errstate(divide="ignore"):
-        w = np.where(z > 0, np.float32(1) / z, np.float32(np.nan))
+    w = ws.pad_v[1:-1]  # contiguous rows; the padding rows stay _FAR_W
+    np.maximum(z, _NEAR_Z, out=w)
+    np.divide(np.float32(1), w, out=w)  # nothing in view: _FAR_W
+    ws.pad_u[:, 1:-1] = w
 
-    def slope(axis):
-        nan = np.float32(np.nan)
-        d = np.diff(w, axis=axis, prepend=nan, append=nan)  # d[i] = w[i] - w[i-1], nan at the ends
-        a = np.fmin(np.abs(d), np.float32(np.inf))  # nan -> inf
-        n = w.shape[axis]
-        fwd, bwd = [slice(None)] * 2, [slice(None)] * 2
-        fwd[axis], bwd[axis] = slice(1, n + 1), slice(0, n)
-        fwd, bwd = tuple(fwd), tuple(bwd)
-        return np.where(a[fwd] <= a[bwd], d[fwd], d[bwd])
+    def slope(d, a, pad, axis, s, near):
+        """One-sided difference of w along `axis` towards the closer neighbour into s; near: one exists."""
+        if axis == 1:
+            np.subtract(pad[:, 1:], pad[:, :-1], out=d)  # d[i] = w[i] - w[i-1]
+            fwd, bwd = (slice(None), slice(1, None)), (slice(None), slice(0, -1))
+        else:
+            np.subtract(pad[1:], pad[:-1], out=d)
+            fwd, bwd = (slice(1, None), slice(None)), (slice(0, -1), slice(None))
+        np.abs(d, out=a)
+        use_fwd = np.less_equal(a[fwd], a[bwd], out=ws.b2)
+        np.multiply(d[fwd], use_fwd, out=s)
+        s += np.multiply(d[bwd], np.logical_not(use_fwd, out=ws.b3), out=ws.t4)  # exact: one is 0
+        np.less(np.minimum(a[fwd], a[bwd], out=ws.t4), np.float32(0.5) * _FAR_W, out=near)
+        return s
 
-    x = ((np.arange(W) - K[0, 2]) / K[0, 0]).astype(np.float32)[None, :]
-    y = ((np.arange(H) - K[1, 2]) / K[1, 1]).astype(np.float32)[:, None]
-    z2 = z * z
-    mx = slope(1)
-    mx *= z2 * np.float32(K[0, 0])  # -fx z_u = fx z^2 w_u
-    my = slope(0)
-    my *= z2 * np.float32(K[1, 1])
-    mz = z - x * mx - y * my
-    return z2, (mx * mx + my * my + mz * mz) * (x * x + y * y + 1)
+    near = ws.near
+    su = slope(ws.d_u, ws.a_u, ws.pad_u, 1, ws.t1, near)
+    sv = slope(ws.d_v, ws.a_v, ws.pad_v, 0, ws.t2, ws.b1)
+    near &= ws.b1
+    u, v, r2 = ws.grids(K)
+    mz = np.multiply(su, u, out=ws.t3)
+    np.subtract(w, mz, out=mz)
+    mz -= np.multiply(sv, v, out=ws.t4)  # w - x fx w_u - y fy w_v, with x fx = u - cx
+    su *= np.float32(K[0, 0])
+    sv *= np.float32(K[1, 1])
+    mz *= mz
+    su *= su
+    sv *= sv
+    mz += su
+    mz += sv
+    mz *= r2
+    if scale != 1:
+        mz *= np.float32(scale)
+    w2 = np.multiply(w, w, out=ws.t1)
+    return w2, mz, near

@@ -127,3 +127,16 @@ def test_bad_settings_are_rejected_naming_the_field(kwargs, field):
 def test_measure_rejects_a_video():
     with pytest.raises(BenchmarkError, match=r"shape \(H, W\)"):
         SensorModel().measure(np.zeros((2, H, W)), K, np.random.default_rng(0))
+
+
+def test_noise_is_normally_distributed_also_on_images_with_an_odd_pixel_count():
+    from scipy import stats
+
+    sensor = SensorModel(noise_m=0.01, quantum_m=None, edge_jump_m=None, grazing_deg=None)
+    for shape in ((H, W), (239, 319)):
+        z = np.full(shape, 0.5, dtype=np.float32)
+        err = (sensor.measure(z, K, np.random.default_rng(5)) - z).ravel().astype(np.float64) / 0.01
+        assert stats.kstest(err, "norm").pvalue > 0.01
+        assert np.mean(np.abs(err) > 2) == pytest.approx(2 * stats.norm.sf(2), abs=0.003)
+        assert np.mean(np.abs(err) > 3) == pytest.approx(2 * stats.norm.sf(3), abs=0.001)
+        assert abs(np.corrcoef(err[:-1], err[1:])[0, 1]) < 0.02  # neighbouring pixels independent
