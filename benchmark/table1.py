@@ -355,7 +355,7 @@ def run_stage(run) -> None:
         "params": table.params,
         "tuning": table.tuning,
         "paper": PAPER,
-        "files": {k: str(v) for k, v in paths.items()},
+        "files": {k: v.name for k, v in paths.items()},  # relative to --out, like the other stages
     }
     run.lines.append("Table 1: kinematics errors vs the AHRS (ours / paper's), pooled over axes and frames")
     run.lines.extend(table.markdown().splitlines())
