@@ -31,6 +31,7 @@ from benchmark.scenario import Scenario
 from benchmark.truth import Truth
 from fsv import Poses
 from fsv.kinematics import so3
+from fsv.rotation import quat_to_rot
 
 REFERENCE_NOISE_M = 0.01
 
@@ -98,7 +99,7 @@ class PoseErrorModel:
         dt = float(t[1] - t[0]) if t.size > 1 else 1.0
         pos_err, rot_err = self.errors(t.size, dt, rng)
         q = so3.quat_mul(so3.quat_from_matrix(rot), so3.quat_exp(rot_err))
-        return Poses(t=t, pos=np.asarray(pos, dtype=float) + pos_err, rot=so3.matrix_from_quat(q))
+        return Poses(t=t, pos=np.asarray(pos, dtype=float) + pos_err, rot=quat_to_rot(q))
 
 
 def tracker_like_poses(truth: Truth, scenario: Scenario, model: PoseErrorModel | None = None) -> Poses:

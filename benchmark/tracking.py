@@ -30,7 +30,7 @@ from benchmark.scenario import Scenario
 from benchmark.truth import Truth
 from fsv import Calibration, DepthVideo, HandModel, ObjectModel
 from fsv.hand import capsule_endpoints, forward_kinematics_qpos
-from fsv.track.rotation import angle_between, exp_so3
+from fsv.rotation import angle_between, exp_so3
 from fsv.track.tracker import TrackInit, Tracking
 from fsv.types import Contacts
 

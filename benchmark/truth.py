@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from benchmark.errors import BenchmarkError
+from fsv.rotation import quat_to_rot
 
 
 @dataclass(frozen=True)
@@ -89,15 +90,7 @@ class Truth:
     @property
     def box_rot(self) -> np.ndarray:
         """world_R_object rotation matrices, (T, 3, 3)."""
-        w, x, y, z = np.moveaxis(np.asarray(self.box_quat, dtype=float), -1, 0)
-        return np.stack(
-            [
-                np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-                np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-                np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-            ],
-            axis=-2,
-        )
+        return quat_to_rot(self.box_quat)
 
     def newton_euler_residual(self) -> tuple[np.ndarray, np.ndarray]:
         """How far the recorded forces are from explaining the recorded motion.

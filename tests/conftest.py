@@ -29,6 +29,7 @@ def make_analytic_truth(duration_s=4.0, fps=30.0, K=4):
     """
     from benchmark.truth import Truth
     from fsv.kinematics import so3
+    from fsv.rotation import quat_to_rot
 
     t = np.arange(int(round(duration_s * fps))) / fps
     g = np.array([0, 0, -9.81])
@@ -40,7 +41,7 @@ def make_analytic_truth(duration_s=4.0, fps=30.0, K=4):
     a, da, dda = (1.2 * v for v in _min_jerk(t, 1.0, 1.5))
     b, db, ddb = (-0.8 * v for v in _min_jerk(t, 2.0, 1.0))
     q = so3.quat_mul(so3.quat_exp(a[:, None] * [0, 0, 1]), so3.quat_exp(b[:, None] * [1, 0, 0]))
-    R = so3.matrix_from_quat(q)
+    R = quat_to_rot(q)
     w_body = np.stack([db, da * np.sin(b), da * np.cos(b)], 1)
     w_dot = np.stack([ddb, dda * np.sin(b) + da * np.cos(b) * db, dda * np.cos(b) - da * np.sin(b) * db], 1)
     T = t.size

@@ -13,7 +13,8 @@ from benchmark.hand import geom_name, hand_model
 from benchmark.scenario import Scenario
 from benchmark.world import build_world
 from fsv import InputError
-from fsv.hand import axis_angle_to_rot, capsule_endpoints, fingertip_centres, forward_kinematics_qpos, quat_to_rot
+from fsv.hand import capsule_endpoints, fingertip_centres, forward_kinematics_qpos
+from fsv.rotation import axis_angle_to_rot, quat_to_rot
 
 
 @pytest.fixture(scope="module", params=[0, 2])

@@ -17,6 +17,7 @@ from fsv.kinematics import (
     sampling_period,
 )
 from fsv.kinematics import so3
+from fsv.rotation import quat_to_rot
 
 DT = 1 / 30
 CONFIGS = [
@@ -42,7 +43,7 @@ def _rotating_poses(T=90, omega_body=(1.0, -2.0, 3.0), pos=None):
     q = so3.quat_mul(q0, so3.quat_exp(t[:, None] * np.asarray(omega_body)))
     if pos is None:
         pos = np.zeros((T, 3))
-    return Poses(t=t, pos=pos, rot=so3.matrix_from_quat(q))
+    return Poses(t=t, pos=pos, rot=quat_to_rot(q))
 
 
 # --- stencils ---------------------------------------------------------------------------------
@@ -170,12 +171,12 @@ def test_quaternion_round_trip_and_log_exp():
     q[q[:, 0] < 0] *= -1
     q[0] = [0, 1, 0, 0]  # a half turn (Shepperd's x branch)
     q[1] = [1, 0, 0, 0]
-    R = so3.matrix_from_quat(q)
+    R = quat_to_rot(q)
     back = so3.quat_from_matrix(R)
     assert np.allclose(np.abs(np.sum(back * q, axis=1)), 1, atol=1e-12)
     phi = so3.quat_log(q)
     assert np.all(np.linalg.norm(phi, axis=1) <= np.pi + 1e-12)
-    np.testing.assert_allclose(so3.matrix_from_quat(so3.quat_exp(phi)), R, atol=1e-12)
+    np.testing.assert_allclose(quat_to_rot(so3.quat_exp(phi)), R, atol=1e-12)
     tiny = np.array([1e-10, -2e-10, 3e-10])
     np.testing.assert_allclose(so3.quat_log(so3.quat_exp(tiny)), tiny, rtol=1e-12)
 
@@ -184,7 +185,7 @@ def test_quaternion_product_composes_rotations():
     rng = np.random.default_rng(1)
     p, q = so3.quat_exp(rng.normal(size=(5, 3))), so3.quat_exp(rng.normal(size=(5, 3)))
     np.testing.assert_allclose(
-        so3.matrix_from_quat(so3.quat_mul(p, q)), so3.matrix_from_quat(p) @ so3.matrix_from_quat(q), atol=1e-12
+        quat_to_rot(so3.quat_mul(p, q)), quat_to_rot(p) @ quat_to_rot(q), atol=1e-12
     )
 
 
@@ -226,7 +227,7 @@ def test_varying_angular_velocity_matches_the_analytic_body_rates():
     t = np.arange(300) / 300
     a, da, dda = np.sin(2 * t) + t**2, 2 * np.cos(2 * t) + 2 * t, -4 * np.sin(2 * t) + 2
     b, db, ddb = 0.5 * np.cos(3 * t), -1.5 * np.sin(3 * t), -4.5 * np.cos(3 * t)
-    rot = so3.matrix_from_quat(so3.quat_mul(so3.quat_exp(a[:, None] * [0, 0, 1]), so3.quat_exp(b[:, None] * [1, 0, 0])))
+    rot = quat_to_rot(so3.quat_mul(so3.quat_exp(a[:, None] * [0, 0, 1]), so3.quat_exp(b[:, None] * [1, 0, 0])))
     w_body = np.stack([db, da * np.sin(b), da * np.cos(b)], 1)
     w_dot = np.stack([ddb, dda * np.sin(b) + da * np.cos(b) * db, dda * np.cos(b) - da * np.sin(b) * db], 1)
     kin = differentiate_poses(Poses(t=t, pos=np.zeros((300, 3)), rot=rot), AlgebraicConfig(window_frames=5))
@@ -256,7 +257,7 @@ def test_filtered_pose_is_what_the_method_smooths():
     rng = np.random.default_rng(4)
     truth = _rotating_poses(T=120, omega_body=(0.5, 0.2, -0.3))
     noisy_q = so3.quat_mul(so3.quat_from_matrix(truth.rot), so3.quat_exp(rng.normal(scale=0.05, size=(120, 3))))
-    noisy = Poses(t=truth.t, pos=rng.normal(scale=0.002, size=(120, 3)), rot=so3.matrix_from_quat(noisy_q))
+    noisy = Poses(t=truth.t, pos=rng.normal(scale=0.002, size=(120, 3)), rot=quat_to_rot(noisy_q))
 
     def rot_err(kin):
         rel = np.einsum("tji,tjk->tik", truth.rot, kin.rot)[kin.valid]

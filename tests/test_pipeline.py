@@ -6,7 +6,7 @@ import pytest
 from benchmark.hand import hand_model
 from fsv import Contacts, DepthVideo, InputError, Kinematics, ObjectModel, TrackInit, run_pipeline
 from fsv.track.hand import HandKinematics, HandState
-from fsv.track.rotation import angle_between, exp_so3
+from fsv.rotation import angle_between, exp_so3
 from raycast import look_at_calibration, render_depth
 
 SIZE = np.array([0.171, 0.111, 0.060])

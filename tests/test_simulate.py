@@ -81,7 +81,7 @@ def test_free_joint_conventions_on_a_tumbling_box():
     a = rec.arrays()
     np.testing.assert_allclose(a["box_acc"], np.tile(m.opt.gravity, (3, 1)), atol=1e-9)
     np.testing.assert_allclose((a["box_pos"][2] - a["box_pos"][0]) / (2 * h), a["box_vel"][1], atol=1e-3)
-    from fsv.hand import quat_to_rot
+    from fsv.rotation import quat_to_rot
 
     R = quat_to_rot(a["box_quat"])
     dR = R[2] @ R[0].T

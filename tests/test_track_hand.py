@@ -9,7 +9,7 @@ from fsv.hand import forward_kinematics
 from fsv.track.camera import CameraRays
 from fsv.track.hand import HandKinematics, HandState, HandTracker, box_signed_distance, ray_capsules
 from fsv.track.object import predict_box_depth
-from fsv.track.rotation import exp_so3
+from fsv.rotation import exp_so3
 from raycast import look_at_calibration, render_depth
 
 SIZE = np.array([0.171, 0.111, 0.060])

@@ -6,7 +6,7 @@ import pytest
 from fsv import InputError, ObjectModel
 from fsv.track.camera import CameraRays
 from fsv.track.object import BoxTracker, BoxTrackerConfig, predict_box_depth, track_box
-from fsv.track.rotation import angle_between, exp_so3
+from fsv.rotation import angle_between, exp_so3
 from fsv.types import DepthVideo
 from raycast import look_at_calibration, render_depth
 

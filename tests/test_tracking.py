@@ -5,8 +5,8 @@ from benchmark.contact_error import contacts_from_truth
 from benchmark.score_forces import score_forces
 from benchmark.tracking import GATES, INIT_PERTURBATION, gate_report, plot_overlay, score_tracking, tracker_init
 from fsv import Poses
-from fsv.hand import quat_to_rot
-from fsv.track.rotation import angle_between, log_so3
+from fsv.rotation import quat_to_rot
+from fsv.rotation import angle_between, log_so3
 from fsv.track.tracker import Tracking
 
 

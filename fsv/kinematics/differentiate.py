@@ -28,6 +28,7 @@ import numpy as np
 
 from fsv.errors import InputError
 from fsv.kinematics import so3
+from fsv.rotation import quat_to_rot
 from fsv.kinematics.stencils import AlgebraicConfig, CentralConfig, GaussianConfig
 from fsv.types import Kinematics, Poses
 
@@ -89,7 +90,7 @@ def differentiate_poses(poses: Poses, config: AlgebraicConfig | CentralConfig | 
     quats = so3.quat_from_matrix(poses.rot)
     q_ref = _reference(quats, *taps[0], lo, hi)
     rate, accel = _rotation_rates(quats, q_ref, taps[1:], lo, hi)
-    R_ref = so3.matrix_from_quat(q_ref)
+    R_ref = quat_to_rot(q_ref)
     omega = np.einsum("tij,tj->ti", R_ref, rate)
     alpha = np.einsum("tij,tj->ti", R_ref, accel)
     return Kinematics(

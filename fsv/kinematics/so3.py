@@ -40,20 +40,6 @@ def quat_from_matrix(R: np.ndarray) -> np.ndarray:
     return np.where(q[..., :1] < 0, -q, q)
 
 
-def matrix_from_quat(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices of (not necessarily unit) quaternions (w, x, y, z), shape (..., 4) -> (..., 3, 3)."""
-    q = np.asarray(q, dtype=float)
-    w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        -2,
-    )
-
-
 def quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Hamilton product p q (rotation q first, then p), broadcasting over leading axes."""
     p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)

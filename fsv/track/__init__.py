@@ -6,5 +6,4 @@
 * :mod:`fsv.track.contacts`: contacts by proximity of the tracked fingertips to the box surface.
 * :mod:`fsv.track.tracker`: the three in sequence over a video (:func:`~fsv.track.tracker.track`)
   from a first-frame :class:`~fsv.track.tracker.TrackInit`.
-* :mod:`fsv.track.rotation`: rotation helpers (exponential and logarithm maps).
 """

@@ -33,10 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
-from fsv.hand import axis_angle_to_rot, quat_to_rot
+from fsv.rotation import axis_angle_to_rot, quat_to_rot
 from fsv.models import HandModel, ObjectModel
 from fsv.track.camera import CameraRays
-from fsv.track.rotation import exp_so3, log_so3, project_to_so3
+from fsv.rotation import exp_so3, log_so3, project_to_so3
 from fsv.types import Calibration
 
 

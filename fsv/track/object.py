@@ -26,7 +26,7 @@ import numpy as np
 from fsv.errors import InputError, TrackingError
 from fsv.models import ObjectModel
 from fsv.track.camera import CameraRays
-from fsv.track.rotation import exp_so3, log_so3, project_to_so3
+from fsv.rotation import exp_so3, log_so3, project_to_so3
 from fsv.types import Calibration, DepthVideo, Poses
 
 _FAR_M = 1.0  # background depth behind the box where no table is seen, [m] past the box

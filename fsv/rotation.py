@@ -1,8 +1,52 @@
-"""Rotations as matrices: the exponential map and its inverse, used by the pose updates."""
+"""Rotations as matrices: conversions from quaternions and axis-angle, the exponential map and its
+inverse (shared by the hand model, the kinematics and the trackers)."""
 
 from __future__ import annotations
 
 import numpy as np
+
+
+def quat_to_rot(quat: np.ndarray) -> np.ndarray:
+    """Rotation matrices of unit quaternions.
+
+    Args:
+        quat: Quaternions (w, x, y, z), shape (..., 4); normalised here.
+
+    Returns:
+        Rotation matrices, shape (..., 3, 3).
+    """
+    q = np.asarray(quat, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def axis_angle_to_rot(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula.
+
+    Args:
+        axis: Unit rotation axes, shape (..., 3) (broadcast against ``angle``).
+        angle: Rotation angles in [rad], shape (...).
+
+    Returns:
+        Rotation matrices, shape (..., 3, 3).
+    """
+    axis = np.asarray(axis, dtype=float)
+    angle = np.asarray(angle, dtype=float)
+    axis, angle = np.broadcast_arrays(axis, angle[..., None])
+    angle = angle[..., 0]
+    x, y, z = np.moveaxis(axis, -1, 0)
+    zero = np.zeros_like(x)
+    K = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+    s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
+    return np.eye(3) + s * K + (1 - c) * (K @ K)
 
 
 def skew(w: np.ndarray) -> np.ndarray:
