@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsv.hand import axis_angle_to_rot
+from fsv.rotation import axis_angle_to_rot, log_so3
 
 
 def min_jerk(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -88,7 +88,9 @@ class Motion:
         # Relative rotation of each segment as axis * angle, world frame.
         self.seg_axis, self.seg_angle = [], []
         for a, b in zip(self.R[:-1], self.R[1:]):
-            axis, angle = _log(b @ a.T)
+            w = log_so3(b @ a.T)
+            angle = float(np.linalg.norm(w))
+            axis = w / angle if angle > 0 else np.array([1.0, 0.0, 0.0])
             self.seg_axis.append(axis)
             self.seg_angle.append(angle)
 
@@ -137,16 +139,6 @@ def _unit(v) -> np.ndarray:
     v = np.asarray(v, dtype=float)
     n = np.linalg.norm(v)
     return v / n if n > 0 else np.array([1.0, 0.0, 0.0])
-
-
-def _log(R: np.ndarray) -> tuple[np.ndarray, float]:
-    """Axis and angle of a rotation matrix (angle in [0, pi))."""
-    c = np.clip((np.trace(R) - 1) / 2, -1.0, 1.0)
-    angle = float(np.arccos(c))
-    if angle < 1e-12:
-        return np.array([1.0, 0.0, 0.0]), 0.0
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) / (2 * np.sin(angle))
-    return w / np.linalg.norm(w), angle
 
 
 def timed(t0: float, t1: float, waypoints: list, weights: list) -> list:
