@@ -3,13 +3,17 @@
 Run: ``python -m benchmark.perf_render [--frames N]``. It simulates a short lift of the
 default scenario, then renders its frames at 320 x 240 three ways in this process:
 
-- pyrender (this benchmark's renderer): exact depth + label image per frame;
-- pyrender + the sensor model (what ``render()`` does per frame);
+- this benchmark's renderer (:class:`benchmark.render.DepthRenderer`, in pyrender's EGL
+  context): exact depth + label image per frame;
+- the same + the sensor model (what ``render()`` does per frame);
 - MuJoCo's ``mujoco.Renderer`` with depth rendering (EGL) from an identical camera (same
   pose and intrinsics, added to the model as a MuJoCo camera).
 
-It prints frames per second, the ratio against MuJoCo, and how far the two renderers' depths
-differ on the pixels both see (a check that the scenes and cameras really are the same).
+The three are timed in turn within each of ``--repeats`` rounds (so a change of the machine's
+load hits all of them alike). It prints, per way, the best and the median frames per second over
+the rounds (wall clock) and the process's CPU time per frame (all threads, llvmpipe's included),
+the ratios against MuJoCo, and how far the two renderers' depths differ on the pixels both see
+(a check that the scenes and cameras really are the same).
 """
 
 from __future__ import annotations
@@ -46,15 +50,26 @@ def add_mujoco_camera(spec, camera: Camera, name: str = "depth_camera"):
     return cam
 
 
-def _rate(fn, frames: int, repeats: int = 3) -> float:
-    """Best frames per second over `repeats` passes of fn(k) for k in range(frames)."""
-    best = np.inf
+def _rates(fns: dict, frames: int, repeats: int) -> dict:
+    """Times passes of fn(k) for k in range(frames), the functions in turn, `repeats` rounds.
+
+    Returns:
+        Per name: ``(best fps, median fps, median CPU ms per frame)`` (wall-clock rates; CPU
+        time of the whole process, all threads).
+    """
+    wall = {name: [] for name in fns}
+    cpu = {name: [] for name in fns}
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        for k in range(frames):
-            fn(k)
-        best = min(best, time.perf_counter() - t0)
-    return frames / best
+        for name, fn in fns.items():
+            t0, c0 = time.perf_counter(), time.process_time()
+            for k in range(frames):
+                fn(k)
+            wall[name].append(time.perf_counter() - t0)
+            cpu[name].append(time.process_time() - c0)
+    return {
+        name: (frames / min(wall[name]), frames / float(np.median(wall[name])), 1e3 * float(np.median(cpu[name])) / frames)
+        for name in fns
+    }
 
 
 def scene_frames(num: int):
@@ -85,9 +100,12 @@ def main(argv=None) -> dict:
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=150, help="frames per timed pass (default 150)")
+    parser.add_argument("--repeats", type=int, default=5, help="timed rounds (default 5)")
     args = parser.parse_args(argv)
     if args.frames < 1:
         parser.error(f"--frames must be >= 1, got {args.frames}")
+    if args.repeats < 1:
+        parser.error(f"--repeats must be >= 1, got {args.repeats}")
 
     camera = load_camera()
     world, pose = scene_frames(args.frames)
@@ -126,11 +144,16 @@ def main(argv=None) -> dict:
         peer.update_scene(peer_data, camera="depth_camera")
         peer.render()
 
-    rates = {
-        "pyrender_depth_labels_fps": _rate(render_only, args.frames),
-        "pyrender_depth_labels_sensor_fps": _rate(render_and_sense, args.frames),
-        "mujoco_depth_fps": _rate(mujoco_depth, args.frames),
-    }
+    timed = _rates(
+        {"pyrender_depth_labels": render_only, "pyrender_depth_labels_sensor": render_and_sense, "mujoco_depth": mujoco_depth},
+        args.frames,
+        args.repeats,
+    )
+    rates = {}
+    for name, (best, median, cpu_ms) in timed.items():
+        rates[f"{name}_fps"] = best
+        rates[f"{name}_fps_median"] = median
+        rates[f"{name}_cpu_ms"] = cpu_ms
     # agreement of the two renderers on one frame (pixels both see, within the sensor's range)
     mujoco_depth(args.frames // 2)
     theirs = peer.render()
@@ -140,15 +163,26 @@ def main(argv=None) -> dict:
     diff = np.abs(mine - theirs)[both]
     rates["agreement_median_m"] = float(np.median(diff))
     rates["agreement_within_0.1mm"] = float(np.mean(diff < 1e-4))
-    n_nodes = ours.draw_calls
-    print(f"scene: {model.ngeom} geoms, {n_nodes} draw calls per frame; {camera.width}x{camera.height}; {args.frames} frames, best of 3")
-    print(f"pyrender depth + labels          : {rates['pyrender_depth_labels_fps']:7.1f} frames/s")
-    print(f"pyrender depth + labels + sensor : {rates['pyrender_depth_labels_sensor_fps']:7.1f} frames/s")
-    print(f"MuJoCo Renderer depth (peer)     : {rates['mujoco_depth_fps']:7.1f} frames/s")
-    print(f"ratio pyrender / MuJoCo          : {rates['pyrender_depth_labels_fps'] / rates['mujoco_depth_fps']:7.2f} "
-          f"(with sensor {rates['pyrender_depth_labels_sensor_fps'] / rates['mujoco_depth_fps']:.2f})")
-    print(f"depth agreement with MuJoCo      : median {rates['agreement_median_m'] * 1e6:.2f} um, "
-          f"{100 * rates['agreement_within_0.1mm']:.1f} % of pixels within 0.1 mm")
+    print(
+        f"scene: {model.ngeom} geoms, {ours.triangles} triangles, {ours.draw_calls} draw call per frame; "
+        f"{camera.width}x{camera.height}; {args.frames} frames per pass, {args.repeats} rounds"
+    )
+    print("                                   best fps  median fps  CPU ms/frame (all threads)")
+    for name, text in (
+        ("pyrender_depth_labels", "depth + labels                 "),
+        ("pyrender_depth_labels_sensor", "depth + labels + sensor        "),
+        ("mujoco_depth", "MuJoCo Renderer depth (peer)   "),
+    ):
+        print(f"{text}: {rates[name + '_fps']:8.1f}  {rates[name + '_fps_median']:10.1f}  {rates[name + '_cpu_ms']:8.2f}")
+    peer_fps = rates["mujoco_depth_fps"]
+    print(
+        f"ratio ours / MuJoCo (best fps)   : {rates['pyrender_depth_labels_fps'] / peer_fps:7.2f} "
+        f"(with sensor {rates['pyrender_depth_labels_sensor_fps'] / peer_fps:.2f})"
+    )
+    print(
+        f"depth agreement with MuJoCo      : median {rates['agreement_median_m'] * 1e6:.2f} um, "
+        f"{100 * rates['agreement_within_0.1mm']:.1f} % of pixels within 0.1 mm"
+    )
     peer.close()
     return rates
 

@@ -1,16 +1,18 @@
 """Depth rendering: what a DS325-like depth camera sees of the simulated scene.
 
-A pyrender scene mirrors the MuJoCo geoms one to one (the table, the box, every capsule and
-sphere of the hand): each geom's mesh is built once from the MjModel in its body's frame, and
-per frame only the bodies' poses (``data.xpos`` / ``data.xmat``) are applied. One off-screen pass
-per frame gives the exact depth along the optical axis and a label image (which geom is seen
-where).
+The rendered scene mirrors the MuJoCo geoms one to one (the table, the box, every capsule and
+sphere of the hand): each geom's triangle mesh is built once from the MjModel in its body's
+frame, and per frame only the bodies' poses (``data.xpos`` / ``data.xmat``) are applied. One
+off-screen pass per frame, in pyrender's headless GL context, gives the exact depth along the
+optical axis and a label image (which geom is seen where).
 The sensor model (:mod:`benchmark.sensor`) then turns the exact depth into a measurement.
 
 Camera conventions: `fsv` and :class:`fsv.Calibration` use OpenCV's pinhole camera (x right,
-y down, z forward; pixel centres at integer coordinates). pyrender uses OpenGL's (x right, y up,
-z backward; pixel centres at half-integers). The conversion happens once, here:
-``T_world_glcam = T_world_cam @ GL_FROM_CV`` and ``(cx, cy)_gl = (cx, cy)_cv + 0.5``.
+y down, z forward; pixel centres at integer coordinates). OpenGL uses x right, y up, z backward
+and puts pixel centres at half-integers. The conversion happens once, here: the shader works in
+the OpenCV camera frame and :func:`clip_from_cam` projects it with the OpenCV intrinsics, the
+half-pixel shift and image rows top first; ``GL_FROM_CV`` converts camera poses for OpenGL-style
+cameras (pyrender's, MuJoCo's).
 
 Rendering is headless through EGL (Mesa's llvmpipe on a CPU-only machine):
 ``PYOPENGL_PLATFORM=egl`` is set here before pyrender is imported, unless the caller chose
@@ -22,6 +24,7 @@ from __future__ import annotations
 import ctypes
 import importlib.resources
 import os
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -248,7 +251,8 @@ def _offscreen(width: int, height: int):
 
     It is shared and never deleted: pyrender's ``delete()`` terminates the EGL display, which
     would invalidate every other GL context of the process (other renderers', MuJoCo's).
-    Meshes of a scene that is no longer rendered are freed when the next scene is rendered.
+    A :class:`DepthRenderer`'s own GL objects (buffers, program, framebuffer) are freed when
+    it is garbage-collected.
     """
     key = (int(width), int(height))
     if key not in _OFFSCREEN:
@@ -261,44 +265,124 @@ def _offscreen(width: int, height: int):
     return _OFFSCREEN[key]
 
 
-class _MovingLabel:
-    """One label's moving geoms as one triangle mesh whose vertices are posed per frame.
+_VERTEX_SHADER = """
+#version 330 core
+layout(location = 0) in vec3 position;  // in its body's frame
+layout(location = 1) in uvec2 body_label;
+uniform mat4 cam_from_body[NUM_BODIES];  // OpenCV camera frame from each body's frame
+uniform mat4 clip_from_cam;
+out float depth;
+flat out uint label;
+void main()
+{
+    vec4 p = cam_from_body[body_label.x] * vec4(position, 1.0);
+    depth = p.z;  // affine on a triangle: the perspective-correct interpolation is exact
+    label = body_label.y;
+    gl_Position = clip_from_cam * p;
+}
+"""
 
-    Attributes:
-        local: Vertices in their bodies' frames, (V, 3).
-        ranges: ``(body, start, stop)`` rows of `local` per body.
-        world: Posed vertices, (V, 3) float32, rewritten per frame.
-        primitive: The pyrender primitive drawn (positions only).
+_FRAGMENT_SHADER = """
+#version 330 core
+in float depth;
+flat in uint label;
+layout(location = 0) out float out_depth;
+layout(location = 1) out uint out_label;
+void main()
+{
+    out_depth = depth;
+    out_label = label;
+}
+"""
+
+
+def clip_from_cam(camera: Camera) -> np.ndarray:
+    """OpenGL projection of points in the OpenCV camera frame, shape (4, 4).
+
+    A point (X, Y, Z) lands at the window position (u + 0.5, v + 0.5), where
+    (u, v, 1) = K (X, Y, Z) / Z is its OpenCV pixel (OpenGL puts pixel centres at half-integers),
+    with clip w = Z and Z in [znear, zfar] mapped to normalised depth [-1, 1]. Framebuffer row v
+    is image row v, so the read-back images need no flip; triangles facing the camera are
+    clockwise in the window (y points down the image).
     """
+    K, W, H = camera.K, camera.width, camera.height
+    n, f = camera.znear, camera.zfar
+    return np.array(
+        [
+            [2 * K[0, 0] / W, 2 * K[0, 1] / W, (2 * K[0, 2] + 1) / W - 1, 0.0],
+            [0.0, 2 * K[1, 1] / H, (2 * K[1, 2] + 1) / H - 1, 0.0],
+            [0.0, 0.0, (f + n) / (f - n), -2 * f * n / (f - n)],
+            [0.0, 0.0, 1.0, 0.0],
+        ]
+    )
 
-    def __init__(self, parts, pyrender):
-        import trimesh
 
-        self.ranges, start = [], 0
-        for body, mesh in parts:
-            self.ranges.append((body, start, start + len(mesh.vertices)))
-            start += len(mesh.vertices)
-        merged = trimesh.util.concatenate([mesh for _, mesh in parts])
-        self.local = np.asarray(merged.vertices, dtype=np.float64)
-        self.world = self.local.astype(np.float32)
-        self.primitive = pyrender.Primitive(
-            positions=self.world, indices=np.asarray(merged.faces, dtype=np.uint32), mode=pyrender.GLTF.TRIANGLES
-        )
+def _compile_program(GL, num_bodies: int):
+    """Links the depth-and-label shader program for `num_bodies` body transforms."""
+    shaders = []
+    for kind, source in ((GL.GL_VERTEX_SHADER, _VERTEX_SHADER), (GL.GL_FRAGMENT_SHADER, _FRAGMENT_SHADER)):
+        shader = GL.glCreateShader(kind)
+        GL.glShaderSource(shader, source.replace("NUM_BODIES", str(num_bodies)))
+        GL.glCompileShader(shader)
+        if not GL.glGetShaderiv(shader, GL.GL_COMPILE_STATUS):
+            raise RenderError(f"the depth shader does not compile: {GL.glGetShaderInfoLog(shader).decode(errors='replace')}")
+        shaders.append(shader)
+    program = GL.glCreateProgram()
+    for shader in shaders:
+        GL.glAttachShader(program, shader)
+    GL.glLinkProgram(program)
+    for shader in shaders:
+        GL.glDeleteShader(shader)
+    if not GL.glGetProgramiv(program, GL.GL_LINK_STATUS):
+        raise RenderError(f"the depth shader does not link: {GL.glGetProgramInfoLog(program).decode(errors='replace')}")
+    return program
 
-    def pose(self, xpos: np.ndarray, xmat: np.ndarray) -> None:
-        for body, start, stop in self.ranges:
-            self.world[start:stop] = self.local[start:stop] @ xmat[body].T + xpos[body]
+
+class _GLObjects:
+    """The GL objects of one DepthRenderer (program, vertex arrays, framebuffer), freed on collection."""
+
+    def __init__(self, gl):
+        self.gl = gl
+        self.program = None
+        self.vao = None
+        self.buffers = []
+        self.fbo = None
+        self.renderbuffers = []
+
+    def free(self):
+        from OpenGL import GL
+
+        try:
+            self.gl._platform.make_current()
+        except Exception:  # the context is gone (interpreter shutdown): nothing left to free
+            return
+        if self.fbo is not None:
+            GL.glDeleteFramebuffers(1, [self.fbo])
+        if self.renderbuffers:
+            GL.glDeleteRenderbuffers(len(self.renderbuffers), self.renderbuffers)
+        if self.buffers:
+            GL.glDeleteBuffers(len(self.buffers), self.buffers)
+        if self.vao is not None:
+            GL.glDeleteVertexArrays(1, [self.vao])
+        if self.program is not None:
+            GL.glDeleteProgram(self.program)
 
 
 class DepthRenderer:
     """Exact depth and label images of a MuJoCo model's geoms from one camera.
 
     Build once per model, then call :meth:`render` per frame with the bodies' world poses.
-    Geoms fixed to the world (the table) are static meshes. All moving geoms that share a label
-    (the box; the palm; each finger's segments) form one mesh whose vertices are posed on the
-    CPU and streamed into its vertex buffer each frame, so a frame costs one draw call per label
-    rather than per body (pyrender's per-draw cost dominates at this resolution). The GL context
-    is the process's shared one (see :func:`_offscreen`).
+    Every drawn geom's triangle mesh is built once, in its body's frame (geoms welded to the
+    world, like the table, in the world frame), and the meshes are uploaded together as one
+    vertex buffer whose vertices carry their body's index and their label. A frame uploads only
+    the bodies' poses (one 4 x 4 matrix per body) and draws everything in one call of a minimal
+    shader that writes the depth along the optical axis (a float per pixel, interpolated from the
+    vertices' exact camera-frame depth) and the label (a byte per pixel) into a single-sample
+    framebuffer, which is read back as it is: no multisample resolve, depth-buffer
+    linearisation or row flip. The GL context is pyrender's (the process's shared
+    ``pyrender.OffscreenRenderer``, see :func:`_offscreen`); pyrender's own forward pass costs
+    several times more per frame at this resolution (its lighting-capable shaders, per-node
+    state and the multisampled read-back).
 
     Args:
         model: A compiled ``mujoco.MjModel``.
@@ -309,22 +393,14 @@ class DepthRenderer:
 
     def __init__(self, model, camera: Camera, labels: np.ndarray):
         import mujoco
-        import pyrender
-        import trimesh
+        from OpenGL import GL
 
         labels = np.asarray(labels)
         if labels.shape != (model.ngeom,):
             raise BenchmarkError(f"labels must have shape ({model.ngeom},), one per geom, got {labels.shape}")
         self._gl = _offscreen(camera.width, camera.height)
         self.camera = camera
-        self.scene = pyrender.Scene(bg_color=(0, 0, 0, 0), ambient_light=(0, 0, 0))
-        K = camera.K
-        cam = pyrender.IntrinsicsCamera(
-            fx=K[0, 0], fy=K[1, 1], cx=K[0, 2] + 0.5, cy=K[1, 2] + 0.5, znear=camera.znear, zfar=camera.zfar
-        )
-        self.scene.add(cam, pose=camera.T_world_cam @ GL_FROM_CV)
-        static: dict[int, list] = {}
-        moving: dict[int, list] = {}
+        positions, attributes, faces, start = [], [], [], 0
         for g in np.flatnonzero(labels):
             T_body_geom = np.eye(4)
             mat = np.zeros(9)
@@ -336,21 +412,71 @@ class DepthRenderer:
             body = int(model.geom_bodyid[g])
             if model.body_weldid[body] == 0 and model.body_mocapid[body] < 0:  # welded to the world
                 mesh.apply_transform(_body_pose0(model, body))
-                static.setdefault(int(labels[g]), []).append(mesh)
-            else:
-                moving.setdefault(int(labels[g]), []).append((body, mesh))
-        self._seg = {}
-        for label, meshes in static.items():
-            node = self.scene.add(pyrender.Mesh.from_trimesh(trimesh.util.concatenate(meshes), smooth=False))
-            self._seg[node] = (label,) * 3
-        self._moving = []
-        for label, parts in moving.items():
-            group = _MovingLabel(parts, pyrender)
-            node = self.scene.add(pyrender.Mesh([group.primitive]))
-            self._seg[node] = (label,) * 3
-            self._moving.append(group)
-        self.draw_calls = len(self._seg)
-        self._flags = pyrender.RenderFlags.SEG
+                body = 0  # the world body: identity pose
+            positions.append(np.asarray(mesh.vertices, dtype=np.float32))
+            attributes.append(np.tile(np.array([body, labels[g]], dtype=np.uint32), (len(mesh.vertices), 1)))
+            faces.append(np.asarray(mesh.faces, dtype=np.uint32) + start)
+            start += len(mesh.vertices)
+        self.triangles = int(sum(len(f) for f in faces))
+        self.draw_calls = 1
+        W, H = camera.width, camera.height
+        cam_from_world = np.linalg.inv(camera.T_world_cam)
+        self._R_cw, self._t_cw = cam_from_world[:3, :3].copy(), cam_from_world[:3, 3].copy()
+        self._poses = np.zeros((model.nbody, 4, 4), dtype=np.float32)  # cam_from_body per body
+        self._poses[:, 3, 3] = 1.0
+        self._rot = np.empty((model.nbody, 3, 3))
+        self._clear_depth = np.zeros(4, dtype=np.float32)
+        self._clear_label = np.zeros(4, dtype=np.uint32)
+        self._clear_z = np.ones(1, dtype=np.float32)
+
+        self._gl._platform.make_current()
+        max_components = int(GL.glGetIntegerv(GL.GL_MAX_VERTEX_UNIFORM_COMPONENTS))
+        if 16 * (model.nbody + 1) > max_components:
+            raise RenderError(
+                f"the model has {model.nbody} bodies; this GL driver's vertex shaders hold at most "
+                f"{max_components // 16 - 1} body poses"
+            )
+        gl = self._objects = _GLObjects(self._gl)
+        weakref.finalize(self, gl.free).atexit = False
+        gl.program = _compile_program(GL, model.nbody)
+        self._loc_poses = GL.glGetUniformLocation(gl.program, "cam_from_body")
+        GL.glUseProgram(gl.program)
+        GL.glUniformMatrix4fv(
+            GL.glGetUniformLocation(gl.program, "clip_from_cam"), 1, GL.GL_TRUE, clip_from_cam(camera).astype(np.float32)
+        )
+        gl.vao = GL.glGenVertexArrays(1)
+        GL.glBindVertexArray(gl.vao)
+        gl.buffers = [int(b) for b in GL.glGenBuffers(3)]
+        for target, b, data in (
+            (GL.GL_ARRAY_BUFFER, gl.buffers[0], np.concatenate(positions)),
+            (GL.GL_ARRAY_BUFFER, gl.buffers[1], np.concatenate(attributes)),
+            (GL.GL_ELEMENT_ARRAY_BUFFER, gl.buffers[2], np.concatenate(faces)),
+        ):
+            GL.glBindBuffer(target, b)
+            GL.glBufferData(target, data.nbytes, np.ascontiguousarray(data), GL.GL_STATIC_DRAW)
+            if b == gl.buffers[0]:
+                GL.glEnableVertexAttribArray(0)
+                GL.glVertexAttribPointer(0, 3, GL.GL_FLOAT, GL.GL_FALSE, 0, None)
+            elif b == gl.buffers[1]:
+                GL.glEnableVertexAttribArray(1)
+                GL.glVertexAttribIPointer(1, 2, GL.GL_UNSIGNED_INT, 0, None)
+        GL.glBindVertexArray(0)
+        gl.renderbuffers = [int(b) for b in GL.glGenRenderbuffers(3)]
+        gl.fbo = GL.glGenFramebuffers(1)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, gl.fbo)
+        for rb, fmt, attachment in zip(
+            gl.renderbuffers,
+            (GL.GL_R32F, GL.GL_R8UI, GL.GL_DEPTH_COMPONENT32F),
+            (GL.GL_COLOR_ATTACHMENT0, GL.GL_COLOR_ATTACHMENT1, GL.GL_DEPTH_ATTACHMENT),
+        ):
+            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
+            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, W, H)
+            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
+        GL.glDrawBuffers(2, [GL.GL_COLOR_ATTACHMENT0, GL.GL_COLOR_ATTACHMENT1])
+        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+        if status != GL.GL_FRAMEBUFFER_COMPLETE:
+            raise RenderError(f"the GL driver cannot render depth and labels offscreen (framebuffer status {status:#x})")
 
     def render(self, xpos: np.ndarray, xmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Renders one frame.
@@ -366,18 +492,43 @@ class DepthRenderer:
         """
         from OpenGL import GL
 
-        xpos = np.asarray(xpos)
-        xmat = np.asarray(xmat).reshape(-1, 3, 3)
+        n = self._poses.shape[0]
+        xpos = np.asarray(xpos, dtype=np.float64)
+        xmat = np.asarray(xmat, dtype=np.float64).reshape(-1, 3, 3)
+        if xpos.shape != (n, 3) or xmat.shape[0] != n:
+            raise BenchmarkError(f"render takes xpos (nbody, 3) and xmat (nbody, 9) with nbody = {n}, got {xpos.shape}, {xmat.shape}")
+        np.matmul(self._R_cw, xmat, out=self._rot)
+        self._poses[:, :3, :3] = self._rot
+        self._poses[:, :3, 3] = xpos @ self._R_cw.T + self._t_cw
+        H, W = self.camera.height, self.camera.width
+        depth = np.empty((H, W), dtype=np.float32)
+        labels = np.empty((H, W), dtype=np.uint8)
+        gl = self._objects
         self._gl._platform.make_current()
-        for group in self._moving:
-            group.pose(xpos, xmat)
-            prim = group.primitive
-            prim.positions = group.world  # uploaded with the mesh when it (re-)enters the GL context
-            if prim._vaid is not None:  # already in the context: stream the new vertices
-                GL.glBindBuffer(GL.GL_ARRAY_BUFFER, prim._buffers[0])
-                GL.glBufferSubData(GL.GL_ARRAY_BUFFER, 0, group.world.nbytes, group.world)
-        color, depth = self._gl.render(self.scene, flags=self._flags, seg_node_map=self._seg)
-        return np.ascontiguousarray(depth, dtype=np.float32), np.ascontiguousarray(color[..., 0])
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, gl.fbo)
+        GL.glViewport(0, 0, W, H)
+        GL.glEnable(GL.GL_DEPTH_TEST)
+        GL.glDepthFunc(GL.GL_LESS)
+        GL.glDepthMask(GL.GL_TRUE)
+        GL.glDisable(GL.GL_BLEND)
+        GL.glEnable(GL.GL_CULL_FACE)
+        GL.glCullFace(GL.GL_BACK)
+        GL.glFrontFace(GL.GL_CW)
+        GL.glClearBufferfv(GL.GL_COLOR, 0, self._clear_depth)
+        GL.glClearBufferuiv(GL.GL_COLOR, 1, self._clear_label)
+        GL.glClearBufferfv(GL.GL_DEPTH, 0, self._clear_z)
+        GL.glUseProgram(gl.program)
+        GL.glUniformMatrix4fv(self._loc_poses, n, GL.GL_TRUE, self._poses)
+        GL.glBindVertexArray(gl.vao)
+        GL.glDrawElements(GL.GL_TRIANGLES, 3 * self.triangles, GL.GL_UNSIGNED_INT, None)
+        GL.glBindVertexArray(0)
+        GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
+        GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
+        GL.glReadPixels(0, 0, W, H, GL.GL_RED, GL.GL_FLOAT, depth)
+        GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT1)
+        GL.glReadPixels(0, 0, W, H, GL.GL_RED_INTEGER, GL.GL_UNSIGNED_BYTE, labels)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+        return depth, labels
 
 
 def _body_pose0(model, body: int) -> np.ndarray:

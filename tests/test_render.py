@@ -100,6 +100,23 @@ def test_gl_from_cv_flips_y_and_z():
     np.testing.assert_array_equal(R.GL_FROM_CV @ R.GL_FROM_CV, np.eye(4))
 
 
+def test_clip_from_cam_puts_the_opencv_pixel_at_the_gl_pixel_centre_with_rows_top_first():
+    cam = R.load_camera()
+    P = R.clip_from_cam(cam)
+    rng = np.random.default_rng(0)
+    X = np.column_stack([rng.uniform(-0.3, 0.3, 50), rng.uniform(-0.2, 0.2, 50), rng.uniform(0.2, 2.0, 50)])
+    clip = np.column_stack([X, np.ones(50)]) @ P.T
+    ndc = clip[:, :3] / clip[:, 3:]
+    window = np.column_stack([(ndc[:, 0] + 1) * cam.width / 2, (ndc[:, 1] + 1) * cam.height / 2])
+    uv = X @ cam.K.T
+    np.testing.assert_allclose(clip[:, 3], X[:, 2])  # w = depth along the optical axis
+    np.testing.assert_allclose(window, uv[:, :2] / uv[:, 2:] + 0.5, atol=1e-9)  # row v is framebuffer row v
+    # the clipping planes map to normalised depth -1 and 1, increasing with depth
+    for z, expected in ((cam.znear, -1.0), (cam.zfar, 1.0)):
+        c = P @ [0.0, 0.0, z, 1.0]
+        assert c[2] / c[3] == pytest.approx(expected)
+
+
 @pytest.mark.parametrize("u, v", [(40, 200), (250, 30), (159, 119)])
 def test_a_point_appears_where_the_opencv_calibration_projects_it(world, u, v):
     """A small sphere centred on the ray of pixel (u, v) is seen centred on that pixel."""
