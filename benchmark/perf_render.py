@@ -164,7 +164,7 @@ def main(argv=None) -> dict:
     rates["agreement_median_m"] = float(np.median(diff))
     rates["agreement_within_0.1mm"] = float(np.mean(diff < 1e-4))
     print(
-        f"scene: {model.ngeom} geoms, {ours.triangles} triangles, {ours.draw_calls} draw call per frame; "
+        f"scene: {model.ngeom} geoms, {ours.triangles} triangles, {ours.draw_calls} draw calls per frame; "
         f"{camera.width}x{camera.height}; {args.frames} frames per pass, {args.repeats} rounds"
     )
     print("                                   best fps  median fps  CPU ms/frame (all threads)")

@@ -170,11 +170,12 @@ def world_labels(world) -> np.ndarray:
 
 
 def geom_trimesh(model, geom: int):
-    """A triangle mesh of one MuJoCo geom in the geom's own frame.
+    """A triangle mesh of one MuJoCo geom in the geom's own frame (not for spheres and capsules).
 
-    Spheres and ellipsoids are icospheres (320 triangles), capsules 24-sided with 12 rings per
-    cap, cylinders 32-sided: the facets lie within 1.2 % of the radius of the true surface (0.1 mm
-    for a finger). Planes become a 2 cm thick slab whose top face is the plane (z = 0).
+    Boxes and meshes are exact; planes become a 2 cm thick slab whose top face is the plane
+    (z = 0); ellipsoids are scaled icospheres (320 triangles) and cylinders 32-sided, whose facets
+    lie within 1.2 % of the radius of the true surface. Spheres and capsules (the whole hand)
+    are not meshed: :class:`DepthRenderer` ray-casts them exactly.
 
     Args:
         model: A compiled ``mujoco.MjModel``.
@@ -197,14 +198,10 @@ def geom_trimesh(model, geom: int):
         )
     if kind == G.mjGEOM_BOX:
         return trimesh.creation.box(extents=2 * size)
-    if kind == G.mjGEOM_SPHERE:
-        return trimesh.creation.icosphere(subdivisions=2, radius=size[0])
     if kind == G.mjGEOM_ELLIPSOID:
         mesh = trimesh.creation.icosphere(subdivisions=2, radius=1.0)
         mesh.apply_scale(size)
         return mesh
-    if kind == G.mjGEOM_CAPSULE:
-        return trimesh.creation.capsule(height=2 * size[1], radius=size[0], count=(24, 12))
     if kind == G.mjGEOM_CYLINDER:
         return trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=32)
     if kind == G.mjGEOM_MESH:
@@ -212,6 +209,8 @@ def geom_trimesh(model, geom: int):
         v0, nv = model.mesh_vertadr[mid], model.mesh_vertnum[mid]
         f0, nf = model.mesh_faceadr[mid], model.mesh_facenum[mid]
         return trimesh.Trimesh(vertices=model.mesh_vert[v0 : v0 + nv].copy(), faces=model.mesh_face[f0 : f0 + nf].copy())
+    if kind in (G.mjGEOM_SPHERE, G.mjGEOM_CAPSULE):
+        raise BenchmarkError(f"geom {geom} is a sphere or capsule: the depth renderer ray-casts those, it has no mesh of them")
     raise BenchmarkError(
         f"geom {geom} has MuJoCo type {kind}, which the depth renderer does not draw; "
         "accepted: plane, sphere, capsule, ellipsoid, cylinder, box, mesh"
@@ -265,7 +264,7 @@ def _offscreen(width: int, height: int):
     return _OFFSCREEN[key]
 
 
-_VERTEX_SHADER = """
+_MESH_VERTEX_SHADER = """
 #version 330 core
 layout(location = 0) in vec3 position;  // in its body's frame
 layout(location = 1) in uvec2 body_label;
@@ -282,7 +281,7 @@ void main()
 }
 """
 
-_FRAGMENT_SHADER = """
+_MESH_FRAGMENT_SHADER = """
 #version 330 core
 in float depth;
 flat in uint label;
@@ -294,6 +293,85 @@ void main()
     out_label = label;
 }
 """
+
+_CAPSULE_VERTEX_SHADER = """
+#version 330 core
+layout(location = 0) in vec3 position;  // a corner of the box around the capsule, body frame
+layout(location = 1) in uvec2 body_label;
+layout(location = 2) in vec4 end_a_radius;  // one end of the axis (body frame) and the radius
+layout(location = 3) in vec3 end_b;  // the other end (= end_a for a sphere)
+uniform mat4 cam_from_body[NUM_BODIES];
+uniform mat4 clip_from_cam;
+flat out vec3 a;
+flat out vec3 b;
+flat out float radius;
+flat out uint label;
+void main()
+{
+    mat4 M = cam_from_body[body_label.x];
+    a = (M * vec4(end_a_radius.xyz, 1.0)).xyz;
+    b = (M * vec4(end_b, 1.0)).xyz;
+    radius = end_a_radius.w;
+    label = body_label.y;
+    gl_Position = clip_from_cam * (M * vec4(position, 1.0));
+}
+"""
+
+_CAPSULE_FRAGMENT_SHADER = """
+#version 330 core
+flat in vec3 a;
+flat in vec3 b;
+flat in float radius;
+flat in uint label;
+uniform mat3 ray_from_pixel;  // K^-1: the ray (x/z, y/z, 1) through an OpenCV pixel
+uniform vec2 ndc_from_depth;  // normalised device depth = x + y / depth
+layout(location = 0) out float out_depth;
+layout(location = 1) out uint out_label;
+
+// Ray parameter s of the first hit of the ray o + s d (s >= -|o|/|d|) on the sphere (c, r), or 1e30.
+float sphere_hit(vec3 o, vec3 d, float dd, vec3 c, float rr)
+{
+    vec3 oc = o - c;
+    float p = dot(d, oc);
+    float h = p * p - dd * (dot(oc, oc) - rr);
+    return h < 0.0 ? 1e30 : (-p - sqrt(h)) / dd;
+}
+
+void main()
+{
+    vec3 d = ray_from_pixel * vec3(gl_FragCoord.xy - 0.5, 1.0);  // d.z = 1: s is depth
+    float dd = dot(d, d);
+    float tc = dot(0.5 * (a + b), d) / dd;  // solve near the capsule: no cancellation at range
+    vec3 o = tc * d;
+    float rr = radius * radius;
+    float s = min(sphere_hit(o, d, dd, a, rr), sphere_hit(o, d, dd, b, rr));
+    vec3 ba = b - a;
+    vec3 oa = o - a;
+    float baba = dot(ba, ba);
+    float bard = dot(ba, d);
+    float baoa = dot(ba, oa);
+    float A = baba * dd - bard * bard;
+    if (A > 0.0) {  // the side of the cylinder, where its axis coordinate lies between the ends
+        float B = baba * dot(d, oa) - baoa * bard;
+        float C = baba * dot(oa, oa) - baoa * baoa - rr * baba;
+        float h = B * B - A * C;
+        if (h >= 0.0) {
+            float t = (-B - sqrt(h)) / A;
+            float y = baoa + t * bard;
+            if (y > 0.0 && y < baba) s = min(s, t);
+        }
+    }
+    if (s > 1e29) discard;
+    float depth = tc + s;
+    out_depth = depth;
+    out_label = label;
+    gl_FragDepth = 0.5 * (ndc_from_depth.x + ndc_from_depth.y / depth) + 0.5;
+}
+"""
+
+CAPSULE_BOX_MARGIN = 1.02
+"""Half-size of the box drawn around a capsule or sphere, in radii across its axis (and beyond
+its ends): every pixel whose ray meets the capsule lies inside the box's outline."""
 
 
 def clip_from_cam(camera: Camera) -> np.ndarray:
@@ -317,10 +395,10 @@ def clip_from_cam(camera: Camera) -> np.ndarray:
     )
 
 
-def _compile_program(GL, num_bodies: int):
-    """Links the depth-and-label shader program for `num_bodies` body transforms."""
+def _compile_program(GL, vertex_shader: str, fragment_shader: str, num_bodies: int):
+    """Links a shader program for `num_bodies` body transforms."""
     shaders = []
-    for kind, source in ((GL.GL_VERTEX_SHADER, _VERTEX_SHADER), (GL.GL_FRAGMENT_SHADER, _FRAGMENT_SHADER)):
+    for kind, source in ((GL.GL_VERTEX_SHADER, vertex_shader), (GL.GL_FRAGMENT_SHADER, fragment_shader)):
         shader = GL.glCreateShader(kind)
         GL.glShaderSource(shader, source.replace("NUM_BODIES", str(num_bodies)))
         GL.glCompileShader(shader)
@@ -339,12 +417,12 @@ def _compile_program(GL, num_bodies: int):
 
 
 class _GLObjects:
-    """The GL objects of one DepthRenderer (program, vertex arrays, framebuffer), freed on collection."""
+    """The GL objects of one DepthRenderer (programs, vertex arrays, framebuffer), freed on collection."""
 
     def __init__(self, gl):
         self.gl = gl
-        self.program = None
-        self.vao = None
+        self.programs = []
+        self.vaos = []
         self.buffers = []
         self.fbo = None
         self.renderbuffers = []
@@ -362,27 +440,55 @@ class _GLObjects:
             GL.glDeleteRenderbuffers(len(self.renderbuffers), self.renderbuffers)
         if self.buffers:
             GL.glDeleteBuffers(len(self.buffers), self.buffers)
-        if self.vao is not None:
-            GL.glDeleteVertexArrays(1, [self.vao])
-        if self.program is not None:
-            GL.glDeleteProgram(self.program)
+        if self.vaos:
+            GL.glDeleteVertexArrays(len(self.vaos), self.vaos)
+        for program in self.programs:
+            GL.glDeleteProgram(program)
+
+
+def _upload(GL, gl: _GLObjects, attributes, faces) -> int:
+    """A vertex array of float or uint attributes (list of (V, k) arrays) and triangles; its id."""
+    vao = GL.glGenVertexArrays(1)
+    gl.vaos.append(int(vao))
+    GL.glBindVertexArray(vao)
+    for location, data in enumerate(attributes):
+        buffer = GL.glGenBuffers(1)
+        gl.buffers.append(int(buffer))
+        GL.glBindBuffer(GL.GL_ARRAY_BUFFER, buffer)
+        GL.glBufferData(GL.GL_ARRAY_BUFFER, data.nbytes, np.ascontiguousarray(data), GL.GL_STATIC_DRAW)
+        GL.glEnableVertexAttribArray(location)
+        if data.dtype == np.uint32:
+            GL.glVertexAttribIPointer(location, data.shape[1], GL.GL_UNSIGNED_INT, 0, None)
+        else:
+            GL.glVertexAttribPointer(location, data.shape[1], GL.GL_FLOAT, GL.GL_FALSE, 0, None)
+    buffer = GL.glGenBuffers(1)
+    gl.buffers.append(int(buffer))
+    GL.glBindBuffer(GL.GL_ELEMENT_ARRAY_BUFFER, buffer)
+    GL.glBufferData(GL.GL_ELEMENT_ARRAY_BUFFER, faces.nbytes, np.ascontiguousarray(faces), GL.GL_STATIC_DRAW)
+    GL.glBindVertexArray(0)
+    return int(vao)
 
 
 class DepthRenderer:
     """Exact depth and label images of a MuJoCo model's geoms from one camera.
 
     Build once per model, then call :meth:`render` per frame with the bodies' world poses.
-    Every drawn geom's triangle mesh is built once, in its body's frame (geoms welded to the
-    world, like the table, in the world frame), and the meshes are uploaded together as one
-    vertex buffer whose vertices carry their body's index and their label. A frame uploads only
-    the bodies' poses (one 4 x 4 matrix per body) and draws everything in one call of a minimal
-    shader that writes the depth along the optical axis (a float per pixel, interpolated from the
-    vertices' exact camera-frame depth) and the label (a byte per pixel) into a single-sample
-    framebuffer, which is read back as it is: no multisample resolve, depth-buffer
-    linearisation or row flip. The GL context is pyrender's (the process's shared
-    ``pyrender.OffscreenRenderer``, see :func:`_offscreen`); pyrender's own forward pass costs
-    several times more per frame at this resolution (its lighting-capable shaders, per-node
-    state and the multisampled read-back).
+    Every drawn geom is uploaded once, in its body's frame (geoms welded to the world, like the
+    table, in the world frame), each vertex carrying its body's index and its label; a frame
+    uploads only the bodies' poses (one 4 x 4 matrix per body) and draws two calls of two
+    minimal shaders into a single-sample framebuffer that holds the depth along the optical axis
+    (a float per pixel) and the label (a byte per pixel), read back as they are (no multisample
+    resolve, depth-buffer linearisation or row flip):
+
+    - boxes, planes and meshes as triangles, whose depth is interpolated from the vertices'
+      exact camera-frame depth (exact on a flat face);
+    - capsules and spheres (the hand) exactly: a box around each is drawn, and the fragment
+      shader intersects each pixel's ray with the true capsule (discarding the pixels that miss
+      it) and writes the depth of the hit, also into the depth buffer (no tessellation error).
+
+    The GL context is pyrender's (the process's shared ``pyrender.OffscreenRenderer``, see
+    :func:`_offscreen`); pyrender's own forward pass costs several times more per frame at this
+    resolution (its lighting-capable shaders, per-node state and the multisampled read-back).
 
     Args:
         model: A compiled ``mujoco.MjModel``.
@@ -393,6 +499,7 @@ class DepthRenderer:
 
     def __init__(self, model, camera: Camera, labels: np.ndarray):
         import mujoco
+        import trimesh
         from OpenGL import GL
 
         labels = np.asarray(labels)
@@ -400,25 +507,40 @@ class DepthRenderer:
             raise BenchmarkError(f"labels must have shape ({model.ngeom},), one per geom, got {labels.shape}")
         self._gl = _offscreen(camera.width, camera.height)
         self.camera = camera
-        positions, attributes, faces, start = [], [], [], 0
+        G = mujoco.mjtGeom
+        cube = trimesh.creation.box(extents=(2.0, 2.0, 2.0))  # corners at +-1, faces outward
+        meshes = {"position": [], "body_label": [], "faces": []}
+        capsules = {"position": [], "body_label": [], "end_a_radius": [], "end_b": [], "faces": []}
         for g in np.flatnonzero(labels):
-            T_body_geom = np.eye(4)
+            T = np.eye(4)  # pose of the geom in its body's frame (in the world for welded bodies)
             mat = np.zeros(9)
             mujoco.mju_quat2Mat(mat, model.geom_quat[g])
-            T_body_geom[:3, :3] = mat.reshape(3, 3)
-            T_body_geom[:3, 3] = model.geom_pos[g]
-            mesh = geom_trimesh(model, int(g))
-            mesh.apply_transform(T_body_geom)
+            T[:3, :3] = mat.reshape(3, 3)
+            T[:3, 3] = model.geom_pos[g]
             body = int(model.geom_bodyid[g])
             if model.body_weldid[body] == 0 and model.body_mocapid[body] < 0:  # welded to the world
-                mesh.apply_transform(_body_pose0(model, body))
+                T = _body_pose0(model, body) @ T
                 body = 0  # the world body: identity pose
-            positions.append(np.asarray(mesh.vertices, dtype=np.float32))
-            attributes.append(np.tile(np.array([body, labels[g]], dtype=np.uint32), (len(mesh.vertices), 1)))
-            faces.append(np.asarray(mesh.faces, dtype=np.uint32) + start)
-            start += len(mesh.vertices)
-        self.triangles = int(sum(len(f) for f in faces))
-        self.draw_calls = 1
+            kind = int(model.geom_type[g])
+            if kind in (G.mjGEOM_CAPSULE, G.mjGEOM_SPHERE):
+                r = float(model.geom_size[g, 0])
+                half = float(model.geom_size[g, 1]) if kind == G.mjGEOM_CAPSULE else 0.0
+                corners = cube.vertices * CAPSULE_BOX_MARGIN * np.array([r, r, half + r])
+                part = capsules
+                ends = np.array([[0.0, 0.0, -half], [0.0, 0.0, half]]) @ T[:3, :3].T + T[:3, 3]
+                part["end_a_radius"].append(np.tile(np.append(ends[0], r), (len(corners), 1)))
+                part["end_b"].append(np.tile(ends[1], (len(corners), 1)))
+                vertices, faces = corners @ T[:3, :3].T + T[:3, 3], cube.faces
+            else:
+                mesh = geom_trimesh(model, int(g))
+                mesh.apply_transform(T)
+                part = meshes
+                vertices, faces = mesh.vertices, mesh.faces
+            start = sum(len(p) for p in part["position"])
+            part["position"].append(vertices)
+            part["body_label"].append(np.tile([body, labels[g]], (len(vertices), 1)))
+            part["faces"].append(np.asarray(faces) + start)
+        self.triangles = sum(len(f) for part in (meshes, capsules) for f in part["faces"])
         W, H = camera.width, camera.height
         cam_from_world = np.linalg.inv(camera.T_world_cam)
         self._R_cw, self._t_cw = cam_from_world[:3, :3].copy(), cam_from_world[:3, 3].copy()
@@ -438,29 +560,31 @@ class DepthRenderer:
             )
         gl = self._objects = _GLObjects(self._gl)
         weakref.finalize(self, gl.free).atexit = False
-        gl.program = _compile_program(GL, model.nbody)
-        self._loc_poses = GL.glGetUniformLocation(gl.program, "cam_from_body")
-        GL.glUseProgram(gl.program)
-        GL.glUniformMatrix4fv(
-            GL.glGetUniformLocation(gl.program, "clip_from_cam"), 1, GL.GL_TRUE, clip_from_cam(camera).astype(np.float32)
-        )
-        gl.vao = GL.glGenVertexArrays(1)
-        GL.glBindVertexArray(gl.vao)
-        gl.buffers = [int(b) for b in GL.glGenBuffers(3)]
-        for target, b, data in (
-            (GL.GL_ARRAY_BUFFER, gl.buffers[0], np.concatenate(positions)),
-            (GL.GL_ARRAY_BUFFER, gl.buffers[1], np.concatenate(attributes)),
-            (GL.GL_ELEMENT_ARRAY_BUFFER, gl.buffers[2], np.concatenate(faces)),
+        P = clip_from_cam(camera)
+        self._draws = []  # (program, location of cam_from_body, vertex array, index count)
+        for part, (vs, fs) in (
+            (meshes, (_MESH_VERTEX_SHADER, _MESH_FRAGMENT_SHADER)),
+            (capsules, (_CAPSULE_VERTEX_SHADER, _CAPSULE_FRAGMENT_SHADER)),
         ):
-            GL.glBindBuffer(target, b)
-            GL.glBufferData(target, data.nbytes, np.ascontiguousarray(data), GL.GL_STATIC_DRAW)
-            if b == gl.buffers[0]:
-                GL.glEnableVertexAttribArray(0)
-                GL.glVertexAttribPointer(0, 3, GL.GL_FLOAT, GL.GL_FALSE, 0, None)
-            elif b == gl.buffers[1]:
-                GL.glEnableVertexAttribArray(1)
-                GL.glVertexAttribIPointer(1, 2, GL.GL_UNSIGNED_INT, 0, None)
-        GL.glBindVertexArray(0)
+            if not part["faces"]:
+                continue
+            program = _compile_program(GL, vs, fs, model.nbody)
+            gl.programs.append(program)
+            GL.glUseProgram(program)
+            GL.glUniformMatrix4fv(GL.glGetUniformLocation(program, "clip_from_cam"), 1, GL.GL_TRUE, P.astype(np.float32))
+            if part is capsules:
+                K_inv = np.linalg.inv(camera.K).astype(np.float32)
+                GL.glUniformMatrix3fv(GL.glGetUniformLocation(program, "ray_from_pixel"), 1, GL.GL_TRUE, K_inv)
+                GL.glUniform2f(GL.glGetUniformLocation(program, "ndc_from_depth"), P[2, 2], P[2, 3])
+            attributes = [
+                np.concatenate(part[name]).astype(np.uint32 if name == "body_label" else np.float32)
+                for name in part
+                if name != "faces"
+            ]
+            faces = np.concatenate(part["faces"]).astype(np.uint32)
+            vao = _upload(GL, gl, attributes, faces)
+            self._draws.append((program, GL.glGetUniformLocation(program, "cam_from_body"), vao, faces.size))
+        self.draw_calls = len(self._draws)
         gl.renderbuffers = [int(b) for b in GL.glGenRenderbuffers(3)]
         gl.fbo = GL.glGenFramebuffers(1)
         GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, gl.fbo)
@@ -496,20 +620,22 @@ class DepthRenderer:
         xpos = np.asarray(xpos, dtype=np.float64)
         xmat = np.asarray(xmat, dtype=np.float64).reshape(-1, 3, 3)
         if xpos.shape != (n, 3) or xmat.shape[0] != n:
-            raise BenchmarkError(f"render takes xpos (nbody, 3) and xmat (nbody, 9) with nbody = {n}, got {xpos.shape}, {xmat.shape}")
+            raise BenchmarkError(
+                f"render takes xpos (nbody, 3) and xmat (nbody, 9) with nbody = {n}, got {xpos.shape}, {xmat.shape}"
+            )
         np.matmul(self._R_cw, xmat, out=self._rot)
         self._poses[:, :3, :3] = self._rot
         self._poses[:, :3, 3] = xpos @ self._R_cw.T + self._t_cw
         H, W = self.camera.height, self.camera.width
         depth = np.empty((H, W), dtype=np.float32)
         labels = np.empty((H, W), dtype=np.uint8)
-        gl = self._objects
         self._gl._platform.make_current()
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, gl.fbo)
+        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, self._objects.fbo)
         GL.glViewport(0, 0, W, H)
         GL.glEnable(GL.GL_DEPTH_TEST)
         GL.glDepthFunc(GL.GL_LESS)
         GL.glDepthMask(GL.GL_TRUE)
+        GL.glDepthRange(0.0, 1.0)
         GL.glDisable(GL.GL_BLEND)
         GL.glEnable(GL.GL_CULL_FACE)
         GL.glCullFace(GL.GL_BACK)
@@ -517,10 +643,11 @@ class DepthRenderer:
         GL.glClearBufferfv(GL.GL_COLOR, 0, self._clear_depth)
         GL.glClearBufferuiv(GL.GL_COLOR, 1, self._clear_label)
         GL.glClearBufferfv(GL.GL_DEPTH, 0, self._clear_z)
-        GL.glUseProgram(gl.program)
-        GL.glUniformMatrix4fv(self._loc_poses, n, GL.GL_TRUE, self._poses)
-        GL.glBindVertexArray(gl.vao)
-        GL.glDrawElements(GL.GL_TRIANGLES, 3 * self.triangles, GL.GL_UNSIGNED_INT, None)
+        for program, loc_poses, vao, count in self._draws:
+            GL.glUseProgram(program)
+            GL.glUniformMatrix4fv(loc_poses, n, GL.GL_TRUE, self._poses)
+            GL.glBindVertexArray(vao)
+            GL.glDrawElements(GL.GL_TRIANGLES, count, GL.GL_UNSIGNED_INT, None)
         GL.glBindVertexArray(0)
         GL.glPixelStorei(GL.GL_PACK_ALIGNMENT, 1)
         GL.glReadBuffer(GL.GL_COLOR_ATTACHMENT0)
