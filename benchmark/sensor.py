@@ -19,6 +19,10 @@ Per pixel with exact depth z (0 = nothing in view), in this order:
 Noise, quantisation and dropout draw from one ``np.random.Generator`` (the scenario's "depth"
 stream): a standard normal per pixel per frame (and a uniform per pixel when dropout is on), so
 the same scenario gives bit-identical frames.
+
+Everything but the random draws runs in one compiled pass over the pixels (numba; float32
+arithmetic in a fixed order, no fast-math), several times faster than the same steps as
+whole-image NumPy operations, which cost a memory pass each.
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from __future__ import annotations
 import threading
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from benchmark.errors import BenchmarkError
@@ -96,27 +101,34 @@ class SensorModel:
         Returns:
             Boolean mask, shape (H, W).
         """
-        z = np.asarray(depth_m, dtype=np.float32)
-        if z.ndim != 2:
-            raise BenchmarkError(f"measurable takes one depth image of shape (H, W), got shape {z.shape}")
-        return self._measurable(z, K, _workspace(z.shape)).copy()
-
-    def _measurable(self, z: np.ndarray, K: np.ndarray, ws: "_Workspace") -> np.ndarray:
-        """:meth:`measurable` of a float32 (H, W) image into the workspace's ``ok`` mask."""
-        ok = np.greater(z, 0, out=ws.ok)
-        if self.min_range_m > 0:
-            ok &= np.greater_equal(z, np.float32(self.min_range_m), out=ws.b1)
-        if np.isfinite(self.max_range_m):
-            ok &= np.less_equal(z, np.float32(self.max_range_m), out=ws.b1)
-        if self.edge_jump_m is not None:
-            ok &= np.logical_not(_edges(z, self.edge_jump_m, ws), out=ws.b1)
-        if self.grazing_deg is not None:
-            cos2 = np.cos(np.deg2rad(self.grazing_deg)) ** 2
-            w2, den, near = _incidence_terms(z, K, ws, scale=cos2)  # cos^2 = w2 / den
-            grazing = np.less(w2, den, out=ws.b1)
-            grazing &= near  # no neighbour that shows something: not grazing
-            ok &= np.logical_not(grazing, out=grazing)
+        z = _image(depth_m, "measurable")
+        ws = _workspace(z.shape)
+        _pad(z, ws.w, ws.zz)
+        ok = np.empty(z.shape, dtype=bool)
+        none = ws.no_out
+        _sensor_kernel(z, ws.w, ws.zz, *_intrinsics(K), *self._mask_settings(), *self._noise_settings(), none, none, ok)
         return ok
+
+    def _mask_settings(self) -> tuple:
+        """Settings of the missing-pixel tests in float32: range limits, edge jump (inf = off)
+        and squared cosine of the grazing angle (0 = off)."""
+        return (
+            np.float32(self.min_range_m),
+            np.float32(self.max_range_m),
+            np.float32(np.inf if self.edge_jump_m is None else self.edge_jump_m),
+            np.float32(0 if self.grazing_deg is None else np.cos(np.deg2rad(self.grazing_deg)) ** 2),
+        )
+
+    def _noise_settings(self) -> tuple:
+        """Dropout, noise and quantum in float32 (quantum -1 = off), and the quantum in float64."""
+        quantum = -1.0 if self.quantum_m is None else float(self.quantum_m)
+        return (
+            np.float32(self.dropout),
+            np.float32(self.noise_m),
+            np.float32(self.noise_quad_per_m),
+            np.float32(quantum),
+            quantum,
+        )
 
     def measure(self, depth_m: np.ndarray, K: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Simulates one measured frame.
@@ -130,32 +142,31 @@ class SensorModel:
         Returns:
             Measured depth, shape (H, W), float32 metres; 0 = no measurement.
         """
-        z = np.asarray(depth_m, dtype=np.float32)
-        if z.ndim != 2:
-            raise BenchmarkError(f"measure takes one depth image of shape (H, W), got shape {z.shape}")
+        z = _image(depth_m, "measure")
         ws = _workspace(z.shape)
-        ok = self._measurable(z, K, ws)
         out = np.empty(z.shape, dtype=np.float32)
         rng.standard_normal(dtype=np.float32, out=out)
-        if self.dropout > 0:
-            u = rng.random(dtype=np.float32, out=ws.t1)
-            ok &= np.greater_equal(u, np.float32(self.dropout), out=ws.b1)
-        if self.noise_quad_per_m > 0:
-            sigma = np.multiply(z, z, out=ws.t1)
-            sigma *= np.float32(self.noise_quad_per_m)
-            sigma += np.float32(self.noise_m)
-            out *= sigma
-        else:
-            out *= np.float32(self.noise_m)
-        out += z
-        if self.quantum_m is not None:
-            out /= np.float32(self.quantum_m)
-            np.rint(out, out=out)
-            np.multiply(out, self.quantum_m, out=ws.f64, dtype=np.float64)  # as dequantise(out)
-            out[...] = ws.f64
-        ok &= np.greater(out, 0, out=ws.b1)
-        out *= ok  # out > 0 where ok holds: no negative zeros
+        # without dropout the kernel reads no uniforms; z stands in (not out: aliasing slows it)
+        uniform = rng.random(dtype=np.float32, out=np.empty(z.shape, dtype=np.float32)) if self.dropout > 0 else z
+        _pad(z, ws.w, ws.zz)
+        _sensor_kernel(z, ws.w, ws.zz, *_intrinsics(K), *self._mask_settings(), *self._noise_settings(), uniform, out, ws.ok)
         return out
+
+
+def _image(depth_m, what: str) -> np.ndarray:
+    """A float32 (H, W) C-contiguous depth image, or a BenchmarkError naming `what` takes."""
+    z = np.ascontiguousarray(depth_m, dtype=np.float32)
+    if z.ndim != 2:
+        raise BenchmarkError(f"{what} takes one depth image of shape (H, W), got shape {z.shape}")
+    return z
+
+
+def _intrinsics(K) -> tuple:
+    """(fx, fy, cx, cy) as float64 from OpenCV intrinsics (3, 3)."""
+    K = np.asarray(K, dtype=np.float64)
+    if K.shape != (3, 3):
+        raise BenchmarkError(f"K must be the (3, 3) intrinsics matrix, got shape {K.shape}")
+    return float(K[0, 0]), float(K[1, 1]), float(K[0, 2]), float(K[1, 2])
 
 
 def quantise(depth_m: np.ndarray, quantum_m: float) -> np.ndarray:
@@ -168,36 +179,28 @@ def dequantise(counts: np.ndarray, quantum_m: float) -> np.ndarray:
     return (np.asarray(counts, dtype=np.float64) * quantum_m).astype(np.float32)
 
 
+# Stand-ins for "nothing in view" in finite float32 arithmetic (no nan/inf special cases).
+_FAR_Z = np.float32(1e10)  # depth, [m]: farther than any edge threshold from any real depth
+_NEAR_Z = np.float32(1e-15)  # depths at or below this (incl. 0 = nothing) count as nothing
+_FAR_W = np.float32(1) / _NEAR_Z  # inverse depth of nothing, [1/m]
+_HALF_FAR_W = np.float32(0.5) * _FAR_W
+_ONE = np.float32(1)
+_ZERO = np.float32(0)
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+
+
 class _Workspace:
-    """Scratch arrays for one image shape, reused across frames (fresh large arrays per frame
-    cost more in page faults than the arithmetic on them)."""
+    """Padded scratch images for one image shape, reused across frames (fresh large arrays per
+    frame cost more in page faults than the arithmetic on them)."""
 
     def __init__(self, shape: tuple[int, int]):
         H, W = shape
-        f32 = np.float32
-        self.ok, self.b1, self.b2, self.b3, self.near = (np.empty((H, W), dtype=bool) for _ in range(5))
-        self.t1, self.t2, self.t3, self.t4 = (np.empty((H, W), dtype=f32) for _ in range(4))
-        self.f64 = np.empty((H, W), dtype=np.float64)
-        self.K = None  # intrinsics of the pixel grids below
-        self.u, self.v, self.r2 = (np.empty((H, W), dtype=f32) for _ in range(3))
-        self.pad_u = np.full((H, W + 2), _FAR_W, dtype=f32)  # inverse depth, nothing outside the image
-        self.pad_v = np.full((H + 2, W), _FAR_W, dtype=f32)
-        self.d_u, self.a_u = np.empty((H, W + 1), dtype=f32), np.empty((H, W + 1), dtype=f32)
-        self.d_v, self.a_v = np.empty((H + 1, W), dtype=f32), np.empty((H + 1, W), dtype=f32)
-        self.step_u, self.step_v = np.empty((H, W - 1), dtype=bool), np.empty((H - 1, W), dtype=bool)
-        self.jump_u, self.jump_v = np.empty((H, W - 1), dtype=f32), np.empty((H - 1, W), dtype=f32)
-
-    def grids(self, K: np.ndarray):
-        """``(u - cx, v - cy, |r|^2)`` per pixel for intrinsics K, (H, W) float32 each."""
-        K = np.asarray(K, dtype=np.float64)
-        if self.K is None or not np.array_equal(self.K, K):
-            H, W = self.u.shape
-            u, v = np.arange(W) - K[0, 2], np.arange(H) - K[1, 2]
-            self.u[...] = u[None, :]
-            self.v[...] = v[:, None]
-            self.r2[...] = 1 + (u[None, :] / K[0, 0]) ** 2 + (v[:, None] / K[1, 1]) ** 2
-            self.K = K.copy()
-        return self.u, self.v, self.r2
+        self.w = np.empty((H + 2, W + 2), dtype=np.float32)  # inverse depth, _FAR_W around
+        self.zz = np.empty((H + 2, W + 2), dtype=np.float32)  # depth for the edge test, nan around
+        self.ok = np.empty((H, W), dtype=bool)
+        self.no_out = np.empty((0, W), dtype=np.float32)  # "no measurement, only the mask"
 
 
 _local = threading.local()
@@ -213,26 +216,145 @@ def _workspace(shape: tuple[int, int]) -> _Workspace:
     return spaces[shape]
 
 
-def _edges(z: np.ndarray, jump_m: float, ws: _Workspace) -> np.ndarray:
-    """Pixels whose depth differs from a 4-neighbour's by more than jump_m (nothing = infinitely far).
+@_jit
+def _pad(z, w, zz):
+    """Fills the padded inverse depth `w` (1 / depth; _FAR_W where nothing is seen and outside
+    the image) and the padded edge-test depth `zz` (nothing: _FAR_Z, far from any depth and equal
+    to nothing; nan outside the image, so that no jump is found there)."""
+    H, W = z.shape
+    nan = np.float32(np.nan)
+    w[0, :] = _FAR_W
+    w[H + 1, :] = _FAR_W
+    zz[0, :] = nan
+    zz[H + 1, :] = nan
+    for i in range(H):
+        w[i + 1, 0] = _FAR_W
+        w[i + 1, W + 1] = _FAR_W
+        zz[i + 1, 0] = nan
+        zz[i + 1, W + 1] = nan
+        zr, wr, zzr = z[i], w[i + 1], zz[i + 1]
+        for j in range(W):
+            d = zr[j]
+            wr[j + 1] = _ONE / max(d, _NEAR_Z)
+            zzr[j + 1] = (_FAR_Z if d <= _ZERO else _ZERO) + d
 
-    Returns the workspace's ``b2`` mask; it may be set on pixels that show nothing.
+
+@_jit_inline
+def _slope(w_before, w, w_after):
+    """One-sided difference of the inverse depth towards the neighbour whose inverse depth is
+    closer, and whether a neighbour that shows something exists in this direction."""
+    before = w - w_before
+    after = w_after - w
+    a_before, a_after = abs(before), abs(after)
+    return (after if a_after <= a_before else before), min(a_after, a_before) < _HALF_FAR_W
+
+
+@_jit_inline
+def _incidence_terms(w, w_left, w_right, w_up, w_down, u, v, r2, fx, fy, scale):
+    """``(w^2, scale |m|^2 |r|^2, near)`` of a pixel of inverse depth `w` with the inverse
+    depths of its 4-neighbours (_FAR_W: nothing or outside the image).
+
+    Their ratio is the squared cosine of the angle between the viewing ray and the surface
+    normal, over `scale`. With P(u, v) = z r, r = ((u - cx) / fx, (v - cy) / fy, 1) and the
+    inverse depth w = 1/z, the normal dP/du x dP/dv is parallel to
+    m = (fx w_u, fy w_v, w - x fx w_u - y fy w_v) (the normal
+    z^2 (-fx z_u, -fy z_v, fx x z_u + fy y z_v + z) with z_u = -z^2 w_u, over z^2), with
+    m . r = w, so cos = w / (|m| |r|). The inverse depth is affine in (u, v) on a plane, so its
+    one-sided differences are exact there; each is taken towards the neighbour whose inverse
+    depth is closer (so they do not straddle an edge). ``near`` is False where the pixel has, in
+    one direction, no neighbour that shows something (the terms are meaningless there).
+    `u`, `v` are the pixel's offsets from the principal point, `r2` = |r|^2, all float32.
     """
-    empty = np.less_equal(z, 0, out=ws.b2)
-    zz = np.multiply(empty, _FAR_Z, out=ws.t1)  # nothing: equal to each other, far from any depth
-    zz += z
-    jump = np.float32(jump_m)
-    edge = ws.b2
-    du = np.subtract(zz[:, 1:], zz[:, :-1], out=ws.jump_u)
-    step_u = np.greater(np.abs(du, out=du), jump, out=ws.step_u)
-    dv = np.subtract(zz[1:], zz[:-1], out=ws.jump_v)
-    step_v = np.greater(np.abs(dv, out=dv), jump, out=ws.step_v)
-    edge[:, 0] = False
-    edge[:, 1:] = step_u
-    edge[:, :-1] |= step_u
-    edge[1:] |= step_v
-    edge[:-1] |= step_v
-    return edge
+    su, near_u = _slope(w_left, w, w_right)
+    sv, near_v = _slope(w_up, w, w_down)
+    mz = (w - su * u) - sv * v  # w - x fx w_u - y fy w_v, with x fx = u - cx
+    mu = su * fx
+    mv = sv * fy
+    return w * w, (mz * mz + mu * mu + mv * mv) * r2 * scale, near_u & near_v
+
+
+@_jit
+def _grids(H, W, fx, fy, cx, cy):
+    """Per column u - cx and (u - cx)^2 / fx^2, per row v - cy and (v - cy)^2 / fy^2 (float64)."""
+    du = np.arange(W) - cx
+    dv = np.arange(H) - cy
+    return du, (du / fx) * (du / fx), dv, (dv / fy) * (dv / fy)
+
+
+@_jit
+def _sensor_kernel(
+    z, w, zz, fx, fy, cx, cy, min_range, max_range, jump, cos2, dropout, noise, noise_quad, quantum, quantum64, uniform, out, ok
+):
+    """The sensor model's per-pixel work on a depth image `z` (`w`, `zz` from :func:`_pad`).
+
+    Writes whether each pixel is measurable into `ok`: in range, no jump above `jump` to a
+    4-neighbour (inf: test off), not grazing (squared incidence cosine below `cos2`; 0: test
+    off). If `out` has rows, it holds standard normals on entry and the measured depth on exit:
+    per pixel in float32, depth + sigma(depth) * normal with sigma = noise (+ noise_quad depth^2
+    if noise_quad > 0), rounded to a multiple of `quantum` if it is > 0 (the count times
+    `quantum64` in float64, then to float32, as :func:`dequantise`), and 0 where the pixel is
+    not measurable, dropped (if dropout > 0: `uniform` < dropout) or not in front of the camera;
+    `ok` then says where it is kept. The inner loops are branch-free, so that they vectorise (and
+    `uniform` must not be `out`: aliased arrays stop that).
+    """
+    H, W = z.shape
+    du, au, dv, av = _grids(H, W, fx, fy, cx, cy)
+    u32 = du.astype(np.float32)
+    fx32, fy32 = np.float32(fx), np.float32(fy)
+    drop, quadratic, quantise = dropout > _ZERO, noise_quad > _ZERO, quantum > _ZERO
+    for i in range(H):
+        v, av_i = np.float32(dv[i]), av[i]
+        zr, zz_up, zz_row, zz_down = z[i], zz[i], zz[i + 1], zz[i + 2]
+        w_up, w_row, w_down = w[i], w[i + 1], w[i + 2]
+        okr = ok[i]
+        for j in range(W):
+            d = zr[j]
+            c = zz_row[j + 1]
+            step = (
+                (abs(c - zz_row[j]) > jump)
+                | (abs(zz_row[j + 2] - c) > jump)
+                | (abs(c - zz_up[j + 1]) > jump)
+                | (abs(zz_down[j + 1] - c) > jump)
+            )
+            r2 = np.float32(1.0 + au[j] + av_i)
+            w2, den, near = _incidence_terms(
+                w_row[j + 1], w_row[j], w_row[j + 2], w_up[j + 1], w_down[j + 1], u32[j], v, r2, fx32, fy32, cos2
+            )
+            okr[j] = (d > _ZERO) & (d >= min_range) & (d <= max_range) & (not step) & (not (near & (w2 < den)))
+        if out.shape[0] > 0:
+            outr, ur = out[i], uniform[i]
+            for j in range(W):
+                d = zr[j]
+                sigma = (d * d * noise_quad + noise) if quadratic else noise
+                m = outr[j] * sigma + d
+                rounded = np.float32(np.rint(m / quantum) * quantum64)
+                m = rounded if quantise else m
+                keep = okr[j] & ((ur[j] >= dropout) | (not drop)) & (m > _ZERO)
+                outr[j] = m * (_ONE if keep else _ZERO)  # kept: m > 0, no negative zeros
+                okr[j] = keep
+
+
+@_jit
+def _incidence_cos_kernel(z, w, fx, fy, cx, cy, c):
+    H, W = z.shape
+    du, au, dv, av = _grids(H, W, fx, fy, cx, cy)
+    for i in range(H):
+        for j in range(W):
+            r2 = np.float32(1.0 + au[j] + av[i])
+            w2, den, near = _incidence_terms(
+                w[i + 1, j + 1],
+                w[i + 1, j],
+                w[i + 1, j + 2],
+                w[i, j + 1],
+                w[i + 2, j + 1],
+                np.float32(du[j]),
+                np.float32(dv[i]),
+                r2,
+                np.float32(fx),
+                np.float32(fy),
+                _ONE,
+            )
+            c[i, j] = np.sqrt(w2 / den) if near and z[i, j] > _ZERO else _ONE
 
 
 def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
@@ -241,69 +363,9 @@ def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
     1 where a pixel shows nothing or has no neighbour that shows something in a direction
     (not grazing); see :func:`_incidence_terms`.
     """
-    z = np.asarray(z, dtype=np.float32)
-    w2, den, near = _incidence_terms(z, K, _workspace(z.shape), scale=1.0)
-    c = np.sqrt(w2 / den)
-    c[~(near & (z > 0))] = 1.0
+    z = _image(z, "_incidence_cos")
+    ws = _workspace(z.shape)
+    _pad(z, ws.w, ws.zz)
+    c = np.empty(z.shape, dtype=np.float32)
+    _incidence_cos_kernel(z, ws.w, *_intrinsics(K), c)
     return c
-
-
-# Stand-ins for "nothing in view" in finite float32 arithmetic (masked numpy operations and
-# nan/inf special cases cost more than plain arithmetic on whole images).
-_FAR_Z = np.float32(1e10)  # depth, [m]: farther than any edge threshold from any real depth
-_NEAR_Z = np.float32(1e-15)  # depths at or below this (incl. 0 = nothing) count as nothing
-_FAR_W = np.float32(1) / _NEAR_Z  # inverse depth of nothing, [1/m]
-
-
-def _incidence_terms(z: np.ndarray, K: np.ndarray, ws: _Workspace, scale: float):
-    """``(w^2, scale |m|^2 |r|^2, near)`` per pixel, (H, W) each, in the workspace.
-
-    The ratio of the first two terms is the squared incidence cosine over `scale`. With
-    P(u, v) = z r, r = ((u - cx) / fx, (v - cy) / fy, 1) and the inverse depth w = 1/z, the
-    normal dP/du x dP/dv is parallel to m = (fx w_u, fy w_v, w - x fx w_u - y fy w_v) (the
-    normal z^2 (-fx z_u, -fy z_v, fx x z_u + fy y z_v + z) with z_u = -z^2 w_u, over z^2),
-    with m . r = w, so cos = w / (|m| |r|). The inverse depth is affine in (u, v) on a plane,
-    so its one-sided differences are exact there; each is taken towards the neighbour whose
-    inverse depth is closer (so they do not straddle an edge). ``near`` is False where a pixel
-    has, in one direction, no neighbour that shows something (the terms are meaningless there).
-    """
-    w = ws.pad_v[1:-1]  # contiguous rows; the padding rows stay _FAR_W
-    np.maximum(z, _NEAR_Z, out=w)
-    np.divide(np.float32(1), w, out=w)  # nothing in view: _FAR_W
-    ws.pad_u[:, 1:-1] = w
-
-    def slope(d, a, pad, axis, s, near):
-        """One-sided difference of w along `axis` towards the closer neighbour into s; near: one exists."""
-        if axis == 1:
-            np.subtract(pad[:, 1:], pad[:, :-1], out=d)  # d[i] = w[i] - w[i-1]
-            fwd, bwd = (slice(None), slice(1, None)), (slice(None), slice(0, -1))
-        else:
-            np.subtract(pad[1:], pad[:-1], out=d)
-            fwd, bwd = (slice(1, None), slice(None)), (slice(0, -1), slice(None))
-        np.abs(d, out=a)
-        use_fwd = np.less_equal(a[fwd], a[bwd], out=ws.b2)
-        np.multiply(d[fwd], use_fwd, out=s)
-        s += np.multiply(d[bwd], np.logical_not(use_fwd, out=ws.b3), out=ws.t4)  # exact: one is 0
-        np.less(np.minimum(a[fwd], a[bwd], out=ws.t4), np.float32(0.5) * _FAR_W, out=near)
-        return s
-
-    near = ws.near
-    su = slope(ws.d_u, ws.a_u, ws.pad_u, 1, ws.t1, near)
-    sv = slope(ws.d_v, ws.a_v, ws.pad_v, 0, ws.t2, ws.b1)
-    near &= ws.b1
-    u, v, r2 = ws.grids(K)
-    mz = np.multiply(su, u, out=ws.t3)
-    np.subtract(w, mz, out=mz)
-    mz -= np.multiply(sv, v, out=ws.t4)  # w - x fx w_u - y fy w_v, with x fx = u - cx
-    su *= np.float32(K[0, 0])
-    sv *= np.float32(K[1, 1])
-    mz *= mz
-    su *= su
-    sv *= sv
-    mz += su
-    mz += sv
-    mz *= r2
-    if scale != 1:
-        mz *= np.float32(scale)
-    w2 = np.multiply(w, w, out=ws.t1)
-    return w2, mz, near
