@@ -140,3 +140,18 @@ def test_noise_is_normally_distributed_also_on_images_with_an_odd_pixel_count():
         assert np.mean(np.abs(err) > 2) == pytest.approx(2 * stats.norm.sf(2), abs=0.003)
         assert np.mean(np.abs(err) > 3) == pytest.approx(2 * stats.norm.sf(3), abs=0.001)
         assert abs(np.corrcoef(err[:-1], err[1:])[0, 1]) < 0.02  # neighbouring pixels independent
+
+
+def test_measurement_is_depth_plus_sigma_times_one_float32_normal_per_pixel_then_rounded():
+    """The documented draw: rng.standard_normal((H, W), float32) once per frame, scaled by sigma
+    (another draw or order would be off by about sigma, far more than half a quantum)."""
+    z, _ = plane_depth(np.array([0.1, 0.3, 1.0]), 0.5)
+    sensor = SensorModel(noise_m=0.01)
+    rng = np.random.default_rng(11)
+    out = np.stack([sensor.measure(z, K, rng) for _ in range(2)])
+    normals = np.random.default_rng(11).standard_normal((2, H, W), dtype=np.float32)
+    kept = out > 0
+    assert kept.mean() > 0.9
+    noisy = np.broadcast_to(z, out.shape) + np.float32(0.01) * normals
+    assert np.abs(out - noisy)[kept].max() <= 0.0005 + 1e-6
+    np.testing.assert_array_equal(kept, sensor.measurable(z, K) & (noisy > 0.0005))
