@@ -484,7 +484,9 @@ class DepthRenderer:
       exact camera-frame depth (exact on a flat face);
     - capsules and spheres (the hand) exactly: a box around each is drawn, and the fragment
       shader intersects each pixel's ray with the true capsule (discarding the pixels that miss
-      it) and writes the depth of the hit, also into the depth buffer (no tessellation error).
+      it) and writes the depth of the hit, also into the depth buffer (no tessellation error;
+      only the box's faces towards the camera are drawn, so a camera inside a box, within about
+      a radius of the capsule, would not see it).
 
     The GL context is pyrender's (the process's shared ``pyrender.OffscreenRenderer``, see
     :func:`_offscreen`); pyrender's own forward pass costs several times more per frame at this
