@@ -442,6 +442,7 @@ class _GLObjects:
             GL.glDeleteBuffers(len(self.buffers), self.buffers)
         if self.vaos:
             GL.glDeleteVertexArrays(len(self.vaos), self.vaos)
+        GL.glUseProgram(0)  # a program in use is only flagged for deletion (renders bind their own)
         for program in self.programs:
             GL.glDeleteProgram(program)
 

@@ -284,6 +284,24 @@ def test_renderers_share_one_gl_context_and_stay_usable(world):
     np.testing.assert_array_equal(renderer.render(data.xpos, data.xmat)[0], before)
 
 
+def test_a_collected_renderer_frees_its_gl_objects(world):
+    import gc
+
+    from OpenGL import GL
+
+    model, data, camera, renderer = world
+    other = R.DepthRenderer(model, camera, scene_labels(model))
+    objects = other._objects
+    assert len(objects.buffers) == 8 and len(objects.programs) == 2  # meshes: 2 attributes + indices; capsules: 4 + 1
+    del other
+    gc.collect()
+    renderer._gl._platform.make_current()
+    assert not any(GL.glIsBuffer(b) for b in objects.buffers)
+    assert not any(GL.glIsProgram(p) for p in objects.programs)
+    assert not GL.glIsFramebuffer(objects.fbo)
+    assert GL.glIsFramebuffer(renderer._objects.fbo)  # the others' stay
+
+
 def test_rendering_is_deterministic(world):
     model, data, camera, renderer = world
     set_box(model, data, *BOX_POSES[1])
