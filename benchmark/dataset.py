@@ -10,12 +10,17 @@ features use; the tactile net force is the resultant of the truth's finger force
 the table still carries the box are dropped too). Frames with fewer than ``min_fingers`` fingers in
 contact (no internal force is possible) or invalid kinematics are dropped as well.
 
-Sources. The kinematics are estimated by default: the algebraic differentiator of
-``benchmark.motion`` on the observed poses (tracker-like errors on the true poses while the
-tracker is not run on every episode), as the paper's vision kinematics. The contacts are "vision"
-by default: the truth's moved by the paper's measured contact-point error (mean -1.55 mm, std
-6.13 mm per axis, ``benchmark.contact_error``); "oracle" takes the truth's. The dataset records its sources in ``dataset.json`` and in every file, and
-every report labels them.
+Sources. By default (``contacts="tracker"``) every episode goes through the method proper, as
+``fsv-bench`` does: the depth video is rendered (``benchmark.render``), the tracker
+(``fsv.track.track``, with the benchmark's seeded first-frame initialisation and the same random
+streams as ``fsv-bench``) estimates the box poses and the contacts, and the kinematics are the
+algebraic differentiator of ``benchmark.motion`` on the tracked poses. Two cheaper, labelled
+alternatives skip rendering and tracking: ``"error-model"``, the truth's contacts moved by the
+paper's measured contact-point error (mean -1.55 mm, std 6.13 mm per axis, white in time,
+``benchmark.contact_error``) with kinematics differentiated from tracker-like poses
+(``benchmark.pose_error``); and ``"oracle"``, the truth's contacts (an ablation). ``kinematics=
+"oracle"`` takes the true kinematics (an ablation). The dataset records its sources in
+``dataset.json`` and in every file, and every report labels them.
 
 Layout of a dataset folder::
 
@@ -27,8 +32,11 @@ Columns of an episode table: ``episode, task, user, grasp, mass, seed, frame, t`
 kinematics ``pos_*, rot_00..rot_22, vel_*, acc_*, omega_*, alpha_*``; the features ``p1, p3,
 p2_<finger>, p4_<finger>``; per finger ``active_, sliding_, point_{x,y,z}_, normal_{x,y,z}_,
 slide_{x,y,z}_`` (object frame), ``f_meas_`` (tactile reading, [N], 0 off contact), ``f_true_`` (the
-truth's normal force, the scoring reference), ``f_nom_`` and ``f_int_`` (nominal and internal normal
-components from eq. 9, [N]); ``net_gap_n``. Read them with pandas
+truth's normal force, the scoring reference), ``true_active_`` and ``true_point_{x,y,z}_`` (the
+truth's contact, object frame: for scoring and for measuring contact errors only, never an input),
+``f_nom_`` and ``f_int_`` (nominal and internal normal components from eq. 9, [N]); ``net_gap_n``.
+With the tracker, each file's metadata also holds the tracker's scores on the episode
+(``benchmark.tracking.score_tracking``). Read them with pandas
 (``pd.read_parquet``) or :func:`load_dataset`.
 
 Running. A local process pool over all cores by default, with a progress bar; or Ray
@@ -65,7 +73,7 @@ from fsv.features import grasp_features
 FORMAT = "fsv-bench-dataset"
 VERSION = 1
 KINEMATICS = ("algebraic", "central", "gaussian", "oracle")
-CONTACTS = ("vision", "oracle")
+CONTACTS = ("tracker", "error-model", "oracle")
 _AX = "xyz"
 
 
@@ -84,8 +92,9 @@ class DatasetSpec:
         kinematics: Kinematics behind the features and the decomposition: a differentiator of
             ``benchmark.motion`` ("algebraic", "central", "gaussian") on the observed poses, or
             "oracle" (the truth).
-        contacts: Source of the contacts: "vision" (the truth's with the paper's contact-point
-            errors, see :func:`episode_contacts`) or "oracle" (the truth).
+        contacts: Source of the contacts (see the module docstring): "tracker" (render and track
+            each episode: the method's contacts and poses), "error-model" (the truth's with the
+            paper's contact-point errors) or "oracle" (the truth).
         tactile_noise_n: Noise of the simulated tactile sensors (``benchmark.tactile``), [N].
         max_gap_n: Samples whose vision and tactile net forces differ by more than this are dropped, [N].
         min_fingers: Frames with fewer fingers in contact are dropped.
@@ -100,7 +109,7 @@ class DatasetSpec:
     fps: float = 30.0
     noise_m: float = 0.01
     kinematics: str = "algebraic"
-    contacts: str = "vision"
+    contacts: str = "tracker"
     tactile_noise_n: float = 0.1
     max_gap_n: float = 1.5
     min_fingers: int = 2
@@ -148,14 +157,33 @@ def true_normal_forces(truth) -> np.ndarray:
     return np.where(truth.contact_active, f, 0.0)
 
 
-def episode_contacts(episode, source: str) -> Contacts:
-    """The contacts behind the features: "oracle" (the truth's) or "vision" (the truth's moved by
-    the paper's contact-point error model, ``benchmark.contact_error``, until the tracker runs here)."""
+def track_episode(episode):
+    """Renders a simulated episode and tracks it from depth alone, exactly as ``fsv-bench`` does
+    (same first-frame initialisation, same random streams): ``(rendered episode, Tracking)``."""
+    from benchmark.render import render
+    from benchmark.tracking import tracker_init
+    from fsv.track.tracker import track
+
+    ep = render(episode)
+    init = tracker_init(ep.truth, ep.scenario, ep.hand_model)
+    return ep, track(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, rng=ep.scenario.rng("tracker"))
+
+
+def episode_contacts(episode, source: str, tracking=None) -> Contacts:
+    """The contacts behind the features: "tracker" (``tracking.contacts``), "oracle" (the truth's)
+    or "error-model" (the truth's moved by the paper's contact-point error model,
+    ``benchmark.contact_error``)."""
     from benchmark.contact_error import contacts_from_truth, vision_like_contacts
 
+    if source == "tracker":
+        if tracking is None:
+            raise DatasetError("contacts source 'tracker' needs the episode's tracking (see track_episode)")
+        return tracking.contacts
     truth = contacts_from_truth(episode.truth)
     if source == "oracle":
         return truth
+    if source != "error-model":
+        raise DatasetError(f"contacts source must be one of {CONTACTS}, got {source!r}")
     return vision_like_contacts(truth, episode.object_model, episode.scenario.rng("contact-error"))
 
 
@@ -179,6 +207,35 @@ def sample_mask(kin: Kinematics, con: Contacts, feats, truth, min_fingers: int =
     return usable, usable & (gap <= max_gap_n), gap
 
 
+MAX_EXCESS_N = 1.5
+"""Default of the plausibility rule (:func:`nominal_excess_n`), [N]: the paper's 1.5 N threshold."""
+
+
+def nominal_excess_n(nominal_normal, measured, active) -> np.ndarray:
+    """How far vision's nominal forces exceed the tactile readings, per frame (a plausibility rule).
+
+    The nominal forces are the least forces that explain the motion (eq. 4-6; here the nominal part of
+    the decomposition, eq. 9), and the paper found them individually below the tactile readings
+    (§4.2, Fig. 5): people grip harder than the minimum. A finger whose nominal normal force
+    exceeds its reading (0 where its sensor reads nothing) by more than a threshold means vision's
+    contacts cannot be right at that frame (e.g. a point on the wrong side of the centre of mass,
+    or a finger in contact for vision but not for touch). This is our reading of the paper's
+    "samples where FSV or tactile sensors are not reliable"; its 1.5 N rule on the net forces
+    (:func:`sample_mask`) only tests the kinematics here. Training and scoring drop frames above
+    ``MAX_EXCESS_N`` unless told otherwise, and say so.
+
+    Args:
+        nominal_normal: Nominal normal force per finger, shape (N, K), [N].
+        measured: Tactile readings, shape (N, K), [N]; NaN or 0 where the sensor reads nothing.
+        active: Finger in contact for vision, shape (N, K).
+
+    Returns:
+        max over vision's fingers of (nominal - reading), shape (N,), [N]; -inf without fingers.
+    """
+    f_nom, meas = np.asarray(nominal_normal, float), np.nan_to_num(np.asarray(measured, float), nan=0.0)
+    return np.max(np.where(np.asarray(active, bool), f_nom - meas, -np.inf), axis=1)
+
+
 def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     """Simulates one scenario and returns its kept samples as a table (see the module docstring)."""
     from benchmark.motion import episode_kinematics
@@ -186,9 +243,12 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     from benchmark.tactile import tactile_normal_forces
     from fsv.forces import FrameStatus, decompose_forces
 
-    ep = simulate(scenario)
+    ep, tracking = simulate(scenario), None
+    if spec.contacts == "tracker":
+        ep, tracking = track_episode(ep)
     tr, model = ep.truth, ep.object_model
-    kin, con = episode_kinematics(ep, spec.kinematics), episode_contacts(ep, spec.contacts)
+    kin = episode_kinematics(ep, spec.kinematics, poses=None if tracking is None else tracking.box)
+    con = episode_contacts(ep, spec.contacts, tracking)
     feats = grasp_features(kin, con, model, gravity=tr.gravity)
     # unbounded range: the firm synthetic users exceed the FSG020's 20 N on the thumb
     measured = tactile_normal_forces(tr, scenario.rng("tactile"), full_scale_n=np.inf, noise_n=spec.tactile_noise_n)
@@ -211,6 +271,10 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
         friction=model.friction, table_friction=model.table_friction,
     )
     stats["gravity"] = np.asarray(tr.gravity, float).tolist()
+    if tracking is not None:
+        from benchmark.tracking import score_tracking
+
+        stats["tracking"] = score_tracking(tracking, tr)
     return _with_meta(pa.table(cols), scenario, spec, names, stats, status="ok")
 
 
@@ -248,6 +312,9 @@ def _columns(sc, tr, kin, con, feats, measured, true_normal, gap, rows) -> dict:
             cols[f"slide_{_AX[a]}_{name}"] = con.slide_dir[rows, k, a]
         cols[f"f_meas_{name}"] = np.nan_to_num(measured[rows, k], nan=0.0)
         cols[f"f_true_{name}"] = true_normal[rows, k]
+        cols[f"true_active_{name}"] = np.asarray(tr.contact_active, bool)[rows, k]
+        for a in range(3):
+            cols[f"true_point_{_AX[a]}_{name}"] = np.asarray(tr.contact_point, float)[rows, k, a]
     cols["net_gap_n"] = gap[rows]
     return cols
 
@@ -413,11 +480,13 @@ def write_manifest(out) -> pd.DataFrame:
     return manifest
 
 
-def load_dataset(out, **where) -> pd.DataFrame:
+def load_dataset(out, max_excess_n: float | None = None, **where) -> pd.DataFrame:
     """All kept samples of a dataset as one DataFrame, optionally filtered by scenario fields.
 
     Args:
         out: Dataset folder.
+        max_excess_n: If given, also drop the rows whose nominal forces exceed the tactile readings
+            by more than this (the plausibility rule, :func:`nominal_excess_n`), [N].
         **where: Column filters, e.g. ``user=[0]`` or ``grasp=1`` (a value or a list of values).
     """
     out = os.fspath(out)
@@ -434,7 +503,15 @@ def load_dataset(out, **where) -> pd.DataFrame:
     frames = [f for f in frames if len(f)]
     if not frames:
         raise DatasetError(f"no samples in {out!r} for {where or 'the whole dataset'}")
-    return pd.concat(frames, ignore_index=True)
+    df = pd.concat(frames, ignore_index=True)
+    if max_excess_n is not None:
+        names = finger_names_of(df)
+        col = lambda prefix: df[[f"{prefix}_{n}" for n in names]].to_numpy()
+        df = df[nominal_excess_n(col("f_nom"), col("f_meas"), col("active")) <= float(max_excess_n)]
+        if df.empty:
+            raise DatasetError(f"no samples in {out!r} for {where or 'the whole dataset'} pass max_excess_n={max_excess_n}")
+        df = df.reset_index(drop=True)
+    return df
 
 
 def finger_names_of(df: pd.DataFrame) -> tuple:
@@ -499,8 +576,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--duration", type=float, default=None, help="episode length in seconds (default: the task's)")
     p.add_argument("--noise", type=float, default=0.01, help="depth noise in metres (sets the pose errors; default 0.01)")
     p.add_argument("--kinematics", default="algebraic", choices=KINEMATICS, help="kinematics source (default: algebraic)")
-    p.add_argument("--contacts", default="vision", choices=CONTACTS,
-                   help="contacts source: vision (truth + the paper's contact error) or oracle (default: vision)")
+    p.add_argument("--contacts", default="tracker", choices=CONTACTS,
+                   help="contacts (and poses) source: tracker (render and track every episode, the method; "
+                        "default), error-model (truth + the paper's contact error, tracker-like poses; cheaper) "
+                        "or oracle (the truth's contacts; an ablation)")
     p.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
     p.add_argument("--ray-address", default=None, help="run on a Ray cluster at this address (needs the 'ray' extra)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -521,6 +600,6 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         f"dropped {int(man['dropped_gap'].sum())} for |vision - tactile net force| > {spec.max_gap_n} N, "
         f"{int(man['dropped_contacts'].sum())} with < {spec.min_fingers} fingers or invalid kinematics, "
         f"{int(man['dropped_solver'].sum())} unsolved; kinematics={spec.kinematics}, contacts={spec.contacts} "
-        f"(oracle = from the truth; vision = truth + the paper's contact error); {time.perf_counter() - t0:.1f} s"
+        f"(oracle = from the truth; error-model = truth + the paper's contact error; tracker = rendered and tracked); {time.perf_counter() - t0:.1f} s"
     )
     return man

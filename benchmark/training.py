@@ -1,10 +1,12 @@
 """``fsv-bench train``: fit the internal-force networks on a generated dataset and save them.
 
-    fsv-bench train --data DIR --out model.pt [--seeds 0-2] [--epochs 1500] [--folds 5]
+    fsv-bench train --data DIR --out model.pt [--seeds 0-2] [--epochs 1500] [--folds 5] [--members 5]
 
 Runs k-fold cross-validation (folds made of whole episodes) to report the expected error, then
 trains on every selected sample and saves the model with its normalisation and a description of
-the data and command (:meth:`fsv.learn.InternalForceModel.save`, atomic).
+the data and command (:meth:`fsv.learn.InternalForceModel.save`, atomic). Samples: those of the
+dataset (the paper's rule) that also pass the plausibility rule
+(:func:`benchmark.dataset.nominal_excess_n`, ``--max-excess``; inf turns it off).
 """
 
 from __future__ import annotations
@@ -15,7 +17,10 @@ import os
 import sys
 import time
 
-from benchmark.dataset import _ints, finger_names_of, load_dataset, training_set
+import numpy as np
+
+from benchmark.dataset import MAX_EXCESS_N, _ints, finger_names_of, load_dataset, training_set
+from benchmark.table2 import TABLE2_MEMBERS
 from fsv.learn import LearnConfig, cross_validate, train
 
 
@@ -26,20 +31,26 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
     p.add_argument("--folds", type=int, default=LearnConfig.folds, help="cross-validation folds (0: skip)")
     p.add_argument("--seed", type=int, default=0, help="seed of the initial weights")
+    p.add_argument("--members", type=int, default=TABLE2_MEMBERS,
+                   help=f"networks per ANN, averaged (default {TABLE2_MEMBERS}; 1 = the paper's single pair)")
+    p.add_argument("--max-excess", type=float, default=MAX_EXCESS_N,
+                   help=f"plausibility rule on the samples, [N] (default {MAX_EXCESS_N}; inf: the paper's rule only)")
 
 
 def run(args: argparse.Namespace):
     where = {} if args.seeds is None else dict(seed=list(_ints(args.seeds)))
-    df = load_dataset(args.data, **where)
+    rule = None if not np.isfinite(args.max_excess) else args.max_excess
+    df = load_dataset(args.data, max_excess_n=rule, **where)
     data = training_set(df)
-    config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed)
+    config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed, members=args.members)
     t0 = time.perf_counter()
     cv = cross_validate(data, config).summary() if args.folds else None
     with open(os.path.join(args.data, "dataset.json")) as fh:
         header = json.load(fh)
     meta = dict(
         command="fsv-bench train " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train"] else "fsv.learn.train",
-        dataset=header["spec"], selection=where, episodes=int(df["episode"].nunique()), cross_validation=cv,
+        dataset=header["spec"], selection=where, max_excess_n=rule, episodes=int(df["episode"].nunique()),
+        cross_validation=cv,
     )
     model = train(data, config, finger_names=finger_names_of(df), metadata=meta)
     model.save(args.out)

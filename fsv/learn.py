@@ -8,6 +8,12 @@ Both take the features of :mod:`fsv.features` (eq. 10-13), are multilayer percep
 two hidden layers of (6, 7) and (8, 13) neurons as in the paper, and are trained full-batch with
 resilient backpropagation (``torch.optim.Rprop``) on standardised inputs.
 
+Members. ``LearnConfig.members`` pairs of networks are trained from different initial weights
+(one seeded generator, drawn in turn) and their outputs are averaged: the mean norm, and the mean
+share vector renormalised. ``members=1`` is the paper's single pair; a few members average out
+the dependence of a small network on its initial weights (``fsv-bench train`` and the Table 2
+scorer say how many they used).
+
 Fingers not in contact. The hand has a fixed number K of finger slots (thumb first). The input is
 ``[p1, p3, p2_1..p2_K, p4_1..p4_K, active_1..active_K]`` (2 + 3K values) with p2_k = p4_k = 0 for
 a finger not in contact, so the network sees which fingers touch. ``ANN_decomp`` has K outputs;
@@ -46,7 +52,8 @@ from fsv.models import ObjectModel
 from fsv.types import Contacts, Kinematics
 
 FORMAT = "fsv-internal-forces"
-VERSION = 1
+VERSION = 2
+_READABLE = (1, 2)  # version 1: a single pair of networks stored as two state dicts
 
 
 @dataclass(frozen=True)
@@ -64,6 +71,8 @@ class LearnConfig:
         seed: Seed of the weight initialisation.
         min_l2_n: Samples whose internal-force norm is below this [N] carry no share information
             and are left out of ANN_decomp's loss.
+        members: Pairs of networks trained from different initial weights; predictions are
+            their average (1: the paper's single pair).
     """
 
     hidden_l2: tuple = (6, 7)
@@ -75,6 +84,7 @@ class LearnConfig:
     folds: int = 5
     seed: int = 0
     min_l2_n: float = 0.05
+    members: int = 1
 
     def __post_init__(self):
         for name in ("hidden_l2", "hidden_decomp"):
@@ -82,10 +92,11 @@ class LearnConfig:
             if len(h) == 0 or any(v <= 0 for v in h):
                 raise InputError(f"LearnConfig.{name} must be a non-empty tuple of positive sizes, got {h}")
             object.__setattr__(self, name, h)
-        for name in ("epochs", "folds", "seed"):
+        for name in ("epochs", "folds", "seed", "members"):
             v = getattr(self, name)
-            if isinstance(v, bool) or int(v) != v or v < (2 if name == "folds" else 0 if name == "seed" else 1):
-                raise InputError(f"LearnConfig.{name} must be an integer >= {2 if name == 'folds' else 0 if name == 'seed' else 1}, got {v!r}")
+            low = 2 if name == "folds" else 0 if name == "seed" else 1
+            if isinstance(v, bool) or int(v) != v or v < low:
+                raise InputError(f"LearnConfig.{name} must be an integer >= {low}, got {v!r}")
             object.__setattr__(self, name, int(v))
         if not (self.lr > 0 and self.min_l2_n >= 0):
             raise InputError(f"LearnConfig.lr must be > 0 and min_l2_n >= 0, got {self.lr!r}, {self.min_l2_n!r}")
@@ -185,7 +196,7 @@ class InternalForceModel:
         finger_names: The K finger slots, thumb first.
         x_mean, x_std: Input standardisation, shape (2 + 3K,).
         l2_mean, l2_std: Standardisation of ANN_L2's target, [N].
-        net_l2, net_decomp: The networks (float64).
+        net_l2, net_decomp: The networks (float64), one per member (lists of ``config.members``).
         metadata: Free-form description (dataset, command, losses); JSON-like values only.
     """
 
@@ -196,8 +207,11 @@ class InternalForceModel:
         self.x_std = np.asarray(x_std, dtype=np.float64)
         self.l2_mean = float(l2_mean)
         self.l2_std = float(l2_std)
-        self.net_l2 = net_l2.eval()
-        self.net_decomp = net_decomp.eval()
+        self.net_l2 = [n.eval() for n in net_l2]
+        self.net_decomp = [n.eval() for n in net_decomp]
+        if len(self.net_l2) != len(self.net_decomp) or not self.net_l2:
+            raise InputError(f"a model needs as many ANN_L2 as ANN_decomp networks (>= 1), got {len(self.net_l2)}, "
+                             f"{len(self.net_decomp)}")
         self.metadata = dict(metadata or {})
 
     @property
@@ -214,7 +228,8 @@ class InternalForceModel:
         Returns:
             ``(l2, shares, internal)``: the internal-force norm, shape (N,), [N] (clipped at 0);
             the per-finger shares, shape (N, K), unit L2 norm over the active fingers and 0
-            elsewhere; and the internal normal forces l2 * shares, shape (N, K), [N].
+            elsewhere; and the internal normal forces l2 * shares, shape (N, K), [N]. With several
+            members, the norm is their mean and the shares their mean, renormalised.
         """
         x = np.asarray(x, dtype=np.float64)
         a = np.asarray(active, dtype=bool)
@@ -223,8 +238,12 @@ class InternalForceModel:
             raise InputError(f"predict expects x of shape (N, {2 + 3 * K}) and active of shape (N, {K}), got {x.shape}, {a.shape}")
         z = torch.from_numpy((x - self.x_mean) / self.x_std)
         with torch.no_grad():
-            l2 = self.net_l2(z)[:, 0].numpy() * self.l2_std + self.l2_mean
-            s = np.where(a, self.net_decomp(z).numpy(), 0.0)
+            l2 = np.mean([net(z)[:, 0].numpy() for net in self.net_l2], axis=0) * self.l2_std + self.l2_mean
+            s = np.zeros((x.shape[0], K))
+            for net in self.net_decomp:
+                out = np.where(a, net(z).numpy(), 0.0)
+                n = np.linalg.norm(out, axis=1)
+                s += out / np.where(n > 0, n, 1.0)[:, None]
         norm = np.linalg.norm(s, axis=1)
         s = s / np.where(norm > 0, norm, 1.0)[:, None]
         l2 = np.maximum(l2, 0.0)
@@ -246,8 +265,8 @@ class InternalForceModel:
             "x_std": torch.from_numpy(self.x_std.copy()),
             "l2_mean": self.l2_mean,
             "l2_std": self.l2_std,
-            "net_l2": self.net_l2.state_dict(),
-            "net_decomp": self.net_decomp.state_dict(),
+            "net_l2": [n.state_dict() for n in self.net_l2],
+            "net_decomp": [n.state_dict() for n in self.net_decomp],
             "metadata": self.metadata,
         }
 
@@ -283,16 +302,19 @@ def load(path) -> InternalForceModel:
         st = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # a truncated or foreign file: report it as bad input
         raise InputError(f"{path!r} is not a readable internal-force model: {e}") from e
-    if not isinstance(st, dict) or st.get("format") != FORMAT or st.get("version") != VERSION:
-        raise InputError(f"{path!r} is not an {FORMAT} file of version {VERSION}")
+    if not isinstance(st, dict) or st.get("format") != FORMAT or st.get("version") not in _READABLE:
+        raise InputError(f"{path!r} is not an {FORMAT} file of version {' or '.join(map(str, _READABLE))}")
     cfg = dict(st["config"])
     config = LearnConfig(**cfg)
     K = len(st["finger_names"])
     gen = torch.Generator().manual_seed(0)
-    net_l2 = _mlp(2 + 3 * K, config.hidden_l2, 1, gen)
-    net_decomp = _mlp(2 + 3 * K, config.hidden_decomp, K, gen)
-    net_l2.load_state_dict(st["net_l2"])
-    net_decomp.load_state_dict(st["net_decomp"])
+    states = {k: st[k] if isinstance(st[k], list) else [st[k]] for k in ("net_l2", "net_decomp")}
+    net_l2, net_decomp = [], []
+    for a, b in zip(states["net_l2"], states["net_decomp"]):
+        net_l2.append(_mlp(2 + 3 * K, config.hidden_l2, 1, gen))
+        net_decomp.append(_mlp(2 + 3 * K, config.hidden_decomp, K, gen))
+        net_l2[-1].load_state_dict(a)
+        net_decomp[-1].load_state_dict(b)
     return InternalForceModel(
         config, st["finger_names"], st["x_mean"].numpy(), st["x_std"].numpy(), st["l2_mean"], st["l2_std"],
         net_l2, net_decomp, st["metadata"],
@@ -327,18 +349,20 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
     try:
         gen = torch.Generator().manual_seed(config.seed)
         z = torch.from_numpy((data.x - x_mean) / x_std)
-        net_l2 = _mlp(z.shape[1], config.hidden_l2, 1, gen)
-        net_decomp = _mlp(z.shape[1], config.hidden_decomp, K, gen)
         y = torch.from_numpy((l2 - l2_mean) / l2_std)
-        loss_l2 = _rprop(net_l2, z, lambda out: torch.mean((out[:, 0] - y) ** 2), config)
         w = torch.from_numpy((data.active & (l2 >= config.min_l2_n)[:, None]).astype(np.float64))
         s = torch.from_numpy(shares)
         n_w = max(float(w.sum()), 1.0)
-        loss_dec = _rprop(net_decomp, z, lambda out: torch.sum(w * (out - s) ** 2) / n_w, config)
+        net_l2, net_decomp, loss_l2, loss_dec = [], [], [], []
+        for _ in range(config.members):
+            net_l2.append(_mlp(z.shape[1], config.hidden_l2, 1, gen))
+            net_decomp.append(_mlp(z.shape[1], config.hidden_decomp, K, gen))
+            loss_l2.append(_rprop(net_l2[-1], z, lambda out: torch.mean((out[:, 0] - y) ** 2), config))
+            loss_dec.append(_rprop(net_decomp[-1], z, lambda out: torch.sum(w * (out - s) ** 2) / n_w, config))
     finally:
         torch.set_num_threads(threads)
     meta = dict(metadata or {})
-    meta.update(samples=len(data), train_mse_l2_std=loss_l2, train_mse_shares=loss_dec)
+    meta.update(samples=len(data), train_mse_l2_std=float(np.mean(loss_l2)), train_mse_shares=float(np.mean(loss_dec)))
     return InternalForceModel(config, names, x_mean, x_std, l2_mean, l2_std, net_l2, net_decomp, meta)
 
 

@@ -105,3 +105,49 @@ def test_pool_output_equals_in_process_output(learn_oracle_dataset, tmp_path):
     man = generate(spec, tmp_path, workers=2, progress=False)
     assert sorted(man["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1"]
     pd.testing.assert_frame_equal(load_dataset(tmp_path), load_dataset(out))
+
+
+def test_tracker_source_uses_the_pipelines_contacts_and_poses(tracked_lift):
+    """contacts="tracker" renders and tracks each episode exactly as fsv-bench / run_pipeline do."""
+    import json
+
+    from benchmark.dataset import build_episode, finger_names_of
+
+    ep, est = tracked_lift
+    spec = DatasetSpec(duration_s=ep.scenario.duration_s, contacts="tracker")
+    assert spec.scenarios() == [ep.scenario]
+    table = build_episode(ep.scenario, spec)
+    meta = json.loads(table.schema.metadata[b"fsv"])
+    assert meta["contacts"] == "tracker" and meta["tracking"]["frames"] == len(ep.truth.t)
+    df = table.to_pandas()
+    assert len(df) > 20
+    rows = df["frame"].to_numpy()
+    names = finger_names_of(df)
+    tracked = est.tracking.contacts
+    np.testing.assert_array_equal(df[[f"active_{n}" for n in names]].to_numpy(), tracked.active[rows])
+    for k, n in enumerate(names):
+        for a, ax in enumerate("xyz"):
+            np.testing.assert_array_equal(df[f"point_{ax}_{n}"], tracked.point[rows, k, a])
+            np.testing.assert_array_equal(df[f"true_point_{ax}_{n}"], ep.truth.contact_point[rows, k, a])
+    from benchmark.motion import episode_kinematics
+
+    kin = episode_kinematics(ep, "algebraic", poses=est.tracking.box)  # differentiated from the tracked poses
+    np.testing.assert_array_equal(df[["acc_x", "acc_y", "acc_z"]].to_numpy(), kin.acc[rows])
+    assert meta["tracking"]["contact_err_mm_std"] > 0  # the tracker's contacts, not the truth's
+
+
+def test_plausibility_rule_on_a_constructed_frame(learn_oracle_dataset):
+    from benchmark.dataset import nominal_excess_n
+
+    nominal = [[3.0, 2.0, 9.0, 0.0], [3.0, 2.0, 1.0, 0.0]]
+    measured = [[10.0, 5.0, np.nan, np.nan], [10.0, 0.5, 4.0, np.nan]]
+    active = [[True, True, True, False], [True, True, True, False]]
+    # frame 0: vision pushes 9 N with a finger whose sensor reads nothing; frame 1: index 1.5 N above its reading
+    np.testing.assert_allclose(nominal_excess_n(nominal, measured, active), [9.0, 1.5])
+    assert nominal_excess_n([[1.0, 1.0]], [[0.0, 0.0]], [[False, False]])[0] == -np.inf
+    spec, out, _ = learn_oracle_dataset
+    everything = load_dataset(out)
+    # oracle contacts and kinematics: the true forces explain the motion, so the least forces never exceed them
+    assert len(load_dataset(out, max_excess_n=1.5)) == len(everything)
+    strict = load_dataset(out, max_excess_n=-0.5)  # nominal at least 0.5 N below every reading
+    assert 0 < len(strict) < len(everything)

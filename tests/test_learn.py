@@ -49,10 +49,34 @@ def test_training_is_deterministic_and_leaves_global_rng_alone():
     state = torch.random.get_rng_state()
     a, b = train(data, cfg), train(data, cfg)
     assert torch.equal(state, torch.random.get_rng_state())
-    for pa, pb in zip(a.state()["net_decomp"].values(), b.state()["net_decomp"].values()):
+    for pa, pb in zip(a.state()["net_decomp"][0].values(), b.state()["net_decomp"][0].values()):
         assert torch.equal(pa, pb)
     c = train(data, LearnConfig(epochs=50, seed=6))
-    assert not torch.equal(a.state()["net_l2"]["0.weight"], c.state()["net_l2"]["0.weight"])
+    assert not torch.equal(a.state()["net_l2"][0]["0.weight"], c.state()["net_l2"][0]["0.weight"])
+
+
+def test_members_average_their_predictions_and_round_trip(tmp_path):
+    data, test = synthetic(300, 2), synthetic(50, 8)
+    two = train(data, LearnConfig(epochs=40, seed=5, members=2))
+    one = train(data, LearnConfig(epochs=40, seed=5))
+    assert len(two.net_l2) == len(two.net_decomp) == 2
+    l2_two, s_two, _ = two.predict(test.x, test.active)
+    l2_one, s_one, _ = one.predict(test.x, test.active)
+    # the first member is the single-pair model (same generator, drawn first) ...
+    np.testing.assert_array_equal(two.state()["net_l2"][0]["0.weight"].numpy(), one.state()["net_l2"][0]["0.weight"].numpy())
+    from fsv.learn import InternalForceModel
+
+    alone = [InternalForceModel(two.config, two.finger_names, two.x_mean, two.x_std, two.l2_mean, two.l2_std, [a], [d])
+             for a, d in zip(two.net_l2, two.net_decomp)]
+    l2s = [m.predict(test.x, test.active)[0] for m in alone]
+    np.testing.assert_array_equal(l2s[0], l2_one)  # ... and the norm is the mean of both members'
+    assert np.all(l2s[0] > 0) and np.all(l2s[1] > 0) and np.max(np.abs(l2s[0] - l2s[1])) > 1e-3
+    np.testing.assert_allclose(l2_two, (l2s[0] + l2s[1]) / 2, rtol=1e-12)
+    shares = sum(m.predict(test.x, test.active)[1] for m in alone)
+    np.testing.assert_allclose(s_two, shares / np.linalg.norm(shares, axis=1, keepdims=True), rtol=1e-12)
+    two.save(tmp_path / "two.pt")
+    for u, v in zip(two.predict(test.x, test.active), load(tmp_path / "two.pt").predict(test.x, test.active)):
+        np.testing.assert_array_equal(u, v)
 
 
 def test_save_load_round_trip_is_bit_exact(model, tmp_path):
@@ -97,6 +121,8 @@ def test_bad_inputs_are_named():
         LearnConfig(hidden_l2=())
     with pytest.raises(InputError, match="folds"):
         LearnConfig(folds=1)
+    with pytest.raises(InputError, match="members"):
+        LearnConfig(members=0)
 
 
 def test_learned_forces_explain_the_motion_and_follow_the_predictions():
