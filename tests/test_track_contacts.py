@@ -64,5 +64,64 @@ def test_an_unseen_finger_keeps_its_last_observed_contact_point():
 def test_bad_inputs_are_named():
     with pytest.raises(InputError, match="on_m"):
         ContactConfig(on_m=0.02, off_m=0.01)
+    with pytest.raises(InputError, match="opposition_range_m"):
+        ContactConfig(opposition_range_m=0.0)
+    with pytest.raises(InputError, match="finger_share"):
+        ContactConfig(finger_share=(("index", -1.0),))
     with pytest.raises(InputError, match="fingertips"):
         detect_contacts(np.zeros((3, 2)), np.ones(2), np.ones((3, 2), bool), box_poses(3), MODEL, ("a", "b"))
+
+
+def _grasp(T, thumb_gap=0.02, fingers_until=None):
+    """Three fingers on the box's +y face, a hidden thumb ``thumb_gap`` off the -y face."""
+    r = 0.008
+    x_f = np.array([-0.030, -0.008, 0.014])
+    z_f = np.array([-0.006, -0.008, -0.006])
+    pos = np.array([0.1, 0.2, 0.03])
+    tips = np.zeros((T, 4, 3))
+    tips[:, 0] = pos + [0.02, -HALF[1] - r - thumb_gap, 0.01]
+    for j in range(3):
+        tips[:, j + 1] = pos + [x_f[j], HALF[1] + r, z_f[j]]
+    if fingers_until is not None:
+        tips[fingers_until:, 1:, 1] += 0.05  # the fingers let go
+    observed = np.ones((T, 4), bool)
+    observed[:, 0] = False
+    return tips, np.full(4, r), observed, box_poses(T, pos), x_f, z_f
+
+
+def test_a_hidden_opposing_digit_sits_at_the_fingers_centre_of_pressure():
+    T = 8
+    tips, rad, observed, poses, x_f, z_f = _grasp(T, fingers_until=5)
+    names = ("thumb", "index", "middle", "ring")
+    c = detect_contacts(tips, rad, observed, poses, MODEL, names)
+    w = np.array([0.33, 0.33, 0.17]) / 0.83  # Radwin et al.: index, middle, ring
+    assert c.active[:5, 0].all() and not c.active[5:, 0].any()  # it lets go with the fingers
+    np.testing.assert_allclose(c.point[2, 0], [w @ x_f, -HALF[1], w @ z_f], atol=1e-12)
+    np.testing.assert_allclose(c.normal[2, 0], [0, 1, 0])
+    # without the prior the thumb, 2 cm off its face, touches nothing; too far, the prior leaves it
+    off = detect_contacts(tips, rad, observed, poses, MODEL, names, ContactConfig(opposition_prior=False))
+    assert not off.active[:, 0].any()
+    far = detect_contacts(*_grasp(T, thumb_gap=0.08)[:4], MODEL, names)
+    assert not far.active[:, 0].any() and far.active[:, 1:].all()
+    # a seen thumb is placed by its own fingertip, not by the prior
+    seen = observed.copy()
+    seen[:, 0] = True
+    assert not detect_contacts(tips, rad, seen, poses, MODEL, names).active[:, 0].any()
+
+
+def test_contact_points_are_medians_over_the_contact():
+    T, r = 21, 0.008
+    rng = np.random.default_rng(0)
+    x = 0.01 + rng.normal(0.0, 0.004, T)
+    x[10] += 0.03  # one wild frame
+    tips = np.stack([[0.1 + xx, 0.2 + HALF[1] + r, 0.03] for xx in x])[:, None, :]
+    raw = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("index",),
+                          ContactConfig(median_frames=0))
+    med = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("index",))
+    assert med.active.all()
+    err_raw, err_med = np.abs(raw.point[:, 0, 0] - 0.01), np.abs(med.point[:, 0, 0] - 0.01)
+    assert err_raw[10] > 0.025 and err_med[10] < 0.01
+    assert np.mean(err_med) < 0.6 * np.mean(err_raw)
+    np.testing.assert_allclose(med.point[:, 0, 1], HALF[1])  # still on the face
+    np.testing.assert_allclose(med.point[5, 0, 0], np.median(raw.point[0:11, 0, 0]))
+    np.testing.assert_allclose(med.point[[0, -1], 0], raw.point[[0, -1], 0])  # the window shrinks at the ends

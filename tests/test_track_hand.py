@@ -133,3 +133,39 @@ def test_ray_capsules_match_an_independent_ray_caster():
     assert np.abs(d).max() < 1e-9
     np.testing.assert_allclose(np.linalg.norm(nrm[hit], axis=1), 1.0)
     assert np.all(np.einsum("ni,ni->n", nrm[hit], rays.ray[hit]) < 0)
+
+
+def _front_of_scene(tracker, state, frame, sigma):
+    """Pixels where the hand model sits more than 3 sigma in front of the observed depth."""
+    kin = tracker.kin
+    p, r, _, _ = kin.pose(state)
+    a, b = kin.capsules(p, r)
+    z = frame.reshape(-1)
+    zh = ray_capsules(tracker.rays.origin, tracker.rays.ray, a, b, HAND.geom_radius)[0]
+    return int(np.sum((z > 0) & np.isfinite(zh) & (z - zh > 3 * sigma)))
+
+
+@pytest.mark.parametrize("free_space_points", [0, 400])
+def test_free_space_pushes_the_model_out_of_pixels_that_see_the_scene(free_space_points):
+    """The (noise-free) depth shows the table only (the box is out of the way); the model starts
+    hovering above it. Without the free-space rows no pixel is a hand candidate and the model
+    stays; with them the pixels that see the farther table where the model puts capsules move it."""
+    from fsv.track.hand import HandTrackerConfig
+
+    bp, bR = np.array([0.4, 0.4, 0.03]), np.eye(3)
+    rays = CameraRays.from_calibration(CALIB)
+
+    def scene(index):
+        return predict_box_depth(rays, index, bp, bR, SIZE / 2, CALIB.K[0, 0])[0]
+    start = hover_state()
+    tracker = HandTracker(CALIB, HAND, BOX, start, config=HandTrackerConfig(free_space_points=free_space_points))
+    frames = [render_depth(CALIB, bp, bR, SIZE / 2, ())] * 6
+    before = _front_of_scene(tracker, start, frames[0], 0.01)
+    for frame in frames:
+        fit = tracker.update(frame, scene, bp, bR, 0.01)
+    after = _front_of_scene(tracker, fit.state, frames[-1], 0.01)
+    assert before > 300
+    if free_space_points:
+        assert after < 0.5 * before, (before, after)
+    else:
+        assert after > 0.9 * before, (before, after)

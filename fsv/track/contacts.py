@@ -10,6 +10,18 @@ along it).
 
 Occlusion prior (the paper's modification of its tracker): a finger that cannot be seen keeps its
 contact, and its contact point stays at its last observed position on the object.
+
+Opposition prior, for a digit the camera cannot see that opposes the fingers (with the camera facing
+the fingers, the thumb behind the box is never seen, so it has no observed position to keep): in a
+grasp, fingers pressing on one face are balanced by the opposing digit pressing on the opposite
+face, and the moment balance about the axes of that face puts the opposing digit's contact at the
+centre of pressure of the fingers' normal forces. The tracker does not know those forces; it takes
+the human share of the grip force per finger (Radwin, Oh, Jensen and Webster 1992: index, middle,
+ring, little about 33 / 33 / 17 / 15 %) as the weights of the centroid of the fingers' contact
+points. So a hidden digit whose pad lies within ``opposition_range_m`` of the face opposite at
+least ``opposition_min_fingers`` contacts (on one face) touches that face at their weighted
+centroid. The paper's tracker kept hidden fingers at their last observed position; this prior adds
+the statics of a grasp for a digit that is never observed.
 """
 
 from __future__ import annotations
@@ -34,6 +46,14 @@ class ContactConfig:
         slide_speed_m_s: Contact point speed over the surface above which a contact slides, [m/s].
         slide_window: Frames on each side of the centred difference for the sliding speed.
         occlusion_prior: Keep an unseen finger's contact and its last observed point.
+        opposition_prior: Place a hidden opposing digit at the fingers' centre of pressure on the
+            opposite face (module docstring).
+        opposition_range_m: A hidden digit's pad must lie within this of the opposite face, [m].
+        opposition_min_fingers: Contacts needed on one face for the opposition prior.
+        finger_share: Share of the grip force of each finger, by name (the centroid's weights);
+            fingers not named weigh the mean of the named ones.
+        median_frames: Each contact point is the median of its points over this many frames on
+            each side (within the same contact), against tracking jitter; 0 = off.
     """
 
     on_m: float = 0.006
@@ -41,6 +61,11 @@ class ContactConfig:
     slide_speed_m_s: float = 0.05
     slide_window: int = 3
     occlusion_prior: bool = True
+    opposition_prior: bool = True
+    opposition_range_m: float = 0.06
+    opposition_min_fingers: int = 2
+    finger_share: tuple = (("index", 0.33), ("middle", 0.33), ("ring", 0.17), ("little", 0.15))
+    median_frames: int = 5
 
     def __post_init__(self):
         if not (np.isfinite(self.on_m) and np.isfinite(self.off_m) and self.off_m >= self.on_m):
@@ -49,6 +74,19 @@ class ContactConfig:
             raise InputError(f"slide_speed_m_s must be > 0, got {self.slide_speed_m_s!r}")
         if int(self.slide_window) < 1:
             raise InputError(f"slide_window must be >= 1 frame, got {self.slide_window!r}")
+        if not (np.isfinite(self.opposition_range_m) and self.opposition_range_m > 0):
+            raise InputError(f"opposition_range_m must be > 0, got {self.opposition_range_m!r}")
+        if int(self.opposition_min_fingers) < 1:
+            raise InputError(f"opposition_min_fingers must be >= 1, got {self.opposition_min_fingers!r}")
+        share = dict(self.finger_share)
+        if not share or not all(np.isfinite(v) and v > 0 for v in share.values()):
+            raise InputError(f"finger_share must map finger names to positive shares, got {self.finger_share!r}")
+
+    def weights(self, finger_names) -> np.ndarray:
+        """The grip share of every finger of ``finger_names``, shape (K,)."""
+        share = dict(self.finger_share)
+        mean = float(np.mean(list(share.values())))
+        return np.array([float(share.get(str(f), mean)) for f in finger_names])
 
 
 def surface_contact(points_obj: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -70,6 +108,63 @@ def surface_contact(points_obj: np.ndarray, half: np.ndarray) -> tuple[np.ndarra
     normal = np.zeros_like(point)
     normal[rows, face] = -np.sign(point[rows, face])
     return point, normal, dist
+
+
+def _oppose(i, tips_obj, radius, observed, active, point, normal, half, weight, c: ContactConfig) -> np.ndarray:
+    """The opposition prior at frame ``i`` (module docstring), in place on ``active``, ``point`` and
+    ``normal``; returns the digits it placed, shape (K,)."""
+    opposed = np.zeros(active.shape[1], dtype=bool)
+    for k in np.flatnonzero(~observed):
+        others = active[i] & (np.arange(active.shape[1]) != k)
+        if others.sum() < c.opposition_min_fingers:
+            continue
+        axis = np.argmax(np.abs(normal[i]), axis=1)
+        side = np.sign(np.einsum("kj,kj->k", normal[i], np.eye(3)[axis]))  # inward: -1 on a + face
+        best = None
+        for ax in range(3):
+            for sg in (-1.0, 1.0):
+                on = others & (axis == ax) & (side == sg)
+                if on.sum() >= c.opposition_min_fingers and (best is None or on.sum() > best[2].sum()):
+                    best = (ax, sg, on)
+        if best is None:
+            continue
+        ax, sg, on = best
+        # the fingers' face is at -sg * half[ax]; the opposite face at +sg * half[ax]
+        gap = sg * tips_obj[k, ax] - half[ax] - radius[k]
+        if sg * tips_obj[k, ax] <= 0 or not -radius[k] <= gap <= c.opposition_range_m:
+            continue
+        w = weight[on] / weight[on].sum()
+        p = w @ point[i, on]
+        p[ax] = sg * half[ax]
+        active[i, k] = True
+        point[i, k] = p
+        normal[i, k] = 0.0
+        normal[i, k, ax] = -sg
+        opposed[k] = True
+    return opposed
+
+
+def _runs(active):
+    """``(finger, start, end)`` of every maximal run of active frames (end exclusive)."""
+    out = []
+    for k in range(active.shape[1]):
+        a = np.concatenate([[False], active[:, k], [False]])
+        starts, ends = np.flatnonzero(~a[:-1] & a[1:]), np.flatnonzero(a[:-1] & ~a[1:])
+        out += [(k, int(s0), int(e0)) for s0, e0 in zip(starts, ends)]
+    return out
+
+
+def _median_in_runs(active, point, normal, half, w):
+    """Centred running median of every contact's point over +-w frames of the same contact (the
+    window shrinks symmetrically at a contact's ends, so a steady slide is left unchanged)."""
+    out, nrm = point.copy(), normal.copy()
+    for k, s0, e0 in _runs(active):
+        for i in range(s0, e0):
+            h = min(w, i - s0, e0 - 1 - i)
+            out[i, k] = np.median(point[i - h : i + h + 1, k], axis=0)
+        p, n, _ = surface_contact(out[s0:e0, k], half)
+        out[s0:e0, k], nrm[s0:e0, k] = p, n
+    return out, nrm
 
 
 def detect_contacts(fingertips: np.ndarray, radius: np.ndarray, observed: np.ndarray, box: Poses,
@@ -104,15 +199,22 @@ def detect_contacts(fingertips: np.ndarray, radius: np.ndarray, observed: np.nda
     point, normal, dist = surface_contact(q.reshape(-1, 3), half)
     point, normal = point.reshape(T, K, 3), normal.reshape(T, K, 3)
     gap = dist.reshape(T, K) - radius[None]
+    weight = c.weights(finger_names)
     active = np.zeros((T, K), dtype=bool)
+    opposed = np.zeros((T, K), dtype=bool)  # placed by the opposition prior
     for i in range(T):
         prev = active[i - 1] if i else np.zeros(K, dtype=bool)
         active[i] = np.where(prev, gap[i] <= c.off_m, gap[i] <= c.on_m)
         if c.occlusion_prior and i:
-            hidden = ~observed[i] & prev
+            # a contact the opposition prior placed lasts only as long as the fingers it opposes
+            hidden = ~observed[i] & prev & ~opposed[i - 1]
             active[i] |= hidden
             point[i, hidden] = point[i - 1, hidden]
             normal[i, hidden] = normal[i - 1, hidden]
+        if c.opposition_prior:
+            opposed[i] = _oppose(i, q[i], radius, observed[i], active, point, normal, half, weight, c)
+    if c.median_frames > 0:
+        point, normal = _median_in_runs(active, point, normal, half, int(c.median_frames))
     sliding = np.zeros((T, K), dtype=bool)
     slide_dir = np.zeros((T, K, 3))
     dt = float(np.median(np.diff(box.t))) if T > 1 else 1.0
