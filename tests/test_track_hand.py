@@ -113,6 +113,12 @@ def test_bad_inputs_are_named():
         HandTracker(CALIB, HAND, BOX, HandState(np.zeros(3), np.eye(3), np.zeros(3)))
     with pytest.raises(InputError, match="palm_rot"):
         HandState(np.zeros(3), np.ones((3, 3)), np.zeros(20))
+    from fsv.track.hand import HandTrackerConfig
+
+    with pytest.raises(InputError, match="free_space_points"):
+        HandTrackerConfig(free_space_points=-1)
+    with pytest.raises(InputError, match="free_space_margin_m"):
+        HandTrackerConfig(free_space_margin_m=0.0)
 
 
 def test_ray_capsules_match_an_independent_ray_caster():
