@@ -19,6 +19,9 @@ combinations, the paper's five rows (○ = the partial training set has it, × =
 A diagnostic that is not in the paper: *same-user training*, every grasp and mass of the evaluated
 row's user only. Our features, like the paper's, cannot tell users apart; where the synthetic
 users grip differently, full training learns their average, and this column shows what is lost.
+A second one, *user-blind ideal* (:func:`user_blind`): the decomposition's exact targets averaged
+over the protocol's two users at the same frames, the best any predictor blind to the user can do
+on average, every other error removed; it bounds full training from below.
 
 For each evaluation frame, the networks' predicted internal normal forces go into the
 reconstruction SOCP (eq. 14, :func:`fsv.forces.reconstruct_forces`), whose total normal force per
@@ -107,13 +110,14 @@ def object_models(out) -> dict:
     return models
 
 
-def evaluate(model: InternalForceModel, df: pd.DataFrame, models: dict) -> dict:
+def evaluate(model: InternalForceModel | None, df: pd.DataFrame, models: dict, predicted=None) -> dict:
     """Reconstructs full forces (eq. 14) from the model's predictions on the frames of ``df``.
 
     Args:
-        model: Trained networks.
+        model: Trained networks (None with ``predicted``).
         df: Dataset rows (any number of episodes).
         models: ``{episode: (ObjectModel, gravity)}`` (see :func:`object_models`).
+        predicted: Internal normal forces to use instead of the model's, shape (len(df), K), [N].
 
     Returns:
         A dict with ``errors`` (relative errors in %, shape (M,)), per-row arrays ``t``,
@@ -122,10 +126,15 @@ def evaluate(model: InternalForceModel, df: pd.DataFrame, models: dict) -> dict:
         residual of the reconstruction over OPTIMAL frames).
     """
     names = finger_names_of(df)
-    if tuple(names) != tuple(model.finger_names):
-        raise DatasetError(f"the dataset's fingers {names} differ from the model's {model.finger_names}")
     ts = training_set(df)
-    _, _, pred = model.predict(ts.x, ts.active)
+    if predicted is None:
+        if tuple(names) != tuple(model.finger_names):
+            raise DatasetError(f"the dataset's fingers {names} differ from the model's {model.finger_names}")
+        _, _, pred = model.predict(ts.x, ts.active)
+    else:
+        pred = np.asarray(predicted, float)
+        if pred.shape != ts.internal.shape:
+            raise DatasetError(f"predicted must have shape {ts.internal.shape}, got {pred.shape}")
     normal = np.zeros_like(pred)
     status = np.zeros(len(df), np.int8)
     resid = 0.0
@@ -146,6 +155,30 @@ def evaluate(model: InternalForceModel, df: pd.DataFrame, models: dict) -> dict:
         predicted_internal=pred, normal=normal, measured=measured, active=ts.active, status=status,
         residual_rel=resid, finger_names=names,
     )
+
+
+def user_blind(df: pd.DataFrame, partner: pd.DataFrame) -> tuple[pd.DataFrame, np.ndarray]:
+    """The ideal user-blind prediction: each frame's own decomposition targets averaged with those
+    of the same frame of another user's episode (same task, grasp, mass and seed, hence the same
+    planned motion), finger by finger where both touch the box.
+
+    Features that do not tell two users apart (p1-p4 do not) cannot do better on average than
+    predicting the same internal forces for both; this average is that prediction with every other
+    error removed (each user's own contacts and kinematics, the exact targets). Its error is a
+    floor of full training on these two users, a diagnostic that is not in the paper.
+
+    Returns:
+        ``(rows, predicted)``: the rows of ``df`` that have a partner frame, and the averaged
+        internal normal forces for them, shape (N, K), [N].
+    """
+    names = finger_names_of(df)
+    key = ["task", "grasp", "mass", "seed", "frame"]
+    cols = [f"f_int_{n}" for n in names] + [f"active_{n}" for n in names]
+    both = df.reset_index(drop=True).merge(partner[key + cols], on=key, how="inner", suffixes=("", "_partner"))
+    own = both[[f"f_int_{n}" for n in names]].to_numpy(float)
+    other = both[[f"f_int_{n}_partner" for n in names]].to_numpy(float)
+    shared = both[[f"active_{n}_partner" for n in names]].to_numpy(bool)
+    return both[df.columns].reset_index(drop=True), np.where(shared, (own + other) / 2, own)
 
 
 def score(data, protocol: Table2Protocol = Table2Protocol(), config: LearnConfig = LearnConfig(),
@@ -195,6 +228,14 @@ def score(data, protocol: Table2Protocol = Table2Protocol(), config: LearnConfig
             row[f"{which}_residual_rel"] = ev["residual_rel"]
             if paper[:3] == (False, False, False):
                 fig6[which] = ev
+        if protocol.user != protocol.other_user:
+            other = protocol.other_user if combo["user"] == protocol.user else protocol.user
+            partner = load(seed=list(protocol.test_seeds), **dict(combo, user=other))
+            rows_ub, pred_ub = user_blind(test_df, partner)
+            ev = evaluate(None, rows_ub, models, predicted=pred_ub)
+            row["user_blind_avg"] = float(np.mean(ev["errors"]))
+            row["user_blind_std"] = float(np.std(ev["errors"]))
+            row["user_blind_n"] = int(ev["errors"].size)
         rows.append(row)
     return dict(
         rows=rows, protocol=asdict(protocol), config=asdict(config), train_seconds=train_s,
@@ -214,15 +255,16 @@ def markdown(result: dict) -> str:
     mark = lambda b: "○" if b else "×"
     lines = [
         "| User | Mass | Grasp | Part. avg [%] | Part. std [%] | Full avg [%] | Full std [%] | Paper part. avg / std | "
-        "Paper full avg / std | Same-user full avg / std [%] (diagnostic) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "Paper full avg / std | Same-user full avg / std [%] (diagnostic) | User-blind ideal avg / std [%] (diagnostic) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in result["rows"]:
         lines.append(
             f"| {mark(r['seen_user'])} | {mark(r['seen_mass'])} | {mark(r['seen_grasp'])} | {r['partial_avg']:.1f} | "
             f"{r['partial_std']:.1f} | {r['full_avg']:.1f} | {r['full_std']:.1f} | {r['paper_partial_avg']} / "
             f"{r['paper_partial_std']} | {r['paper_full_avg']} / {r['paper_full_std']} | "
-            f"{r['same_user_avg']:.1f} / {r['same_user_std']:.1f} |"
+            f"{r['same_user_avg']:.1f} / {r['same_user_std']:.1f} | "
+            + (f"{r['user_blind_avg']:.1f} / {r['user_blind_std']:.1f} |" if "user_blind_avg" in r else "– |")
         )
     s = result["samples"]
     rule = result.get("max_excess_n")

@@ -51,3 +51,21 @@ def test_score_writes_the_table_and_the_figure(learn_oracle_dataset, tmp_path):
     assert {p.name for p in tmp_path.iterdir()} == {"table2.md", "table2.csv", "table2.json", "fig6.png"}
     assert "| ○ | ○ | ○ |" in markdown(result)
     assert json.loads((tmp_path / "table2.json").read_text())["sources"] == {"kinematics": "oracle", "contacts": "oracle"}
+
+
+def test_user_blind_prediction_averages_the_two_users_frame_by_frame():
+    import pandas as pd
+
+    from benchmark.table2 import user_blind
+
+    def rows(user, frames, thumb, index, index_active):
+        n = len(frames)
+        return pd.DataFrame(dict(task="lift", user=user, grasp=0, mass=1, seed=3, frame=frames,
+                                 active_thumb=True, active_index=index_active, f_int_thumb=thumb, f_int_index=index))
+
+    own = rows(0, [4, 5, 6], [10.0, 12.0, 14.0], [6.0, 6.0, 7.0], [True, True, True])
+    partner = rows(1, [5, 6, 7], [20.0, 18.0, 0.0], [8.0, 0.0, 0.0], [True, False, False])
+    kept, pred = user_blind(own, partner)
+    assert list(kept["frame"]) == [5, 6] and list(kept["user"]) == [0, 0]  # frames both users have
+    # thumb averaged; the index only where the partner's index touches too (frame 6: own value)
+    np.testing.assert_allclose(pred, [[16.0, 7.0], [16.0, 7.0]])
