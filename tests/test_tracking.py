@@ -95,3 +95,21 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
     data = path.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
     assert [p.name for p in tmp_path.iterdir()] == ["o.png"]  # written atomically, no temp file left
+
+
+def test_contact_gates_hold_on_the_default_ten_second_lift_of_another_seed():
+    """The issue's gates on the scenario `fsv-bench --task lift --noise 0.01 --seed 3` runs (10 s, 301
+    frames), a seed no tracker setting was tuned on (measured: +0.3 +- 2.3 mm, recall and precision
+    1.00 / 1.00; seeds 0-4 all pass). The short test lifts above miss a gate on some seeds."""
+    from benchmark.render import render
+    from benchmark.scenario import Scenario
+    from benchmark.simulate import simulate
+    from fsv.track.tracker import track
+
+    ep = render(simulate(Scenario(task="lift", seed=3)))
+    assert ep.depth.depth_m.shape[0] == 301
+    tracking = track(ep.depth, ep.calib, ep.object_model, ep.hand_model, tracker_init(ep.truth, ep.scenario, ep.hand_model),
+                     rng=ep.scenario.rng("tracker"))
+    s = score_tracking(tracking, ep.truth)
+    assert s["box_pos_err_mm_median"] <= 2.0 and s["box_rot_err_deg_median"] <= 1.5, s
+    assert all(g["pass"] for g in gate_report(s).values()), gate_report(s)
