@@ -21,7 +21,8 @@ row's user only. Our features, like the paper's, cannot tell users apart; where 
 users grip differently, full training learns their average, and this column shows what is lost.
 A second one, *user-blind ideal* (:func:`user_blind`): the decomposition's exact targets averaged
 over the protocol's two users at the same frames, the best any predictor blind to the user can do
-on average, every other error removed; it bounds full training from below.
+on average, every other error removed; full training can do better only insofar as its inputs
+do tell the users apart.
 
 For each evaluation frame, the networks' predicted internal normal forces go into the
 reconstruction SOCP (eq. 14, :func:`fsv.forces.reconstruct_forces`), whose total normal force per
@@ -164,8 +165,9 @@ def user_blind(df: pd.DataFrame, partner: pd.DataFrame) -> tuple[pd.DataFrame, n
 
     Features that do not tell two users apart (p1-p4 do not) cannot do better on average than
     predicting the same internal forces for both; this average is that prediction with every other
-    error removed (each user's own contacts and kinematics, the exact targets). Its error is a
-    floor of full training on these two users, a diagnostic that is not in the paper.
+    error removed (each user's own contacts and kinematics, the exact targets). Networks trained on
+    both users beat it only insofar as their inputs tell the users apart; a diagnostic that is not
+    in the paper.
 
     Returns:
         ``(rows, predicted)``: the rows of ``df`` that have a partner frame, and the averaged
