@@ -66,12 +66,17 @@ def test_no_contact_frames_get_no_forces_and_timings_are_recorded(lift):
     assert est.timing_s["total"] >= est.timing_s["track"] + est.timing_s["kinematics"]
 
 
+def _at_rest(k: Kinematics, n: int) -> Kinematics:
+    """Oracle kinematics of the first n frames of ``k``: its poses, every derivative zero."""
+    z = np.zeros((n, 3))
+    return Kinematics(t=k.t[:n], pos=k.pos[:n], rot=k.rot[:n], vel=z, acc=z, omega=z, alpha=z,
+                      valid=np.ones(n, bool), method="oracle")
+
+
 def test_oracle_inputs_replace_the_estimates_and_are_labelled(lift):
     est, video, init = lift[0], lift[4], lift[5]
     n = 6
-    k = est.kinematics
-    oracle_kin = Kinematics(t=k.t[:n], pos=k.pos[:n], rot=k.rot[:n], vel=np.zeros((n, 3)), acc=np.zeros((n, 3)),
-                            omega=np.zeros((n, 3)), alpha=np.zeros((n, 3)), valid=np.ones(n, bool), method="oracle")
+    oracle_kin = _at_rest(est.kinematics, n)
     K = len(HAND.finger_names)
     active = np.zeros((n, K), bool)
     active[:, 0] = True
@@ -100,9 +105,7 @@ def test_a_trained_model_adds_the_learned_forces(lift):
 
     est, video, init = lift[0], lift[4], lift[5]
     n = 8
-    k = est.kinematics
-    kin = Kinematics(t=k.t[:n], pos=k.pos[:n], rot=k.rot[:n], vel=np.zeros((n, 3)), acc=np.zeros((n, 3)),
-                     omega=np.zeros((n, 3)), alpha=np.zeros((n, 3)), valid=np.ones(n, bool), method="oracle")
+    kin = _at_rest(est.kinematics, n)
     K = len(HAND.finger_names)
     active = np.zeros((n, K), bool)
     active[:, :2] = True  # thumb and index pinch the box's y faces
