@@ -61,11 +61,16 @@ def test_grip_rises_with_load_and_margin():
 
 
 def test_users_differ_in_grip_policy():
-    margins = [u["safety_margin"] for u in users()]
-    assert len(users()) >= 4 and len(set(margins)) == len(margins)
+    """u0-u3 grip with four different intensities; u4 is u1's hand with u0's intensity (Table 2's pair)."""
+    us = users()
+    intensity = lambda u: (u["safety_margin"], u["baseline_grip_n"])
+    hand = lambda u: (u["hand_scale"], tuple(u["finger_share"].values()), u["anticipation_s"], u["response_s"],
+                      u["stiffness_nm_per_rad"])
+    assert len(us) == 5 and len({intensity(u) for u in us[:4]}) == 4
+    assert intensity(us[4]) == intensity(us[0]) and hand(us[4]) == hand(us[1]) != hand(us[0])
 
 
-@pytest.mark.parametrize("user", [0, 1, 2, 3])
+@pytest.mark.parametrize("user", range(len(users())))
 @pytest.mark.parametrize("grasp", [0, 1, 2, 3])
 def test_grasp_plans_fit_every_hand(user, grasp):
     plan = plan_grasp(Scenario(user=user, grasp=grasp))

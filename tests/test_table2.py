@@ -69,3 +69,13 @@ def test_user_blind_prediction_averages_the_two_users_frame_by_frame():
     assert list(kept["frame"]) == [5, 6] and list(kept["user"]) == [0, 0]  # frames both users have
     # thumb averaged; the index only where the partner's index touches too (frame 6: own value)
     np.testing.assert_allclose(pred, [[16.0, 7.0], [16.0, 7.0]])
+
+
+@pytest.mark.parametrize("users", ["0,0", "4", "0,1,4"])
+def test_users_option_takes_two_different_users(tmp_path, capsys, users):
+    from benchmark.cli import main
+
+    code = main(["table2", "--data", str(tmp_path), "--out", str(tmp_path / "out"), "--users", users])
+    err = capsys.readouterr().err
+    assert code == 2 and f"--users {users!r}: expected two different user indices" in err
+    assert not (tmp_path / "out").exists()
