@@ -115,3 +115,11 @@ def test_grip_rises_with_load_across_masses_and_within_an_episode(episode_factor
     assert best > 0.6
     high = load > np.median(load)
     assert fn[high].mean() > fn[~high].mean()
+
+
+def test_table2_pair_grips_alike_and_a_careful_user_harder(episode_factory):
+    """u4 (u1's hand, u0's margin and baseline) squeezes like u0; u1 (margin 0.8, baseline 2.5 N) harder."""
+    grip = {u: np.median(_total_grip(episode_factory(task="lift", user=u, grasp=0, mass=2, duration_s=2.4))[0])
+            for u in (0, 1, 4)}
+    assert abs(grip[4] / grip[0] - 1) < 0.1  # measured: +4 % (the smaller hand's other finger shares)
+    assert grip[1] > 1.25 * grip[0]  # measured: +39 %
