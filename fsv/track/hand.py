@@ -38,10 +38,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
-from fsv.rotation import axis_angle_to_rot, quat_to_rot
+from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
 from fsv.track.camera import CameraRays
-from fsv.rotation import exp_so3, log_so3, project_to_so3
+from fsv.rotation import cross, exp_so3, log_so3, project_to_so3
 from fsv.types import Calibration
 
 
@@ -189,6 +189,22 @@ class HandKinematics:
             while b > 0:
                 self.finger_of_segment[b] = k
                 b = int(model.parent[b])
+        # Constants of :meth:`pose`: every hinge's cross-product matrix K and K @ K (Rodrigues'
+        # formula, the same arrays as ``axis_angle_to_rot`` builds on every call), and per segment
+        # its parent, offsets and hinges as Python objects (no NumPy indexing in the loop).
+        axis = np.asarray(model.joint_axis, dtype=float)
+        x, y, z = np.moveaxis(axis, -1, 0)
+        zero = np.zeros_like(x)
+        K = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+        self.hinge_K, self.hinge_KK = K, K @ K
+        self.chain = [(int(model.parent[b]), model.offset_pos[b], self.offset_rot[b],
+                       [(int(j), model.joint_axis[j]) for j in self.joints_of[b]]) for b in range(B)]
+
+    def hinges(self, joints: np.ndarray) -> np.ndarray:
+        """Rotation of every hinge, bit for bit ``axis_angle_to_rot(model.joint_axis, joints)``: (n,) -> (n, 3, 3)."""
+        q = np.asarray(joints, dtype=float)
+        s, c = np.sin(q)[..., None, None], np.cos(q)[..., None, None]
+        return np.eye(3) + s * self.hinge_K + (1 - c) * self.hinge_KK
 
     def pose(self, state: HandState):
         """Segment poses and hinge frames.
@@ -198,21 +214,20 @@ class HandKinematics:
             orientations, and each hinge's world axis and pivot, [m].
         """
         m = self.model
-        B = len(m.segment_names)
-        hinge = axis_angle_to_rot(m.joint_axis, state.joints)
+        B = len(self.chain)
+        hinge = self.hinges(state.joints)
         pos = np.empty((B, 3))
         rot = np.empty((B, 3, 3))
         axis = np.empty((m.num_joints, 3))
         pivot = np.empty((m.num_joints, 3))
-        for b in range(B):
+        for b, (p, offset_pos, offset_rot, joints) in enumerate(self.chain):
             if b == 0:
                 pos[0], R = state.palm_pos, state.palm_rot
             else:
-                p = m.parent[b]
-                pos[b] = pos[p] + rot[p] @ m.offset_pos[b]
-                R = rot[p] @ self.offset_rot[b]
-            for j in self.joints_of[b]:
-                axis[j] = R @ m.joint_axis[j]
+                pos[b] = pos[p] + rot[p] @ offset_pos
+                R = rot[p] @ offset_rot
+            for j, joint_axis in joints:
+                axis[j] = R @ joint_axis
                 pivot[j] = pos[b]
                 R = R @ hinge[j]
             rot[b] = R
@@ -249,11 +264,11 @@ class HandKinematics:
         n = self.model.num_joints
         J = np.zeros((x.shape[0], 6 + n))
         J[:, :3] = direction
-        J[:, 3:6] = np.cross(x - pos[0], direction)
+        J[:, 3:6] = cross(x - pos[0], direction)
         moves = self.moves[segment]  # (P, n)
         # d/dq_j (direction . x) = direction . (a_j x (x - pivot_j)) = a_j . ((x - pivot_j) x direction)
         lever = x[:, None, :] - pivot[None, :, :]
-        J[:, 6:] = np.where(moves, np.einsum("jk,pjk->pj", axis, np.cross(lever, direction[:, None, :])), 0.0)
+        J[:, 6:] = np.where(moves, np.einsum("jk,pjk->pj", axis, cross(lever, direction[:, None, :])), 0.0)
         return J
 
 

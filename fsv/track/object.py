@@ -26,7 +26,7 @@ import numpy as np
 from fsv.errors import InputError, TrackingError
 from fsv.models import ObjectModel
 from fsv.track.camera import CameraRays
-from fsv.rotation import exp_so3, log_so3, project_to_so3
+from fsv.rotation import cross, exp_so3, log_so3, project_to_so3
 from fsv.types import Calibration, DepthVideo, Poses
 
 _FAR_M = 1.0  # background depth behind the box where no table is seen, [m] past the box
@@ -147,8 +147,7 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
         q = (p - pos) @ rot
         rect = np.full(N, np.inf)  # margin inside the face's rectangle (all four edges)
         sil = np.full(N, np.inf)  # margin inside its silhouette edges only
-        rect_edge = np.zeros((2, N))  # (axis, sign) of the edge setting each margin
-        sil_edge = np.zeros((2, N))
+        rect_axis = rect_sign = sil_axis = sil_sign = 0.0  # (axis, sign) of the edge setting each margin
         for b in range(3):
             if b == a:
                 continue
@@ -156,12 +155,12 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
                 m_edge = half[b] - e * q[:, b]  # distance inside the edge q_b = e * half_b
                 closer = m_edge < rect
                 rect = np.where(closer, m_edge, rect)
-                rect_edge[:, closer] = [[b], [-e]]
+                rect_axis, rect_sign = np.where(closer, float(b), rect_axis), np.where(closer, -e, rect_sign)
                 if dist[(b, e)] > 0:
                     continue  # the face across this edge is visible: not a silhouette edge
                 closer = m_edge < sil
                 sil = np.where(closer, m_edge, sil)
-                sil_edge[:, closer] = [[b], [-e]]
+                sil_axis, sil_sign = np.where(closer, float(b), sil_axis), np.where(closer, -e, sil_sign)
         rect = np.where(hit, rect, -np.inf)
         better = rect > rect_best
         rect_best = np.where(better, rect, rect_best)
@@ -171,8 +170,8 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
         inside = rect >= 0
         best_m = np.where(better, np.where(inside, sil, rect), best_m)
         best_face = np.where(better, len(cache), best_face)
-        edge = np.where(inside, sil_edge, rect_edge)
-        cache.append((n, nd, p, q, edge[0].astype(int), edge[1]))
+        edge_axis = np.where(inside, sil_axis, rect_axis)
+        cache.append((n, nd, p, q, edge_axis.astype(int), np.where(inside, sil_sign, rect_sign)))
     no_face = best_face < 0
     z_box = np.where(no_face, 0.0, best_z)
     bg_eff = np.where(np.isfinite(bg), bg, z_box + _FAR_M)
@@ -191,14 +190,14 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
             continue
         nds, ps = nd[sel], p[sel]
         dz_dt = np.broadcast_to(n / nds[:, None], (nds.shape[0], 3))
-        dz_dw = np.cross(ps - pos, n) / nds[:, None]
+        dz_dw = cross(ps - pos, n) / nds[:, None]
         # m = half_b + sign * q_b on the nearest silhouette edge, q_b = R_b . (p - c):
         # dq_b = dw . (R_b x (p - c)) + (R_b . d) dz - R_b . dt.
         Rb = rot[:, sil_axis[sel]].T
         sgn = sil_sign[sel]
         Rb_d = np.einsum("ij,ij->i", Rb, d[sel])
         dm_dt = sgn[:, None] * (Rb_d[:, None] * dz_dt - Rb)
-        dm_dw = sgn[:, None] * (np.cross(Rb, ps - pos) + Rb_d[:, None] * dz_dw)
+        dm_dw = sgn[:, None] * (cross(Rb, ps - pos) + Rb_d[:, None] * dz_dw)
         ws, zs, ts = w[sel], z_box[sel], tau[sel]
         gain = (zs - bg_eff[sel]) * ws * (1 - ws) / ts
         # d(m / tau) with tau proportional to the depth: (dm - m dz / z) / tau.
