@@ -326,23 +326,50 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
     wd = d @ w.T  # (N, G)
     ww = np.einsum("gi,gi->g", w, w)[None]
     r2 = (radius**2)[None]
+    # The (N, G) arrays are updated in place (the same operations in the same order as the
+    # formulas in the comments, without a temporary per operation).
     with np.errstate(invalid="ignore", divide="ignore"):
         # Cylinder: |w_p + t d_p|^2 = r^2 with the components perpendicular to the axis.
-        A = dd - du**2
-        B = 2 * (wd - wu * du)
+        A = du**2
+        np.subtract(dd, A, out=A)  # A = dd - du**2
+        B = wu * du
+        np.subtract(wd, B, out=B)
+        B *= 2  # B = 2 * (wd - wu * du)
         C = ww - wu**2 - r2
-        disc = B**2 - 4 * A * C
-        t_cyl = np.where((disc >= 0) & (A > 1e-12), (-B - np.sqrt(np.maximum(disc, 0))) / (2 * A), np.inf)
-        s = wu + t_cyl * du
-        t_cyl = np.where((t_cyl > 0) & (s >= 0) & (s <= L[None]), t_cyl, np.inf)
-        best = t_cyl
-        for end in (a, b):  # the two end spheres
-            we = origin[None, :] - end
-            Be = 2 * (d @ we.T)
-            Ce = np.einsum("gi,gi->g", we, we)[None] - r2
-            disc = Be**2 - 4 * dd * Ce
-            t_s = np.where(disc >= 0, (-Be - np.sqrt(np.maximum(disc, 0))) / (2 * dd), np.inf)
-            best = np.minimum(best, np.where(t_s > 0, t_s, np.inf))
+        disc = B**2
+        tmp = 4 * A
+        tmp *= C
+        disc -= tmp  # disc = B**2 - 4 * A * C
+        ok = (disc >= 0) & (A > 1e-12)
+        np.maximum(disc, 0, out=disc)
+        np.sqrt(disc, out=disc)
+        np.negative(B, out=B)
+        B -= disc
+        A *= 2
+        B /= A  # (-B - sqrt(max(disc, 0))) / (2 * A)
+        t_cyl = np.where(ok, B, np.inf)
+        np.multiply(t_cyl, du, out=tmp)
+        np.add(wu, tmp, out=tmp)  # s = wu + t_cyl * du, the point's position along the axis
+        best = np.where((t_cyl > 0) & (tmp >= 0) & (tmp <= L[None]), t_cyl, np.inf)
+        dd2, dd4 = 2 * dd, 4 * dd
+        for end in (a, b):  # the two end spheres; for a, origin - a is w
+            if end is a:
+                Be, Ce = 2 * wd, ww - r2
+            else:
+                we = origin[None, :] - end
+                Be = d @ we.T
+                Be *= 2
+                Ce = np.einsum("gi,gi->g", we, we)[None] - r2
+            disc = Be**2
+            np.multiply(dd4, Ce, out=tmp)
+            disc -= tmp  # disc = Be**2 - 4 * dd * Ce
+            ok = disc >= 0
+            np.maximum(disc, 0, out=disc)
+            np.sqrt(disc, out=disc)
+            np.negative(Be, out=Be)
+            Be -= disc
+            Be /= dd2  # t = (-Be - sqrt(max(disc, 0))) / (2 * dd) where disc >= 0, else +inf
+            np.minimum(best, np.where(ok & (Be > 0), Be, np.inf), out=best)
     geom = np.argmin(best, axis=1)
     rows = np.arange(N)
     depth = best[rows, geom]
