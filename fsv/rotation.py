@@ -71,7 +71,7 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
     cp0, cp1, cp2 = cp[..., 0], cp[..., 1], cp[..., 2]
     np.multiply(a1, b2, out=cp0)
-    tmp = np.multiply(a2, b1)
+    tmp = np.multiply(a2, b1, out=...)
     cp0 -= tmp
     np.multiply(a2, b0, out=cp1)
     np.multiply(a0, b2, out=tmp)

@@ -175,3 +175,66 @@ def test_free_space_pushes_the_model_out_of_pixels_that_see_the_scene(free_space
         assert after < 0.5 * before, (before, after)
     else:
         assert after > 0.9 * before, (before, after)
+
+
+def _ray_capsules_formulas(origin, rays, a, b, radius):
+    """The first hits of ``ray_capsules`` written as plain formulas, one temporary per operation
+    (its implementation before it updated its arrays in place): the reference it must equal bit for bit."""
+    ab = b - a
+    L = np.maximum(np.linalg.norm(ab, axis=1), 1e-12)
+    u = ab / L[:, None]
+    w = origin[None, :] - a
+    d = rays
+    dd = np.einsum("ni,ni->n", d, d)[:, None]
+    du = d @ u.T
+    wu = np.einsum("gi,gi->g", w, u)[None]
+    wd = d @ w.T
+    ww = np.einsum("gi,gi->g", w, w)[None]
+    r2 = (radius**2)[None]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        A = dd - du**2
+        B = 2 * (wd - wu * du)
+        C = ww - wu**2 - r2
+        disc = B**2 - 4 * A * C
+        t_cyl = np.where((disc >= 0) & (A > 1e-12), (-B - np.sqrt(np.maximum(disc, 0))) / (2 * A), np.inf)
+        s = wu + t_cyl * du
+        best = np.where((t_cyl > 0) & (s >= 0) & (s <= L[None]), t_cyl, np.inf)
+        for end in (a, b):
+            we = origin[None, :] - end
+            Be = 2 * (d @ we.T)
+            Ce = np.einsum("gi,gi->g", we, we)[None] - r2
+            disc = Be**2 - 4 * dd * Ce
+            t_s = np.where(disc >= 0, (-Be - np.sqrt(np.maximum(disc, 0))) / (2 * dd), np.inf)
+            best = np.minimum(best, np.where(t_s > 0, t_s, np.inf))
+    return best
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_ray_capsules_equal_their_formulas_bit_for_bit(seed):
+    """The in-place evaluation keeps every operation and its order: same depths and capsules to the bit."""
+    kin = HandKinematics(HAND)
+    p, r, _, _ = kin.pose(hover_state(seed))
+    a, b = kin.capsules(p, r)
+    rays = CameraRays.from_calibration(CALIB)
+    depth, geom, _, _ = ray_capsules(rays.origin, rays.ray, a, b, HAND.geom_radius)
+    best = _ray_capsules_formulas(rays.origin, rays.ray, a, b, HAND.geom_radius)
+    g = np.argmin(best, axis=1)
+    ref = best[np.arange(best.shape[0]), g]
+    assert np.isfinite(ref).sum() > 300
+    assert depth.tobytes() == ref.tobytes()
+    np.testing.assert_array_equal(geom, np.where(np.isfinite(ref), g, -1))
+
+
+def test_hinge_rotations_are_cached_rodrigues_bit_for_bit():
+    """``HandKinematics.hinges`` reuses the hinges' constant K and K @ K: the same bits as
+    ``axis_angle_to_rot`` evaluated from scratch."""
+    from fsv.rotation import axis_angle_to_rot
+
+    kin = HandKinematics(HAND)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        q = rng.uniform(-2.0, 2.0, HAND.num_joints)
+        hinge = kin.hinges(q)
+        assert hinge.shape == (HAND.num_joints, 3, 3)
+        assert hinge.tobytes() == axis_angle_to_rot(HAND.joint_axis, q).tobytes()
+    assert kin.hinges(np.zeros(HAND.num_joints)).tobytes() == np.broadcast_to(np.eye(3), (HAND.num_joints, 3, 3)).tobytes()
