@@ -341,8 +341,7 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
         tmp *= C
         disc -= tmp  # disc = B**2 - 4 * A * C
         ok = (disc >= 0) & (A > 1e-12)
-        np.maximum(disc, 0, out=disc)
-        np.sqrt(disc, out=disc)
+        np.sqrt(disc, out=disc)  # max(disc, 0) is disc wherever ok; elsewhere t is +inf
         np.negative(B, out=B)
         B -= disc
         A *= 2
@@ -364,12 +363,12 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
             np.multiply(dd4, Ce, out=tmp)
             disc -= tmp  # disc = Be**2 - 4 * dd * Ce
             ok = disc >= 0
-            np.maximum(disc, 0, out=disc)
             np.sqrt(disc, out=disc)
             np.negative(Be, out=Be)
             Be -= disc
             Be /= dd2  # t = (-Be - sqrt(max(disc, 0))) / (2 * dd) where disc >= 0, else +inf
-            np.minimum(best, np.where(ok & (Be > 0), Be, np.inf), out=best)
+            ok &= Be > 0
+            np.minimum(best, Be, out=best, where=ok)  # best = min(best, t if t > 0 else +inf)
     geom = np.argmin(best, axis=1)
     rows = np.arange(N)
     depth = best[rows, geom]

@@ -124,9 +124,15 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
         (+inf where no visible face is near); with ``jacobian=True`` also the Jacobian of depth,
         shape (N, 6).
     """
-    o, d = rays.origin, rays.ray[index]
-    bg = rays.table_depth[index]
-    N = index.shape[0]
+    return _box_depth(rays.origin, rays.ray[index], rays.table_depth[index], pos, rot, half, fx, silhouette_px, jacobian)
+
+
+def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, rot: np.ndarray, half: np.ndarray,
+               fx: float, silhouette_px: float, jacobian: bool):
+    """:func:`predict_box_depth` on the rays ``d`` (N, 3) from ``o`` (3,) of the pixels, whose table
+    depths are ``bg`` (N,): a fit gathers them once for all its iterations."""
+    N = d.shape[0]
+    d_col = [np.ascontiguousarray(d[:, k]) for k in range(3)]
     # A face is visible when the camera is outside its plane; an edge of a visible face lies on
     # the silhouette when the face across it is not visible.
     dist = {(a, s): s * (rot[:, a] @ (o - pos)) - half[a] for a in range(3) for s in (1.0, -1.0)}
@@ -143,7 +149,11 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
         with np.errstate(divide="ignore", invalid="ignore"):
             z = np.where(nd < -1e-9, -dist_f / nd, np.inf)
         hit = np.isfinite(z)
-        p = o + np.where(hit, z, 0.0)[:, None] * d
+        z_hit = np.where(hit, z, 0.0)
+        p = np.empty((N, 3))  # o + z_hit * d, one column at a time (no (N, 3) broadcast)
+        for k in range(3):
+            np.multiply(z_hit, d_col[k], out=p[:, k])
+            np.add(o[k], p[:, k], out=p[:, k])
         q = (p - pos) @ rot
         rect = np.full(N, np.inf)  # margin inside the face's rectangle (all four edges)
         sil = np.full(N, np.inf)  # margin inside its silhouette edges only
@@ -189,21 +199,31 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
         if not np.any(sel):
             continue
         nds, ps = nd[sel], p[sel]
-        dz_dt = np.broadcast_to(n / nds[:, None], (nds.shape[0], 3))
-        dz_dw = cross(ps - pos, n) / nds[:, None]
+        lever = ps - pos
+        cross_n = cross(lever, n)
         # m = half_b + sign * q_b on the nearest silhouette edge, q_b = R_b . (p - c):
         # dq_b = dw . (R_b x (p - c)) + (R_b . d) dz - R_b . dt.
         Rb = rot[:, sil_axis[sel]].T
         sgn = sil_sign[sel]
         Rb_d = np.einsum("ij,ij->i", Rb, d[sel])
-        dm_dt = sgn[:, None] * (Rb_d[:, None] * dz_dt - Rb)
-        dm_dw = sgn[:, None] * (cross(Rb, ps - pos) + Rb_d[:, None] * dz_dw)
+        cross_Rb = cross(Rb, lever)
         ws, zs, ts = w[sel], z_box[sel], tau[sel]
         gain = (zs - bg_eff[sel]) * ws * (1 - ws) / ts
         # d(m / tau) with tau proportional to the depth: (dm - m dz / z) / tau.
-        mz = (np.where(np.isfinite(best_m[sel]), best_m[sel], 0.0) / zs)[:, None]
-        J[sel, :3] = ws[:, None] * dz_dt + gain[:, None] * (dm_dt - mz * dz_dt)
-        J[sel, 3:] = ws[:, None] * dz_dw + gain[:, None] * (dm_dw - mz * dz_dw)
+        mz = np.where(np.isfinite(best_m[sel]), best_m[sel], 0.0) / zs
+        # One column at a time (translation k, rotation 3 + k); per element the same operations as
+        # J_t = w dz_dt + gain (dm_dt - mz dz_dt), dz_dt = n / nd, dm_dt = sgn ((R_b . d) dz_dt - R_b),
+        # J_w = w dz_dw + gain (dm_dw - mz dz_dw), dz_dw = ((p - c) x n) / nd,
+        # dm_dw = sgn (R_b x (p - c) + (R_b . d) dz_dw).
+        Jf = np.empty((nds.shape[0], 6))
+        for k in range(3):
+            dz_dt = n[k] / nds
+            dz_dw = cross_n[:, k] / nds
+            dm_dt = sgn * (Rb_d * dz_dt - Rb[:, k])
+            dm_dw = sgn * (cross_Rb[:, k] + Rb_d * dz_dw)
+            Jf[:, k] = ws * dz_dt + gain * (dm_dt - mz * dz_dt)
+            Jf[:, 3 + k] = ws * dz_dw + gain * (dm_dw - mz * dz_dw)
+        J[sel] = Jf
     return depth, w, plane, J
 
 
@@ -294,8 +314,9 @@ class BoxTracker:
         c = self.config
         valid = z_obs > 0
         pos, rot = np.array(pos, dtype=float), np.array(rot, dtype=float)
+        rays = (self.rays.origin, self.rays.ray[index], self.rays.table_depth[index])  # the same every iteration
         for _ in range(c.iterations):
-            zp, cover, plane, J = predict_box_depth(self.rays, index, pos, rot, self.half, self.fx, c.silhouette_px, True)
+            zp, cover, plane, J = _box_depth(*rays, pos, rot, self.half, self.fx, c.silhouette_px, True)
             r = z_obs - zp
             w = self._weights(r, self._occluded(z_obs, zp, plane, sigma), valid, sigma)
             A = (J * w[:, None]).T @ J
@@ -315,7 +336,7 @@ class BoxTracker:
             rot = project_to_so3(exp_so3(step[3:]) @ rot)
             if np.linalg.norm(step[:3]) < 5e-5 and np.linalg.norm(step[3:]) < 5e-4:
                 break
-        zp, cover, plane = predict_box_depth(self.rays, index, pos, rot, self.half, self.fx, c.silhouette_px)
+        zp, cover, plane = _box_depth(*rays, pos, rot, self.half, self.fx, c.silhouette_px, False)
         r = z_obs - zp
         on_box = valid & (cover > 0.5)
         seen = on_box & ~self._occluded(z_obs, zp, plane, sigma)
