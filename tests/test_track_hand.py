@@ -223,6 +223,9 @@ def test_ray_capsules_equal_their_formulas_bit_for_bit(seed):
     assert np.isfinite(ref).sum() > 300
     assert depth.tobytes() == ref.tobytes()
     np.testing.assert_array_equal(geom, np.where(np.isfinite(ref), g, -1))
+    fast = ray_capsules(rays.origin, rays.ray, a, b, HAND.geom_radius, surface=False)
+    assert fast[0].tobytes() == depth.tobytes() and fast[2] is None and fast[3] is None
+    np.testing.assert_array_equal(fast[1], geom)
 
 
 def test_hinge_rotations_are_cached_rodrigues_bit_for_bit():

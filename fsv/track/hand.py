@@ -300,7 +300,8 @@ def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius
     return g, dist[rows, g], cp, normal
 
 
-def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray):
+def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray, *,
+                 surface: bool = True):
     """First intersection of camera rays with a set of capsules.
 
     Args:
@@ -309,6 +310,7 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
             parameter of a hit is its depth.
         a, b: Capsule end points, shape (G, 3), [m].
         radius: Capsule radii, shape (G,), [m].
+        surface: Also compute the hit points and normals (None otherwise).
 
     Returns:
         ``(depth (N,), geom (N,), point (N, 3), normal (N, 3))``: depth of the first hit (+inf for
@@ -373,6 +375,8 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
     rows = np.arange(N)
     depth = best[rows, geom]
     hit = np.isfinite(depth)
+    if not surface:
+        return depth, np.where(hit, geom, -1), None, None
     x = origin + np.where(hit, depth, 0.0)[:, None] * d
     g = geom
     sax = np.clip(np.einsum("ni,ni->n", x - a[g], u[g]), 0.0, L[g])
@@ -482,7 +486,7 @@ class HandTracker:
         scene = scene[:: int(np.ceil(scene.size / n_free))] if n_free and scene.size > n_free else scene[: n_free]
         if scene.size:  # only the rays that pass near the predicted hand can meet it this frame
             inflated = self.model.geom_radius + self.config.free_space_margin_m
-            scene = scene[ray_capsules(self.rays.origin, self.rays.ray[scene], a, b, inflated)[1] >= 0]
+            scene = scene[ray_capsules(self.rays.origin, self.rays.ray[scene], a, b, inflated, surface=False)[1] >= 0]
         idx = idx[keep]
         if idx.size > self.config.max_points:
             idx = idx[:: int(np.ceil(idx.size / self.config.max_points))]
@@ -615,7 +619,8 @@ class HandTracker:
         st = self.predict()
         pos, rot, _, _ = self.kin.pose(st)
         a, b = self.kin.capsules(pos, rot)
-        return ray_capsules(self.rays.origin, self.rays.ray[index], a, b, self.model.geom_radius + inflate_m)[0]
+        return ray_capsules(self.rays.origin, self.rays.ray[index], a, b, self.model.geom_radius + inflate_m,
+                            surface=False)[0]
 
     def update(self, depth_m: np.ndarray, scene_depth, box_pos, box_rot, sigma: float) -> HandFit:
         """Tracks one frame.
@@ -664,7 +669,7 @@ class HandTracker:
         if idx.size == 0:
             return np.zeros(K, dtype=bool)
         a, b = self.kin.capsules(pose[0], pose[1])
-        zh, geom, _, _ = ray_capsules(self.rays.origin, self.rays.ray[idx], a, b, self.model.geom_radius)
+        zh, geom, _, _ = ray_capsules(self.rays.origin, self.rays.ray[idx], a, b, self.model.geom_radius, surface=False)
         seen = (geom >= 0) & (np.abs(z_obs - zh) < 2 * sigma)
         seg = np.where(seen, self.model.geom_segment[np.maximum(geom, 0)], -1)
         counts = np.zeros(K, dtype=int)
