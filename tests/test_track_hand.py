@@ -241,3 +241,22 @@ def test_hinge_rotations_are_cached_rodrigues_bit_for_bit():
         assert hinge.shape == (HAND.num_joints, 3, 3)
         assert hinge.tobytes() == axis_angle_to_rot(HAND.joint_axis, q).tobytes()
     assert kin.hinges(np.zeros(HAND.num_joints)).tobytes() == np.broadcast_to(np.eye(3), (HAND.num_joints, 3, 3)).tobytes()
+
+
+def test_point_jacobian_hinge_columns_equal_the_broadcast_formula_bit_for_bit():
+    """The hinge columns a_j . ((x - pivot_j) x direction), masked by the hinges that move each
+    point's segment, as one broadcast expression with np.cross: the same bits."""
+    kin = HandKinematics(HAND)
+    pose = kin.pose(hover_state(1))
+    rng = np.random.default_rng(5)
+    P = 200
+    seg = rng.integers(0, len(HAND.segment_names), P)
+    x = pose[0][seg] + rng.normal(0.0, 0.02, (P, 3))
+    direction = rng.normal(size=(P, 3))
+    J = kin.point_jacobian(x, seg, direction, pose)
+    _, _, axis, pivot = pose
+    ref = np.where(kin.moves[seg], np.einsum("jk,pjk->pj", axis, np.cross(x[:, None, :] - pivot[None], direction[:, None, :])),
+                   0.0)
+    assert np.count_nonzero(ref) > P
+    assert J[:, 6:].tobytes() == ref.tobytes()
+    assert J[:, 3:6].tobytes() == np.cross(x - pose[0][0], direction).tobytes()

@@ -267,8 +267,16 @@ class HandKinematics:
         J[:, 3:6] = cross(x - pos[0], direction)
         moves = self.moves[segment]  # (P, n)
         # d/dq_j (direction . x) = direction . (a_j x (x - pivot_j)) = a_j . ((x - pivot_j) x direction)
-        lever = x[:, None, :] - pivot[None, :, :]
-        J[:, 6:] = np.where(moves, np.einsum("jk,pjk->pj", axis, cross(lever, direction[:, None, :])), 0.0)
+        # lever x direction with lever = x - pivot_j, (P, n, 3): the components of cross() computed
+        # from contiguous (P, n) arrays instead of strided views of a broadcast (same operations).
+        l0, l1, l2 = (np.subtract.outer(x[:, k], pivot[:, k]) for k in range(3))
+        d0, d1, d2 = (direction[:, k : k + 1] for k in range(3))
+        lever_x_dir = np.empty((x.shape[0], n, 3))
+        for k, (p1, q1, p2, q2) in enumerate(((l1, d2, l2, d1), (l2, d0, l0, d2), (l0, d1, l1, d0))):
+            c = lever_x_dir[..., k]
+            np.multiply(p1, q1, out=c)
+            c -= p2 * q2
+        J[:, 6:] = np.where(moves, np.einsum("jk,pjk->pj", axis, lever_x_dir), 0.0)
         return J
 
 
