@@ -358,11 +358,10 @@ class BoxTracker:
         if depth_m.shape != (self.rays.height, self.rays.width):
             raise InputError(f"depth frame must have shape ({self.rays.height}, {self.rays.width}), got {depth_m.shape}")
         c = self.config
-        z_all = depth_m.reshape(-1).astype(float)
         first = not self.history
         pos_p, rot_p = self.predict()
         index = self.roi(pos_p, rot_p, c.roi_margin_px + (25 if first else 0))
-        z_obs = z_all[index]
+        z_obs = depth_m.reshape(-1)[index].astype(float)  # only the region's pixels in float64
         sigma = self.sigma if self.sigma is not None else 0.01
         if occluder is not None:
             z_occ = np.asarray(occluder(index), dtype=float)
