@@ -41,12 +41,31 @@ def axis_angle_to_rot(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     axis = np.asarray(axis, dtype=float)
     angle = np.asarray(angle, dtype=float)
     axis, angle = np.broadcast_arrays(axis, angle[..., None])
-    angle = angle[..., 0]
-    x, y, z = np.moveaxis(axis, -1, 0)
+    K = skew_stack(axis)
+    return rot_from_skew(K, K @ K, angle[..., 0])
+
+
+def skew_stack(axis: np.ndarray) -> np.ndarray:
+    """Cross-product matrices [a]x of vectors along the last axis, (..., 3) -> (..., 3, 3)."""
+    x, y, z = np.moveaxis(np.asarray(axis, dtype=float), -1, 0)
     zero = np.zeros_like(x)
-    K = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+    return np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+
+
+def rot_from_skew(K: np.ndarray, KK: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula from the axes' cross-product matrices (for fixed axes, compute them once).
+
+    Args:
+        K: ``skew_stack(axis)``, shape (..., 3, 3).
+        KK: ``K @ K``, shape (..., 3, 3).
+        angle: Rotation angles in [rad], shape (...).
+
+    Returns:
+        Rotation matrices, shape (..., 3, 3).
+    """
+    angle = np.asarray(angle, dtype=float)
     s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
-    return np.eye(3) + s * K + (1 - c) * (K @ K)
+    return np.eye(3) + s * K + (1 - c) * KK
 
 
 def skew(w: np.ndarray) -> np.ndarray:

@@ -41,7 +41,7 @@ from fsv.errors import InputError
 from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
 from fsv.track.camera import CameraRays
-from fsv.rotation import cross, exp_so3, log_so3, project_to_so3
+from fsv.rotation import cross, exp_so3, log_so3, project_to_so3, rot_from_skew, skew_stack
 from fsv.types import Calibration
 
 
@@ -192,19 +192,14 @@ class HandKinematics:
         # Constants of :meth:`pose`: every hinge's cross-product matrix K and K @ K (Rodrigues'
         # formula, the same arrays as ``axis_angle_to_rot`` builds on every call), and per segment
         # its parent, offsets and hinges as Python objects (no NumPy indexing in the loop).
-        axis = np.asarray(model.joint_axis, dtype=float)
-        x, y, z = np.moveaxis(axis, -1, 0)
-        zero = np.zeros_like(x)
-        K = np.stack([np.stack([zero, -z, y], -1), np.stack([z, zero, -x], -1), np.stack([-y, x, zero], -1)], -2)
+        K = skew_stack(model.joint_axis)
         self.hinge_K, self.hinge_KK = K, K @ K
         self.chain = [(int(model.parent[b]), model.offset_pos[b], self.offset_rot[b],
                        [(int(j), model.joint_axis[j]) for j in self.joints_of[b]]) for b in range(B)]
 
     def hinges(self, joints: np.ndarray) -> np.ndarray:
         """Rotation of every hinge, bit for bit ``axis_angle_to_rot(model.joint_axis, joints)``: (n,) -> (n, 3, 3)."""
-        q = np.asarray(joints, dtype=float)
-        s, c = np.sin(q)[..., None, None], np.cos(q)[..., None, None]
-        return np.eye(3) + s * self.hinge_K + (1 - c) * self.hinge_KK
+        return rot_from_skew(self.hinge_K, self.hinge_KK, joints)
 
     def pose(self, state: HandState):
         """Segment poses and hinge frames.
