@@ -19,6 +19,9 @@ Two parts:
 from __future__ import annotations
 
 import functools
+import hashlib
+import importlib.resources
+import json
 from dataclasses import dataclass
 
 import mujoco
@@ -28,6 +31,7 @@ from scipy.optimize import least_squares
 from benchmark.errors import ScenarioError
 from benchmark.scenario import Scenario
 from benchmark.world import World, build_world, grasp_of, user_of
+from fsv.linalg import dot, inv, mm, mv, rows_mt, vm
 
 # Relaxed postures (radians): [abduction, flexion, flexion, flexion] per digit.
 _PRIOR_ACTIVE = {"thumb": [0.0, 0.3, 0.4, 0.3], "finger": [0.0, 0.25, 1.4, 0.5]}
@@ -79,81 +83,145 @@ def _pitch_quat(pitch: float) -> np.ndarray:
     return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
 
 
-@functools.lru_cache(maxsize=64)
-def _plan(user: int, grasp: int) -> GraspPlan:
-    sc = Scenario(user=user, grasp=grasp)
-    world = build_world(sc)
-    spec = grasp_of(sc)
-    hand, m = world.hand, world.model
-    d = mujoco.MjData(m)
-    K = len(hand.finger_names)
-    unknown = set(spec["spots"]) - set(hand.finger_names)
-    if unknown:
-        raise ScenarioError(f"grasp {spec['name']!r} names unknown digits {sorted(unknown)}; accepted: {hand.finger_names}")
-    active = np.array([f in spec["spots"] for f in hand.finger_names])
-    spot = np.zeros((K, 3))
-    normal_in = np.zeros((K, 3))
-    for k, f in enumerate(hand.finger_names):
-        if active[k]:
-            spot[k] = spec["spots"][f]["point"]
-            normal_in[k] = -face_normal(spec["spots"][f]["face"])
-    box_pos = d.qpos[world.box_qadr : world.box_qadr + 3].copy()
-    target = box_pos + spot - normal_in * hand.fingertip_radius[:, None]
-    prior = np.zeros(hand.num_joints)
-    for k, f in enumerate(hand.finger_names):
-        js = [j for j, n in enumerate(hand.joint_names) if n.startswith(f + "_")]
-        prior[js] = _PRIOR_ACTIVE["thumb" if k == 0 else "finger"] if active[k] else _PRIOR_FREE
-    lo, hi = hand.joint_range[:, 0], hand.joint_range[:, 1]
-    prior = np.clip(prior, lo, hi)
-    pad_geoms = {int(np.flatnonzero((world.geom_segment == hand.fingertip_segment[k])
-                                    & (m.geom_type == mujoco.mjtGeom.mjGEOM_SPHERE))[0]) for k in range(K) if active[k]}
-    body_geoms = [g for g in np.flatnonzero(world.geom_segment >= 0) if g not in pad_geoms]
-    distal = {int(hand.fingertip_segment[k]) for k in range(K) if active[k]}
-    clearance = np.repeat([_SHAFT_CLEARANCE_M if world.geom_segment[g] in distal else _CLEARANCE_M
-                           for g in body_geoms], 2)
-    half = world.obj.half_extents
-    x0 = np.concatenate([[0.0, half[2] + 0.03, 0.3], prior])  # palm y, z (object frame), pitch; joints
+PLANS_FILE = "grasp_plans.json"  # in sim_assets: the solved plans, so every machine builds the same world
+_PLANS_FORMAT = "fsv-bench grasp plans"
 
-    def pose(x):
-        d.qpos[world.hand_qadr[:3]] = box_pos + [spec["palm_x"], x[0], x[1]]
-        d.qpos[world.hand_qadr[3:7]] = _pitch_quat(x[2])
-        d.qpos[world.joint_qadr] = x[3:]
-        mujoco.mj_kinematics(m, d)
 
-    def distances():
+class _PlanProblem:
+    """The least-squares problem that fits one grasp to one hand (palm y, z, pitch and 20 joints).
+
+    Attributes:
+        fingerprint: sha256 of everything the solution depends on (the compiled hand and box, the
+            grasp's spots, the priors and clearances): a stored solution is used only while it matches.
+    """
+
+    def __init__(self, user: int, grasp: int):
+        sc = Scenario(user=user, grasp=grasp)
+        world = build_world(sc)
+        spec = grasp_of(sc)
+        hand, m = world.hand, world.model
+        self.world, self.spec, self.d = world, spec, mujoco.MjData(m)
+        self.user_name, self.grasp_name = str(user_of(sc)["name"]), str(spec["name"])
+        K = len(hand.finger_names)
+        unknown = set(spec["spots"]) - set(hand.finger_names)
+        if unknown:
+            raise ScenarioError(f"grasp {spec['name']!r} names unknown digits {sorted(unknown)}; accepted: {hand.finger_names}")
+        active = np.array([f in spec["spots"] for f in hand.finger_names])
+        spot = np.zeros((K, 3))
+        normal_in = np.zeros((K, 3))
+        for k, f in enumerate(hand.finger_names):
+            if active[k]:
+                spot[k] = spec["spots"][f]["point"]
+                normal_in[k] = -face_normal(spec["spots"][f]["face"])
+        self.active, self.spot, self.normal_in = active, spot, normal_in
+        self.box_pos = self.d.qpos[world.box_qadr : world.box_qadr + 3].copy()
+        self.target = self.box_pos + spot - normal_in * hand.fingertip_radius[:, None]
+        prior = np.zeros(hand.num_joints)
+        for k, f in enumerate(hand.finger_names):
+            js = [j for j, n in enumerate(hand.joint_names) if n.startswith(f + "_")]
+            prior[js] = _PRIOR_ACTIVE["thumb" if k == 0 else "finger"] if active[k] else _PRIOR_FREE
+        self.lo, self.hi = hand.joint_range[:, 0], hand.joint_range[:, 1]
+        self.prior = np.clip(prior, self.lo, self.hi)
+        pad_geoms = {int(np.flatnonzero((world.geom_segment == hand.fingertip_segment[k])
+                                        & (m.geom_type == mujoco.mjtGeom.mjGEOM_SPHERE))[0]) for k in range(K) if active[k]}
+        self.body_geoms = [g for g in np.flatnonzero(world.geom_segment >= 0) if g not in pad_geoms]
+        distal = {int(hand.fingertip_segment[k]) for k in range(K) if active[k]}
+        self.clearance = np.repeat([_SHAFT_CLEARANCE_M if world.geom_segment[g] in distal else _CLEARANCE_M
+                                    for g in self.body_geoms], 2)
+        digest = hashlib.sha256()
+        for arr in (m.body_pos, m.body_quat, m.geom_size, m.geom_pos, m.geom_quat, m.geom_type, m.jnt_axis,
+                    m.jnt_pos, m.jnt_range, self.target, self.prior, self.clearance, world.obj.half_extents):
+            digest.update(np.ascontiguousarray(arr).tobytes())
+        digest.update(json.dumps([spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]).encode())
+        self.fingerprint = digest.hexdigest()
+
+    def pose(self, x: np.ndarray) -> None:
+        w, d = self.world, self.d
+        d.qpos[w.hand_qadr[:3]] = self.box_pos + [self.spec["palm_x"], x[0], x[1]]
+        d.qpos[w.hand_qadr[3:7]] = _pitch_quat(x[2])
+        d.qpos[w.joint_qadr] = x[3:]
+        mujoco.mj_kinematics(w.model, d)
+
+    def distances(self) -> np.ndarray:
+        w, d, m = self.world, self.d, self.world.model
         out = []
-        for g in body_geoms:
-            out.append(mujoco.mj_geomDistance(m, d, int(g), world.box_geom, 0.05, None))
+        for g in self.body_geoms:
+            out.append(mujoco.mj_geomDistance(m, d, int(g), w.box_geom, 0.05, None))
             out.append(d.geom_xpos[g][2] - m.geom_rbound[g])
         return np.array(out)
 
-    def residual(x):
-        pose(x)
-        tips = d.site_xpos[world.tip_site]
-        r_tip = (tips - target)[active].ravel() / 0.001
-        r_post = (x[3:] - prior) / 0.5
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        self.pose(x)
+        tips = self.d.site_xpos[self.world.tip_site]
+        r_tip = (tips - self.target)[self.active].ravel() / 0.001
+        r_post = (x[3:] - self.prior) / 0.5
         r_pitch = [(x[2] - 0.3) / 0.5]
-        r_col = np.maximum(0.0, clearance - distances()) / 0.0005
+        r_col = np.maximum(0.0, self.clearance - self.distances()) / 0.0005
         return np.concatenate([r_tip, r_post, r_pitch, r_col])
 
-    bounds = (np.concatenate([[-0.1, half[2], -0.6], lo]), np.concatenate([[0.1, 0.15, 1.2], hi]))
-    sol = least_squares(residual, x0, bounds=bounds, x_scale=np.concatenate([[0.01, 0.01, 0.1], np.full(hand.num_joints, 0.1)]),
-                        max_nfev=400)
-    x = sol.x
-    pose(x)
-    tip_err = float(np.max(np.linalg.norm(d.site_xpos[world.tip_site] - target, axis=1)[active]))
-    gap = float(np.min(distances() - clearance + _CLEARANCE_M))
-    q_grasp = x[3:].copy()
-    # Pre-shape: open every flexion of the active digits by 0.5 rad (pads swing away from the faces).
-    q_open = q_grasp.copy()
-    for k, f in enumerate(hand.finger_names):
-        if active[k]:
-            for j, n in enumerate(hand.joint_names):
-                if n.startswith(f + "_") and n.endswith("flex"):
-                    q_open[j] = np.clip(q_grasp[j] - 0.5, lo[j], hi[j])
-    return GraspPlan(active=active, spot=spot, normal_in=normal_in,
-                     palm_pos=np.array([spec["palm_x"], x[0], x[1]]), palm_quat=_pitch_quat(x[2]),
-                     q_grasp=q_grasp, q_open=q_open, tip_error_m=tip_err, clearance_m=gap)
+    def solve(self) -> np.ndarray:
+        """Fits the plan from scratch (scipy's least squares: its last digits depend on the BLAS kernel)."""
+        half = self.world.obj.half_extents
+        x0 = np.concatenate([[0.0, half[2] + 0.03, 0.3], self.prior])  # palm y, z (object frame), pitch; joints
+        bounds = (np.concatenate([[-0.1, half[2], -0.6], self.lo]), np.concatenate([[0.1, 0.15, 1.2], self.hi]))
+        x_scale = np.concatenate([[0.01, 0.01, 0.1], np.full(len(self.prior), 0.1)])
+        return least_squares(self.residual, x0, bounds=bounds, x_scale=x_scale, max_nfev=400).x
+
+    def plan(self, x: np.ndarray) -> GraspPlan:
+        hand = self.world.hand
+        self.pose(x)
+        tip_err = float(np.max(np.linalg.norm(self.d.site_xpos[self.world.tip_site] - self.target, axis=1)[self.active]))
+        gap = float(np.min(self.distances() - self.clearance + _CLEARANCE_M))
+        q_grasp = x[3:].copy()
+        # Pre-shape: open every flexion of the active digits by 0.5 rad (pads swing away from the faces).
+        q_open = q_grasp.copy()
+        for k, f in enumerate(hand.finger_names):
+            if self.active[k]:
+                for j, n in enumerate(hand.joint_names):
+                    if n.startswith(f + "_") and n.endswith("flex"):
+                        q_open[j] = np.clip(q_grasp[j] - 0.5, self.lo[j], self.hi[j])
+        return GraspPlan(active=self.active, spot=self.spot, normal_in=self.normal_in,
+                         palm_pos=np.array([self.spec["palm_x"], x[0], x[1]]), palm_quat=_pitch_quat(x[2]),
+                         q_grasp=q_grasp, q_open=q_open, tip_error_m=tip_err, clearance_m=gap)
+
+
+@functools.lru_cache(maxsize=1)
+def stored_plans() -> dict:
+    """The solved plans shipped in ``sim_assets/grasp_plans.json``: ``{"user/grasp": {fingerprint, x}}``."""
+    path = importlib.resources.files("sim_assets") / PLANS_FILE
+    if not path.is_file():
+        return {}
+    data = json.loads(path.read_text())
+    if data.get("format") != _PLANS_FORMAT:
+        raise ScenarioError(f"{path} is not a {_PLANS_FORMAT!r} file")
+    return data["plans"]
+
+
+@functools.lru_cache(maxsize=64)
+def _plan(user: int, grasp: int) -> GraspPlan:
+    problem = _PlanProblem(user, grasp)
+    entry = stored_plans().get(f"{problem.user_name}/{problem.grasp_name}")
+    if entry is not None and entry["fingerprint"] == problem.fingerprint:
+        x = np.array(entry["x"], dtype=float)
+    else:  # a user or grasp edited since the plans were stored: solved here, machine-dependent in the last digits
+        x = problem.solve()
+    return problem.plan(x)
+
+
+def solve_all_plans() -> dict:
+    """Solves every (user, grasp) plan from scratch: the content of ``sim_assets/grasp_plans.json``."""
+    from benchmark.world import grasps, users
+
+    plans = {}
+    for u in range(len(users())):
+        for g in range(len(grasps())):
+            problem = _PlanProblem(u, g)
+            plans[f"{problem.user_name}/{problem.grasp_name}"] = {"fingerprint": problem.fingerprint,
+                                                                  "x": [float(v) for v in problem.solve()]}
+    return {"format": _PLANS_FORMAT, "version": 1,
+            "note": "Grasp plans solved by benchmark.grip (python -m benchmark.grip --write-plans); "
+                    "stored so that every machine and BLAS kernel builds bit-identical worlds.",
+            "plans": plans}
 
 
 def plan_grasp(scenario: Scenario) -> GraspPlan:
@@ -233,12 +301,12 @@ class GripPolicy:
         share[1:] /= share[1:].sum()
         # Weighted least norm: every pad works at a similar fraction of its friction cone.
         W = np.repeat(share, 3)
-        Gp = W[:, None] * G.T @ np.linalg.inv((G * W) @ G.T)
+        Gp = mm(W[:, None] * G.T, inv(mm(G * W, G.T)))
         f_nom = np.zeros((len(wrench), K, 3))
-        f_nom[:, idx] = (wrench @ Gp.T).reshape(len(wrench), -1, 3)
+        f_nom[:, idx] = rows_mt(wrench, Gp).reshape(len(wrench), -1, 3)
         d = (share[:, None] * normals_in[idx]).ravel()
-        d_int = (d - Gp @ (G @ d)).reshape(-1, 3)
-        d_int /= d_int[0] @ normals_in[idx[0]]
+        d_int = (d - mv(Gp, mv(G, d))).reshape(-1, 3)
+        d_int /= dot(d_int[0], normals_in[idx[0]])
         f_int = np.zeros((K, 3))
         f_int[idx] = d_int
         mu = self.friction / (1.0 + self.safety_margin)
@@ -309,8 +377,8 @@ class Human:
 
         # Palm target and finger posture targets at every step.
         pos, rot, *_ = motion.evaluate(t)
-        palm_pos = pos + rot @ plan.palm_pos
-        palm_rot = rot @ self.R_palm_obj
+        palm_pos = pos + mv(rot, plan.palm_pos)
+        palm_rot = mm(rot, self.R_palm_obj)
         reach = _mj(t / ph.reach_end)
         palm_pos += ((1 - reach) * (t < ph.reach_end))[:, None] * self.approach
         closing = _mj((t - ph.reach_end) / (ph.close_end - ph.reach_end))
@@ -337,7 +405,7 @@ class Human:
         force_obj = np.einsum("nji,nj->ni", rot_a, mass * (acc - gravity))
         w_b = np.einsum("nji,nj->ni", rot_a, omega)
         a_b = np.einsum("nji,nj->ni", rot_a, alpha)
-        torque_obj = a_b @ inertia + np.cross(w_b, w_b @ inertia)
+        torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
         wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
         f_nom, f_int, grip_slip = pol.distribute(wrench, plan.spot, plan.normal_in, plan.active)
         target = pol.baseline_grip_n + grip_slip
@@ -383,11 +451,11 @@ class Human:
         ctrl[:] = self.ctrl[step]
         if step % self.ctrl_every:
             return
-        f = self.forces_obj[step // self.ctrl_every] @ box_rot.T
+        f = rows_mt(self.forces_obj[step // self.ctrl_every], box_rot)
         m, jac = self.world.model, self._jac
         for k, site, dofs in self._fingers:
             mujoco.mj_jacSite(m, data, jac, None, site)
-            qfrc[dofs] = f[k] @ jac[:, dofs]
+            qfrc[dofs] = vm(f[k], jac[:, dofs])
 
 
 def _mj(s: np.ndarray) -> np.ndarray:
@@ -399,3 +467,25 @@ def _rot(quat: np.ndarray) -> np.ndarray:
     R = np.zeros(9)
     mujoco.mju_quat2Mat(R, np.asarray(quat, dtype=float))
     return R.reshape(3, 3)
+
+
+def main(argv=None) -> int:
+    """``python -m benchmark.grip --write-plans``: re-solves and stores every grasp plan."""
+    import argparse
+
+    from benchmark.atomic import write_text
+
+    parser = argparse.ArgumentParser(prog="python -m benchmark.grip", description=main.__doc__)
+    parser.add_argument("--write-plans", action="store_true", help="solve every plan and write sim_assets/" + PLANS_FILE)
+    args = parser.parse_args(argv)
+    if not args.write_plans:
+        parser.print_help()
+        return 0
+    path = importlib.resources.files("sim_assets") / PLANS_FILE
+    write_text(str(path), json.dumps(solve_all_plans(), indent=1) + "\n")
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

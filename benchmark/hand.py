@@ -22,6 +22,7 @@ import yaml
 
 from benchmark.errors import ScenarioError
 from fsv import HandModel
+from fsv.linalg import dot, norm
 
 FINGERS = ("thumb", "index", "middle", "ring", "little")
 # Fraction of the pad radius used by the distal shaft, so that the pad sphere alone touches a face.
@@ -40,14 +41,14 @@ def _base_quat(finger: dict) -> np.ndarray:
     if "base_direction" not in finger:
         return np.array([1.0, 0.0, 0.0, 0.0])
     y = np.asarray(finger["base_direction"], dtype=float)
-    y /= np.linalg.norm(y)
+    y /= norm(y)
     pad = np.asarray(finger["base_pad"], dtype=float)
-    z = -(pad - (pad @ y) * y)
-    z /= np.linalg.norm(z)
+    z = -(pad - dot(pad, y) * y)
+    z /= norm(z)
     R = np.stack([np.cross(y, z), y, z], axis=1)
     w = np.sqrt(max(1.0 + np.trace(R), 1e-12)) / 2
     q = np.array([w, (R[2, 1] - R[1, 2]) / (4 * w), (R[0, 2] - R[2, 0]) / (4 * w), (R[1, 0] - R[0, 1]) / (4 * w)])
-    return q / np.linalg.norm(q)
+    return q / norm(q)
 
 
 @functools.lru_cache(maxsize=None)
@@ -93,7 +94,7 @@ def hand_model(scale: float = 1.0) -> HandModel:
                 j_names.append(f"{finger['name']}_{j['name']}")
                 j_seg.append(b)
                 axis = np.asarray(j["axis"], dtype=float)
-                j_axis.append(axis / np.linalg.norm(axis))
+                j_axis.append(axis / norm(axis))
                 j_range.append(np.deg2rad(j["range_deg"]))
             length, radius = s * segment["length"], s * segment["radius"]
             last = i == len(finger["segments"]) - 1

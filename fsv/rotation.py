@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from fsv.linalg import dot, mm, norm
+
 
 def quat_to_rot(quat: np.ndarray) -> np.ndarray:
     """Rotation matrices of unit quaternions.
@@ -42,7 +44,7 @@ def axis_angle_to_rot(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     angle = np.asarray(angle, dtype=float)
     axis, angle = np.broadcast_arrays(axis, angle[..., None])
     K = skew_stack(axis)
-    return rot_from_skew(K, K @ K, angle[..., 0])
+    return rot_from_skew(K, mm(K, K), angle[..., 0])
 
 
 def skew_stack(axis: np.ndarray) -> np.ndarray:
@@ -104,11 +106,11 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def exp_so3(w: np.ndarray) -> np.ndarray:
     """Rotation matrix of the rotation vector ``w`` (axis times angle in [rad]), (3,) -> (3, 3)."""
     w = np.asarray(w, dtype=float)
-    theta = float(np.linalg.norm(w))
+    theta = norm(w)
     W = skew(w)
     if theta < 1e-8:
-        return np.eye(3) + W + 0.5 * W @ W
-    return np.eye(3) + np.sin(theta) / theta * W + (1 - np.cos(theta)) / theta**2 * W @ W
+        return np.eye(3) + W + 0.5 * mm(W, W)
+    return np.eye(3) + np.sin(theta) / theta * W + (1 - np.cos(theta)) / theta**2 * mm(W, W)
 
 
 def log_so3(R: np.ndarray) -> np.ndarray:
@@ -123,7 +125,7 @@ def log_so3(R: np.ndarray) -> np.ndarray:
         B = (R + np.eye(3)) / 2
         i = int(np.argmax(np.diag(B)))
         a = B[:, i] / np.sqrt(B[i, i])
-        return theta * a * (1.0 if a @ v >= 0 else -1.0)
+        return theta * a * (1.0 if dot(a, v) >= 0 else -1.0)
     return theta / (2 * np.sin(theta)) * v
 
 
@@ -133,11 +135,45 @@ def angle_between(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip((tr - 1) / 2, -1.0, 1.0))
 
 
+_POLAR_MAX_ITERATIONS = 30  # Newton's polar iteration converges quadratically: 3-5 suffice near SO(3)
+_POLAR_TOLERANCE = 1e-15  # stop once an iteration moves no entry by more than this
+
+
 def project_to_so3(M: np.ndarray) -> np.ndarray:
-    """Nearest rotation matrix to ``M`` (polar decomposition), (3, 3) -> (3, 3)."""
-    U, _, Vt = np.linalg.svd(M)
-    D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
-    return U @ D @ Vt
+    """Nearest rotation matrix to ``M`` (the orthogonal factor of its polar decomposition), (3, 3) -> (3, 3).
+
+    For ``det(M) > 0`` (every use here: a rotation after a small update) Newton's iteration
+    X <- (X + X^-T) / 2 with closed-form 3 x 3 inverses, in a fixed order of operations (the same
+    bits on every BLAS kernel); otherwise the singular value decomposition.
+    """
+    M = np.asarray(M, dtype=float)
+    X = M.copy()
+    if _det3(X) <= 0:
+        U, _, Vt = np.linalg.svd(M)
+        D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
+        return U @ D @ Vt
+    for _ in range(_POLAR_MAX_ITERATIONS):
+        nxt = 0.5 * (X + _cofactor3(X) / _det3(X))
+        done = np.max(np.abs(nxt - X)) <= _POLAR_TOLERANCE
+        X = nxt
+        if done:
+            break
+    return X
+
+
+def _det3(X: np.ndarray) -> float:
+    return float(X[0, 0] * (X[1, 1] * X[2, 2] - X[1, 2] * X[2, 1])
+                 - X[0, 1] * (X[1, 0] * X[2, 2] - X[1, 2] * X[2, 0])
+                 + X[0, 2] * (X[1, 0] * X[2, 1] - X[1, 1] * X[2, 0]))
+
+
+def _cofactor3(X: np.ndarray) -> np.ndarray:
+    """Cofactor matrix of a 3 x 3 matrix: ``det(X) * inv(X).T``."""
+    return np.array([
+        [X[1, 1] * X[2, 2] - X[1, 2] * X[2, 1], X[1, 2] * X[2, 0] - X[1, 0] * X[2, 2], X[1, 0] * X[2, 1] - X[1, 1] * X[2, 0]],
+        [X[0, 2] * X[2, 1] - X[0, 1] * X[2, 2], X[0, 0] * X[2, 2] - X[0, 2] * X[2, 0], X[0, 1] * X[2, 0] - X[0, 0] * X[2, 1]],
+        [X[0, 1] * X[1, 2] - X[0, 2] * X[1, 1], X[0, 2] * X[1, 0] - X[0, 0] * X[1, 2], X[0, 0] * X[1, 1] - X[0, 1] * X[1, 0]],
+    ])
 
 
 def rot_to_quat(R: np.ndarray) -> np.ndarray:
@@ -150,4 +186,4 @@ def rot_to_quat(R: np.ndarray) -> np.ndarray:
     y = np.copysign(y, R[0, 2] - R[2, 0])
     z = np.copysign(z, R[1, 0] - R[0, 1])
     q = np.array([w, x, y, z])
-    return q / np.linalg.norm(q)
+    return q / norm(q)

@@ -420,3 +420,31 @@ def test_a_simulated_lift_renders_one_frame_per_truth_frame_and_shows_box_and_fi
     local = np.abs((world_pts - ep.truth.box_pos[k]) @ ep.truth.box_rot[k])
     half = ep.object_model.half_extents
     assert np.median(np.max(local / half, axis=1)) == pytest.approx(1.0, abs=0.1)  # on the surface
+
+
+_WORLD_DIGEST = """
+import dataclasses, hashlib, numpy as np
+from benchmark import Scenario, render, simulate
+ep = render(simulate(Scenario(task="lift", seed=0, duration_s=3.0)))
+h = hashlib.sha256()
+for f in dataclasses.fields(ep.truth):
+    v = getattr(ep.truth, f.name)
+    if isinstance(v, np.ndarray):
+        h.update(f.name.encode()); h.update(np.ascontiguousarray(v).tobytes())
+print(h.hexdigest(), hashlib.sha256(ep.depth.depth_m.tobytes()).hexdigest())
+"""
+
+
+def test_truth_and_depth_are_bit_identical_under_every_openblas_kernel():
+    """The simulation loop and the renderer's inputs keep BLAS out (fixed-order fsv.linalg, stored
+    grasp plans), so the kernel OpenBLAS picks for the CPU cannot change the world."""
+    import os
+    import subprocess
+    import sys
+
+    digests = set()
+    for kernel in ("Haswell", "Sandybridge", "Nehalem", "Prescott"):
+        env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
+        out = subprocess.run([sys.executable, "-c", _WORLD_DIGEST], env=env, capture_output=True, text=True, check=True)
+        digests.add(out.stdout.strip())
+    assert len(digests) == 1, digests

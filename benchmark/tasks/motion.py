@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsv.linalg import mm, norm
 from fsv.rotation import axis_angle_to_rot, log_so3
 
 
@@ -84,12 +85,12 @@ class Motion:
         if np.any(np.diff(self.t) <= 0):
             raise ValueError(f"keyframe times must increase, got {self.t}")
         self.d = np.array([k[1] for k in keyframes], dtype=float).reshape(-1, 3)
-        self.R = [axis_angle_to_rot(_unit(k[2]), np.linalg.norm(k[2])) @ self.start_rot for k in keyframes]
+        self.R = [mm(axis_angle_to_rot(_unit(k[2]), norm(k[2])), self.start_rot) for k in keyframes]
         # Relative rotation of each segment as axis * angle, world frame.
         self.seg_axis, self.seg_angle = [], []
         for a, b in zip(self.R[:-1], self.R[1:]):
-            w = log_so3(b @ a.T)
-            angle = float(np.linalg.norm(w))
+            w = log_so3(mm(b, a.T))
+            angle = norm(w)
             axis = w / angle if angle > 0 else np.array([1.0, 0.0, 0.0])
             self.seg_axis.append(axis)
             self.seg_angle.append(angle)
@@ -129,7 +130,7 @@ class Motion:
             vel[sel] = (dp / T)[:, None] * delta
             acc[sel] = (ddp / T**2)[:, None] * delta
             axis, angle = self.seg_axis[i], self.seg_angle[i]
-            rot[sel] = axis_angle_to_rot(axis, p * angle) @ self.R[i]
+            rot[sel] = mm(axis_angle_to_rot(axis, p * angle), self.R[i])
             omega[sel] = (angle * dp / T)[:, None] * axis
             alpha[sel] = (angle * ddp / T**2)[:, None] * axis
         return pos, rot, vel, acc, omega, alpha
@@ -137,7 +138,7 @@ class Motion:
 
 def _unit(v) -> np.ndarray:
     v = np.asarray(v, dtype=float)
-    n = np.linalg.norm(v)
+    n = norm(v)
     return v / n if n > 0 else np.array([1.0, 0.0, 0.0])
 
 
