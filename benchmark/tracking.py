@@ -30,6 +30,7 @@ from benchmark.scenario import Scenario
 from benchmark.truth import Truth
 from fsv import Calibration, DepthVideo, HandModel, ObjectModel
 from fsv.hand import capsule_endpoints, forward_kinematics_qpos
+from fsv.linalg import mm
 from fsv.rotation import angle_between, exp_so3
 from fsv.track.tracker import TrackInit, Tracking
 from fsv.types import Contacts
@@ -59,9 +60,9 @@ def tracker_init(truth: Truth, scenario: Scenario, hand_model: HandModel, scale:
     joints = base.joints + rng.normal(0.0, s["joints_rad"], base.joints.shape)
     return TrackInit(
         box_pos=base.box_pos + rng.normal(0.0, s["box_pos_m"], 3),
-        box_rot=exp_so3(rng.normal(0.0, s["box_rot_rad"], 3)) @ base.box_rot,
+        box_rot=mm(exp_so3(rng.normal(0.0, s["box_rot_rad"], 3)), base.box_rot),
         palm_pos=base.palm_pos + rng.normal(0.0, s["palm_pos_m"], 3),
-        palm_rot=exp_so3(rng.normal(0.0, s["palm_rot_rad"], 3)) @ base.palm_rot,
+        palm_rot=mm(exp_so3(rng.normal(0.0, s["palm_rot_rad"], 3)), base.palm_rot),
         joints=np.clip(joints, hand_model.joint_range[:, 0], hand_model.joint_range[:, 1]),
     )
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from fsv._check import as_array, finite, same_length
 from fsv.errors import InputError
+from fsv.linalg import rows_mt
 from fsv.models import ObjectModel
 from fsv.types import Contacts, Kinematics
 
@@ -106,7 +107,7 @@ def contact_wrench(kinematics: Kinematics, model: ObjectModel, gravity=GRAVITY) 
     w = np.einsum("tji,tj->ti", R, kinematics.omega)
     al = np.einsum("tji,tj->ti", R, kinematics.alpha)
     I = model.inertia
-    tau_c = al @ I.T + np.cross(w, w @ I.T)
+    tau_c = rows_mt(al, I) + np.cross(w, rows_mt(w, I))
     return F_c, tau_c
 
 

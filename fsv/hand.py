@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
+from fsv.linalg import mm, mv
 from fsv.models import HandModel
 from fsv.rotation import axis_angle_to_rot, quat_to_rot
 
@@ -105,10 +106,10 @@ def forward_kinematics(model: HandModel, palm_pos: np.ndarray, palm_rot: np.ndar
     for b in range(B):
         if b > 0:
             p = model.parent[b]
-            pos[..., b, :] = pos[..., p, :] + rot[..., p, :, :] @ model.offset_pos[b]
-            rot[..., b, :, :] = rot[..., p, :, :] @ offset_rot[b]
+            pos[..., b, :] = pos[..., p, :] + mv(rot[..., p, :, :], model.offset_pos[b])
+            rot[..., b, :, :] = mm(rot[..., p, :, :], offset_rot[b])
         for j in np.flatnonzero(model.joint_segment == b):
-            rot[..., b, :, :] = rot[..., b, :, :] @ hinge[..., j, :, :]
+            rot[..., b, :, :] = mm(rot[..., b, :, :], hinge[..., j, :, :])
     return HandPose(pos=pos, rot=rot)
 
 

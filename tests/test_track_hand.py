@@ -6,6 +6,7 @@ import pytest
 from benchmark.hand import hand_model
 from fsv import InputError, ObjectModel
 from fsv.hand import forward_kinematics
+from fsv.linalg import rows_mt
 from fsv.track.camera import CameraRays
 from fsv.track.hand import HandKinematics, HandState, HandTracker, box_signed_distance, ray_capsules
 from fsv.track.object import predict_box_depth
@@ -186,9 +187,9 @@ def _ray_capsules_formulas(origin, rays, a, b, radius):
     w = origin[None, :] - a
     d = rays
     dd = np.einsum("ni,ni->n", d, d)[:, None]
-    du = d @ u.T
+    du = rows_mt(d, u)
     wu = np.einsum("gi,gi->g", w, u)[None]
-    wd = d @ w.T
+    wd = rows_mt(d, w)
     ww = np.einsum("gi,gi->g", w, w)[None]
     r2 = (radius**2)[None]
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -201,7 +202,7 @@ def _ray_capsules_formulas(origin, rays, a, b, radius):
         best = np.where((t_cyl > 0) & (s >= 0) & (s <= L[None]), t_cyl, np.inf)
         for end in (a, b):
             we = origin[None, :] - end
-            Be = 2 * (d @ we.T)
+            Be = 2 * rows_mt(d, we)
             Ce = np.einsum("gi,gi->g", we, we)[None] - r2
             disc = Be**2 - 4 * dd * Ce
             t_s = np.where(disc >= 0, (-Be - np.sqrt(np.maximum(disc, 0))) / (2 * dd), np.inf)

@@ -29,6 +29,8 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
+from fsv.linalg import mm
+
 #: Slots of a contact's column bank: the directions n, t_x, t_y and the kinetic direction n + μ s.
 STATIC_SLOTS = (0, 1, 2)
 SLIDING_SLOTS = (3,)
@@ -287,5 +289,5 @@ class Program:
             self._solver.update(A=data, b=b, q=q)
         sol = self._solver.solve()
         x = np.array(sol.x[: self._num_w])
-        forces = self._S @ (x[:, None] * dirs)
+        forces = mm(self._S, x[:, None] * dirs)
         return forces, sol.status, sol.obj_val + const, sol.iterations

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsv._check import as_array, finite
+from fsv.linalg import mm
 from fsv.models import ObjectModel
 from fsv.types import Kinematics
 
@@ -35,7 +36,7 @@ def required_wrench(kinematics: Kinematics, model: ObjectModel, gravity=GRAVITY)
     g = as_array("gravity", gravity, (3,))
     finite("gravity", g)
     R = kinematics.rot
-    J = R @ model.inertia @ np.swapaxes(R, 1, 2)
+    J = mm(mm(R, model.inertia), np.swapaxes(R, 1, 2))
     force = model.mass_kg * (kinematics.acc - g)
     Jw = np.einsum("tij,tj->ti", J, kinematics.omega)
     torque = np.einsum("tij,tj->ti", J, kinematics.alpha) + np.cross(kinematics.omega, Jw)

@@ -28,6 +28,7 @@ import numpy as np
 
 from fsv.errors import InputError
 from fsv.kinematics import so3
+from fsv.linalg import mv
 from fsv.rotation import quat_to_rot
 from fsv.kinematics.stencils import AlgebraicConfig, CentralConfig, GaussianConfig
 from fsv.types import Kinematics, Poses
@@ -154,7 +155,7 @@ def _reference(quats: np.ndarray, offsets: np.ndarray, coeffs: np.ndarray, lo: i
         return quats[k + offsets[0]]
     q_r = quats[k + offsets[np.argmax(coeffs)]]
     phi = so3.relative_log(q_r, quats, k[:, None] + offsets[None, :])  # (3, T, taps)
-    mean = (phi @ coeffs).T / coeffs.sum()
+    mean = mv(phi, coeffs).T / coeffs.sum()
     return so3.quat_mul(q_r, so3.quat_exp(mean))
 
 
@@ -171,7 +172,7 @@ def _rotation_rates(
         coeff = np.zeros(offsets.size)
         coeff[np.searchsorted(offsets, o)] = c
         full = np.zeros((T, 3))
-        full[lo:hi] = (phi @ coeff).T
+        full[lo:hi] = mv(phi, coeff).T
         out.append(full)
     return out[0], out[1]
 

@@ -47,9 +47,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+
 from scipy import special
 
 from fsv.errors import InputError
+from fsv.linalg import mv, rows_mt, solve
 
 
 @dataclass(frozen=True)
@@ -160,7 +162,7 @@ def algebraic_weights(order: int, window_frames: int, kappa: float, mu: float, e
         A = np.stack([(-i) ** j / math.factorial(j) for j in range(order + 1)])
         target = np.zeros(order + 1)
         target[order] = 1.0
-        w = w - A.T @ np.linalg.solve(A @ A.T, A @ w - target)
+        w = w - mv(A.T, solve(rows_mt(A, A), mv(A, w) - target))
     return w
 
 

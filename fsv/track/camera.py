@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
+from fsv.linalg import rows_mt, vm
 from fsv.types import Calibration
 
 
@@ -47,7 +48,7 @@ class CameraRays:
         d_cam = np.stack([(u - cx) / fx, (v - cy) / fy, np.ones_like(u, dtype=float)], -1).reshape(-1, 3)
         R = calib.T_world_cam[:3, :3]
         origin = calib.T_world_cam[:3, 3].copy()
-        ray = d_cam @ R.T
+        ray = rows_mt(d_cam, R)
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (table_z - origin[2]) / ray[:, 2]
         t = np.where(np.isfinite(t) & (t > 0), t, np.inf)
@@ -56,7 +57,7 @@ class CameraRays:
     def project(self, calib: Calibration, points_world: np.ndarray) -> np.ndarray:
         """Projects world points to pixel coordinates (u, v) and depth: (N, 3) -> (N, 3)."""
         T = calib.T_world_cam
-        p_cam = (np.asarray(points_world) - T[:3, 3]) @ T[:3, :3]
+        p_cam = vm(np.asarray(points_world) - T[:3, 3], T[:3, :3])
         z = p_cam[:, 2]
         u = calib.K[0, 0] * p_cam[:, 0] / z + calib.K[0, 2]
         v = calib.K[1, 1] * p_cam[:, 1] / z + calib.K[1, 2]

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
+from fsv.linalg import vm
 from fsv.models import ObjectModel
 from fsv.track.hand import box_signed_distance
 from fsv.types import Contacts, Poses
@@ -134,7 +135,7 @@ def _oppose(i, tips_obj, radius, observed, active, point, normal, half, weight, 
         if sg * tips_obj[k, ax] <= 0 or not -radius[k] <= gap <= c.opposition_range_m:
             continue
         w = weight[on] / weight[on].sum()
-        p = w @ point[i, on]
+        p = vm(w, point[i, on])
         p[ax] = sg * half[ax]
         active[i, k] = True
         point[i, k] = p

@@ -38,6 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
+from fsv.linalg import dot, gram, mm, mv, norm, rows_mt, solve, tmv, vm
 from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
 from fsv.track.camera import CameraRays
@@ -193,7 +194,7 @@ class HandKinematics:
         # formula, the same arrays as ``axis_angle_to_rot`` builds on every call), and per segment
         # its parent, offsets and hinges as Python objects (no NumPy indexing in the loop).
         K = skew_stack(model.joint_axis)
-        self.hinge_K, self.hinge_KK = K, K @ K
+        self.hinge_K, self.hinge_KK = K, mm(K, K)
         self.chain = [(int(model.parent[b]), model.offset_pos[b], self.offset_rot[b],
                        [(int(j), model.joint_axis[j]) for j in self.joints_of[b]]) for b in range(B)]
 
@@ -219,12 +220,12 @@ class HandKinematics:
             if b == 0:
                 pos[0], R = state.palm_pos, state.palm_rot
             else:
-                pos[b] = pos[p] + rot[p] @ offset_pos
-                R = rot[p] @ offset_rot
+                pos[b] = pos[p] + mv(rot[p], offset_pos)
+                R = mm(rot[p], offset_rot)
             for j, joint_axis in joints:
-                axis[j] = R @ joint_axis
+                axis[j] = mv(R, joint_axis)
                 pivot[j] = pos[b]
-                R = R @ hinge[j]
+                R = mm(R, hinge[j])
             rot[b] = R
         return pos, rot, axis, pivot
 
@@ -326,9 +327,9 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
     w = origin[None, :] - a  # (G, 3)
     d = rays
     dd = np.einsum("ni,ni->n", d, d)[:, None]  # (N, 1)
-    du = d @ u.T  # (N, G)
+    du = rows_mt(d, u)  # (N, G)
     wu = np.einsum("gi,gi->g", w, u)[None]  # (1, G)
-    wd = d @ w.T  # (N, G)
+    wd = rows_mt(d, w)  # (N, G)
     ww = np.einsum("gi,gi->g", w, w)[None]
     r2 = (radius**2)[None]
     # The (N, G) arrays are updated in place (the same operations in the same order as the
@@ -361,7 +362,7 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
                 Be, Ce = 2 * wd, ww - r2
             else:
                 we = origin[None, :] - end
-                Be = d @ we.T
+                Be = rows_mt(d, we)
                 Be *= 2
                 Ce = np.einsum("gi,gi->g", we, we)[None] - r2
             disc = Be**2
@@ -461,7 +462,7 @@ class HandTracker:
         if len(self.history) < 2:
             return last
         prev = self.history[-2]
-        rot = exp_so3(log_so3(last.palm_rot @ prev.palm_rot.T)) @ last.palm_rot
+        rot = mm(exp_so3(log_so3(mm(last.palm_rot, prev.palm_rot.T))), last.palm_rot)
         return HandState(2 * last.palm_pos - prev.palm_pos, rot, last.joints)
 
     def _candidates(self, depth_m, scene_depth, state: HandState, sigma: float):
@@ -511,9 +512,9 @@ class HandTracker:
 
         def add(J, r, w, scale=1.0):
             nonlocal A, g
-            Jw = J * (scale * w)[:, None]
-            A += Jw.T @ J
-            g -= Jw.T @ r
+            sw = scale * w
+            A += gram(J, sw)
+            g -= tmv(J, sw * r)
 
         if z_obs.size:
             # Where a capsule is hit, the residual is along the ray (observed minus predicted
@@ -556,11 +557,11 @@ class HandTracker:
                 cost += 0.5 * k**2 * float(np.sum(np.log1p((rf / k) ** 2)))
         # No interpenetration with the box: capsule samples at least their radius outside.
         xs = pose[0][self.pen_segment] + np.einsum("pij,pj->pi", pose[1][self.pen_segment], self.pen_local)
-        sd, grad = box_signed_distance((xs - box_pos) @ box_rot, self.half)
+        sd, grad = box_signed_distance(vm(xs - box_pos, box_rot), self.half)
         pen = self.pen_radius - sd
         hit = pen > 0
         if np.any(hit):
-            Jp = -self.kin.point_jacobian(xs[hit], self.pen_segment[hit], grad[hit] @ box_rot.T, pose)
+            Jp = -self.kin.point_jacobian(xs[hit], self.pen_segment[hit], rows_mt(grad[hit], box_rot), pose)
             wp = (sigma / c.penetration_m) ** 2
             add(Jp, pen[hit], np.ones(int(hit.sum())), wp)
             cost += 0.5 * wp * float(np.sum(pen[hit] ** 2))
@@ -568,12 +569,12 @@ class HandTracker:
         # box flexes until the pad meets its surface (fingers wrap the object they hold).
         if np.any(self.hidden):
             tips = self.kin.fingertips(pose[0], pose[1])
-            sd_t, grad_t = box_signed_distance((tips - box_pos) @ box_rot, self.half)
+            sd_t, grad_t = box_signed_distance(vm(tips - box_pos, box_rot), self.half)
             gap = sd_t - self.model.fingertip_radius
             close = self.hidden & (gap > 0) & (gap < c.closure_range_m)
             if np.any(close):
                 seg = self.model.fingertip_segment[close]
-                Jc = self.kin.point_jacobian(tips[close], seg, grad_t[close] @ box_rot.T, pose)
+                Jc = self.kin.point_jacobian(tips[close], seg, rows_mt(grad_t[close], box_rot), pose)
                 # Only the finger's flexion closes it: the palm stays where the depth puts it and
                 # the abduction keeps its last observed value.
                 Jc[:, :6] = 0.0
@@ -583,12 +584,12 @@ class HandTracker:
                 cost += 0.5 * wc * float(np.sum(gap[close] ** 2))
         # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
         for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, st.palm_pos - prior.palm_pos),
-                             (slice(3, 6), c.smooth_rot_rad, log_so3(st.palm_rot @ prior.palm_rot.T)),
+                             (slice(3, 6), c.smooth_rot_rad, log_so3(mm(st.palm_rot, prior.palm_rot.T))),
                              (slice(6, 6 + n), c.smooth_joint_rad, st.joints - prior.joints)):
             ws = (sigma / sd_) ** 2
             A[sl, sl] += ws * np.eye(res.shape[0])
             g[sl] -= ws * res
-            cost += 0.5 * ws * float(res @ res)
+            cost += 0.5 * ws * float(dot(res, res))
         return A, g, cost, explained
 
     def _solve(self, idx, z_obs, free, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):
@@ -601,10 +602,10 @@ class HandTracker:
         A, g, cost, explained = self._system(state, *args)
         lam = 1e-3
         for _ in range(c.iterations):
-            step = np.linalg.solve(A + lam * np.diag(np.diag(A)) + 1e-12 * np.eye(6 + n), g)
+            step = solve(A + lam * np.diag(np.diag(A)) + 1e-12 * np.eye(6 + n), g)
             step[:3] = np.clip(step[:3], -0.02, 0.02)
             step[3:] = np.clip(step[3:], -0.3, 0.3)
-            cand = HandState(state.palm_pos + step[:3], exp_so3(step[3:6]) @ state.palm_rot,
+            cand = HandState(state.palm_pos + step[:3], mm(exp_so3(step[3:6]), state.palm_rot),
                              np.clip(state.joints + step[6:], self.lo, self.hi))
             A2, g2, cost2, expl2 = self._system(cand, *args)
             if cost2 < cost:
@@ -650,7 +651,7 @@ class HandTracker:
         # hand may have stopped); the lower robust cost wins.
         state, explained, cost = self._solve(idx, z_obs, free, prior, prior, box_pos, box_rot, sigma)
         last = self.history[-1]
-        if np.linalg.norm(prior.palm_pos - last.palm_pos) > 0.004:
+        if norm(prior.palm_pos - last.palm_pos) > 0.004:
             alt = self._solve(idx, z_obs, free, last, prior, box_pos, box_rot, sigma)
             if alt[2] < cost:
                 state, explained, cost = alt
@@ -685,7 +686,7 @@ class HandTracker:
         best, best_e, best_cost, reinit = state, explained, cost, False
         for _ in range(self.config.particles):
             cand = HandState(state.palm_pos + self.rng.normal(0.0, 0.02, 3),
-                             exp_so3(self.rng.normal(0.0, 0.2, 3)) @ state.palm_rot, state.joints)
+                             mm(exp_so3(self.rng.normal(0.0, 0.2, 3)), state.palm_rot), state.joints)
             fit, e, cst = self._solve(idx, z_obs, free, cand, prior, box_pos, box_rot, sigma)
             if cst < best_cost:
                 best, best_e, best_cost, reinit = fit, e, cst, True

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError, TrackingError
+from fsv.linalg import dot, gram, mm, mv, norm, rows_mt, solve, tmv, vm
 from fsv.models import ObjectModel
 from fsv.track.camera import CameraRays
 from fsv.rotation import cross, exp_so3, log_so3, project_to_so3
@@ -135,7 +136,7 @@ def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, ro
     d_col = [np.ascontiguousarray(d[:, k]) for k in range(3)]
     # A face is visible when the camera is outside its plane; an edge of a visible face lies on
     # the silhouette when the face across it is not visible.
-    dist = {(a, s): s * (rot[:, a] @ (o - pos)) - half[a] for a in range(3) for s in (1.0, -1.0)}
+    dist = {(a, s): s * dot(rot[:, a], o - pos) - half[a] for a in range(3) for s in (1.0, -1.0)}
     rect_best = np.full(N, -np.inf)
     best_z = np.full(N, np.inf)
     best_m = np.full(N, -np.inf)
@@ -145,7 +146,7 @@ def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, ro
         if dist_f <= 0:
             continue
         n = s * rot[:, a]
-        nd = d @ n
+        nd = mv(d, n)
         with np.errstate(divide="ignore", invalid="ignore"):
             z = np.where(nd < -1e-9, -dist_f / nd, np.inf)
         hit = np.isfinite(z)
@@ -154,7 +155,7 @@ def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, ro
         for k in range(3):
             np.multiply(z_hit, d_col[k], out=p[:, k])
             np.add(o[k], p[:, k], out=p[:, k])
-        q = (p - pos) @ rot
+        q = vm(p - pos, rot)
         rect = np.full(N, np.inf)  # margin inside the face's rectangle (all four edges)
         sil = np.full(N, np.inf)  # margin inside its silhouette edges only
         rect_axis = rect_sign = sil_axis = sil_sign = 0.0  # (axis, sign) of the edge setting each margin
@@ -269,11 +270,11 @@ class BoxTracker:
         if len(self.history) == 1:
             return self.history[-1]
         (p1, R1), (p2, R2) = self.history[-2], self.history[-1]
-        return 2 * p2 - p1, exp_so3(log_so3(R2 @ R1.T)) @ R2
+        return 2 * p2 - p1, mm(exp_so3(log_so3(mm(R2, R1.T))), R2)
 
     def roi(self, pos: np.ndarray, rot: np.ndarray, margin_px: int) -> np.ndarray:
         """Flat indices of the pixels around the box's projection, subsampled to ``max_pixels``."""
-        corners = pos + (np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T * self.half) @ rot.T
+        corners = pos + rows_mt(np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T * self.half, rot)
         uvz = self.rays.project(self.calib, corners)
         if np.any(uvz[:, 2] <= 0.05):
             raise TrackingError(f"the box at {np.round(pos, 3)} m is behind or at the camera")
@@ -319,22 +320,22 @@ class BoxTracker:
             zp, cover, plane, J = _box_depth(*rays, pos, rot, self.half, self.fx, c.silhouette_px, True)
             r = z_obs - zp
             w = self._weights(r, self._occluded(z_obs, zp, plane, sigma), valid, sigma)
-            A = (J * w[:, None]).T @ J
-            g = (J * w[:, None]).T @ r
+            A = gram(J, w)
+            g = tmv(J, w * r)
             if prior is not None:
                 pp, Rp = prior
                 lt, lr = (sigma / c.prior_pos_m) ** 2, (sigma / c.prior_rot_rad) ** 2
                 A[:3, :3] += lt * np.eye(3)
                 A[3:, 3:] += lr * np.eye(3)
                 g[:3] -= lt * (pos - pp)
-                g[3:] -= lr * log_so3(rot @ Rp.T)
+                g[3:] -= lr * log_so3(mm(rot, Rp.T))
             A += 1e-9 * np.eye(6) + 1e-3 * np.diag(np.diag(A))
-            step = np.linalg.solve(A, g)
+            step = solve(A, g)
             step[:3] = np.clip(step[:3], -0.02, 0.02)
             step[3:] = np.clip(step[3:], -0.2, 0.2)
             pos = pos + step[:3]
-            rot = project_to_so3(exp_so3(step[3:]) @ rot)
-            if np.linalg.norm(step[:3]) < 5e-5 and np.linalg.norm(step[3:]) < 5e-4:
+            rot = project_to_so3(mm(exp_so3(step[3:]), rot))
+            if norm(step[:3]) < 5e-5 and norm(step[3:]) < 5e-4:
                 break
         zp, cover, plane = _box_depth(*rays, pos, rot, self.half, self.fx, c.silhouette_px, False)
         r = z_obs - zp
@@ -385,7 +386,7 @@ class BoxTracker:
         for _ in range(c.particles):
             dp = self.rng.normal(0.0, c.search_pos_m, 3)
             dw = self.rng.normal(0.0, c.search_rot_rad, 3)
-            hyps.append((best[0] + dp, exp_so3(dw) @ best[1]))
+            hyps.append((best[0] + dp, mm(exp_so3(dw), best[1])))
         costs = [self.cost(z_obs, index, p, R, sigma) for p, R in hyps]
         reinit = False
         best_cost = costs[1]
