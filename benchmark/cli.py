@@ -210,6 +210,9 @@ def main(argv: list | None = None) -> int:
     except BenchmarkError as e:
         print(f"fsv-bench: failed: {e}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print("fsv-bench: interrupted; files already in the output folder are complete, the run is not", file=sys.stderr)
+        return 130
     sc = scenario
     print(f"fsv-bench: task {sc.task}, user {sc.user}, grasp {sc.grasp}, mass {sc.mass}, seed {sc.seed}, "
           f"noise {sc.noise_m} m, {len(run.episode.truth.t)} frames")

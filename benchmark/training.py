@@ -21,6 +21,7 @@ import numpy as np
 
 from benchmark.dataset import MAX_EXCESS_N, _ints, finger_names_of, load_dataset, training_set
 from benchmark.table2 import TABLE2_MEMBERS
+from fsv.errors import InputError
 from fsv.learn import LearnConfig, cross_validate, train
 
 
@@ -42,6 +43,10 @@ def run(args: argparse.Namespace):
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     df = load_dataset(args.data, max_excess_n=rule, **where)
     data = training_set(df)
+    episodes = int(df["episode"].nunique())
+    if args.folds and not 2 <= args.folds <= episodes:
+        raise InputError(f"--folds {args.folds} needs between 2 and the dataset's {episodes} episodes; "
+                         f"pass --folds {min(max(episodes, 2), 5)} or --folds 0 to skip cross-validation")
     config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed, members=args.members)
     t0 = time.perf_counter()
     cv = cross_validate(data, config).summary() if args.folds else None

@@ -137,3 +137,36 @@ def tracked_lift(rendered_lift_episode):
     est = run_pipeline(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, gravity=ep.truth.gravity,
                        rng=ep.scenario.rng("tracker"))
     return ep, est
+
+
+# --- the whole method on several default (10 s) lifts: accuracy gates as statistics over episodes ---
+
+GATE_SEEDS = (1, 2, 3, 4)
+"""Seeds of the multi-episode accuracy gates: the four seeds after seed 0, the one the tracker was tuned on."""
+
+
+@pytest.fixture(scope="session")
+def tracked_lifts():
+    """``[(episode, estimate, tracking scores, force scores, learned-force block)]`` for
+    ``fsv-bench --task lift --noise 0.01 --seed S`` with S in :data:`GATE_SEEDS`: the whole method
+    from depth (tracker, algebraic kinematics, nominal forces, the shipped internal-force model)."""
+    from benchmark.learning import score_episode
+    from benchmark.render import render
+    from benchmark.scenario import Scenario
+    from benchmark.score_forces import score_forces
+    from benchmark.simulate import simulate
+    from benchmark.tracking import score_tracking, tracker_init
+    from fsv import run_pipeline
+    from fsv.learn import default_model
+
+    out = []
+    for seed in GATE_SEEDS:
+        ep = render(simulate(Scenario(task="lift", seed=seed)))
+        init = tracker_init(ep.truth, ep.scenario, ep.hand_model)
+        est = run_pipeline(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, gravity=ep.truth.gravity,
+                           rng=ep.scenario.rng("tracker"))
+        tracking = score_tracking(est.tracking, ep.truth)
+        forces = score_forces(est.nominal, ep.truth, est.kinematics.rot)
+        learned = score_episode(ep, default_model(), est.kinematics, est.contacts)[0]
+        out.append((ep, est, tracking, forces, learned))
+    return out

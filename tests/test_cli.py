@@ -60,3 +60,51 @@ def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, c
     assert not (out / "depth.gif").exists()
     ep = load_episode(out / "episode.npz")
     assert ep.depth.depth_m.shape == (31, 240, 320) and ep.labels.shape == (31, 240, 320)
+
+
+def _with_render_stage(monkeypatch, exc):
+    """Replaces the render stage of the main command by one that raises ``exc`` (after simulating)."""
+    import dataclasses
+
+    import benchmark.cli as cli
+
+    def boom(run):
+        raise exc
+
+    stages = [dataclasses.replace(s, run=boom) if s.name == "render" else s for s in cli.STAGES]
+    monkeypatch.setattr(cli, "STAGES", stages)
+
+
+def test_a_failing_stage_exits_1_with_one_line(tmp_path, capsys, monkeypatch):
+    from benchmark.errors import RenderError
+
+    _with_render_stage(monkeypatch, RenderError("no OpenGL context"))
+    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--out", str(tmp_path / "run")])
+    assert code == 1
+    err = capsys.readouterr().err
+    assert err == "fsv-bench: failed: no OpenGL context\n"
+    assert not (tmp_path / "run" / "summary.json").exists()
+
+
+def test_ctrl_c_exits_130_and_writes_no_summary(tmp_path, capsys, monkeypatch):
+    _with_render_stage(monkeypatch, KeyboardInterrupt())
+    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--out", str(tmp_path / "run")])
+    assert code == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert not (tmp_path / "run" / "summary.json").exists()
+
+
+@pytest.mark.parametrize("exc, code, needle", [(KeyboardInterrupt(), 130, "interrupted; complete files are kept"),
+                                                ("benchmark", 1, "failed: the box fell")])
+def test_subcommands_exit_130_on_ctrl_c_and_1_on_failure(monkeypatch, capsys, exc, code, needle):
+    import benchmark.dataset as dataset
+    from benchmark.errors import SimulationError
+
+    err = SimulationError("the box fell") if exc == "benchmark" else exc
+
+    def run(args):
+        raise err
+
+    monkeypatch.setattr(dataset, "run", run)
+    assert main(["generate", "--out", "unused"]) == code
+    assert needle in capsys.readouterr().err

@@ -1,6 +1,7 @@
 """The tracker against the simulated truth: the issue's accuracy gates, the scores, init and overlay."""
 
 import numpy as np
+import pytest
 from benchmark.contact_error import contacts_from_truth
 from benchmark.score_forces import score_forces
 from benchmark.tracking import GATES, INIT_PERTURBATION, gate_report, plot_overlay, score_tracking, tracker_init
@@ -11,32 +12,35 @@ from fsv.track.tracker import Tracking
 
 
 def test_box_gates_hold_on_lift_with_1cm_noise(tracked_lift):
+    """Measured 0.57 mm and 0.58 deg (medians); gates 1.5 mm and 1.5 deg."""
     ep, est = tracked_lift
     s = score_tracking(est.tracking, ep.truth)
-    assert s["box_pos_err_mm_median"] <= 2.0, s
+    assert s["box_pos_err_mm_median"] <= 1.5, s
     assert s["box_rot_err_deg_median"] <= 1.5, s
 
 
-def test_end_to_end_net_force_error_is_within_the_papers_filter_threshold(tracked_lift):
+def test_end_to_end_net_force_error_on_the_short_lift(tracked_lift):
+    """Measured 0.086 N RMS on this 2.5 s lift (identical under every OpenBLAS kernel); gate 0.3 N."""
     ep, est = tracked_lift
     assert est.oracle == ()  # tracked contacts, kinematics from tracked poses
     block = score_forces(est.nominal, ep.truth, est.kinematics.rot)
-    assert block["net_force_err_n_rms"] <= 1.5, block
+    assert block["net_force_err_n_rms"] <= 0.3, block
 
 
 def test_the_hand_is_tracked_where_the_camera_sees_it(tracked_lift):
+    """Measured: palm 1.9 mm, observed fingertips 3.8 mm (medians; gates 6 and 10 mm)."""
     ep, est = tracked_lift
     palm_err = np.linalg.norm(est.tracking.hand_qpos[:, :3] - ep.truth.hand_qpos[:, :3], axis=1)
-    assert np.median(palm_err) < 0.015, np.median(palm_err)
+    assert np.median(palm_err) < 0.006, np.median(palm_err)
     seen = est.tracking.observed
     tip_err = np.linalg.norm(est.tracking.fingertips - ep.truth.fingertip_pos, axis=-1)
-    assert seen.sum() > 50 and np.median(tip_err[seen]) < 0.02, np.median(tip_err[seen])
+    assert seen.sum() > 50 and np.median(tip_err[seen]) < 0.010, np.median(tip_err[seen])
 
 
 def test_contact_gates_hold_on_lift_with_1cm_noise(tracked_lift):
     """The issue's contact gates: per-axis contact point error |mean| <= 2 mm and std <= 4 mm,
-    recall and precision >= 0.9 (this 2.5 s lift, seed 0: -0.1 +- 1.8 mm, 0.99 / 0.98; the README gives
-    seeds 0-8, on some of which a gate misses)."""
+    recall and precision >= 0.9 (this 2.5 s lift, seed 0: -0.21 +- 1.81 mm, 0.98 / 1.00, the same
+    bits under every OpenBLAS kernel; the statistics over several episodes are gated below)."""
     ep, est = tracked_lift
     s = score_tracking(est.tracking, ep.truth)
     assert s["contact_pairs"] > 200
@@ -97,19 +101,41 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["o.png"]  # written atomically, no temp file left
 
 
-def test_contact_gates_hold_on_the_default_ten_second_lift_of_another_seed():
-    """The issue's gates on the scenario `fsv-bench --task lift --noise 0.01 --seed 3` runs (10 s, 301
-    frames), a seed no tracker setting was tuned on (measured: +0.3 +- 2.3 mm, recall and precision
-    1.00 / 1.00; seeds 0-4 all pass). The short test lifts above miss a gate on some seeds."""
-    from benchmark.render import render
-    from benchmark.scenario import Scenario
-    from benchmark.simulate import simulate
-    from fsv.track.tracker import track
+@pytest.mark.accuracy
+def test_tracking_gates_hold_as_statistics_over_four_default_lifts(tracked_lifts):
+    """The contact and box gates of ``benchmark.tracking.GATES`` as statistics over the 10 s lifts of
+    seeds 1-4 (never used for tuning). Measured (identical under the Haswell, Sandybridge, Nehalem and
+    Prescott kernels): contact std 1.89 / 2.97 / 2.66 / 1.45 mm, median 2.28 mm (seeds 0-8 range
+    1.3-3.0 mm); precision 0.998 / 0.944 / 0.993 / 0.998; box 0.55-0.63 mm, 0.5-0.6 deg."""
+    scores = [t for _, _, t, _, _ in tracked_lifts]
 
-    ep = render(simulate(Scenario(task="lift", seed=3)))
-    assert ep.depth.depth_m.shape[0] == 301
-    tracking = track(ep.depth, ep.calib, ep.object_model, ep.hand_model, tracker_init(ep.truth, ep.scenario, ep.hand_model),
-                     rng=ep.scenario.rng("tracker"))
-    s = score_tracking(tracking, ep.truth)
-    assert s["box_pos_err_mm_median"] <= 2.0 and s["box_rot_err_deg_median"] <= 1.5, s
-    assert all(g["pass"] for g in gate_report(s).values()), gate_report(s)
+    def med(key):
+        return float(np.median([s[key] for s in scores]))
+
+    assert all(s["contact_pairs"] > 800 for s in scores), [s["contact_pairs"] for s in scores]
+    assert med("contact_err_mm_std") <= 4.0, [s["contact_err_mm_std"] for s in scores]
+    assert abs(np.mean([s["contact_err_mm_mean"] for s in scores])) <= 2.0, [s["contact_err_mm_mean"] for s in scores]
+    assert med("contact_recall") >= 0.9 and med("contact_precision") >= 0.9, scores
+    assert med("box_pos_err_mm_median") <= 1.5 and med("box_rot_err_deg_median") <= 1.5, scores
+
+
+@pytest.mark.accuracy
+def test_net_force_from_depth_is_a_tenth_of_a_newton_over_four_default_lifts(tracked_lifts):
+    """Net force of the nominal forces against the truth's resultant, whole method from depth.
+    Measured RMS 0.089 / 0.121 / 0.129 / 0.090 N, median 0.106 N (gate 0.3 N: a regression to three
+    times today's error fails). Least-violation frames (the programs were infeasible on the tracked
+    contacts): 0 / 10 / 9 / 0 of 287 each, 19 of 1148 in all (gate 40)."""
+    rms = [f["net_force_err_n_rms"] for _, _, _, f, _ in tracked_lifts]
+    assert np.median(rms) <= 0.3 and max(rms) <= 0.6, rms
+    least_violation = [f["solver_failures"] for _, _, _, f, _ in tracked_lifts]
+    assert sum(least_violation) <= 40, least_violation
+
+
+@pytest.mark.accuracy
+def test_learned_forces_from_depth_over_four_default_lifts(tracked_lifts):
+    """The shipped model on tracked contacts and kinematics: the relative error of Table 2 per
+    episode. Measured 19.2 / 21.3 / 26.5 / 20.4 %, median 20.8 % (gate 30 %; the paper's Table 2:
+    9.7-10.9 % on its own cohort)."""
+    err = [b["rel_err_pct_mean"] for _, _, _, _, b in tracked_lifts]
+    assert np.median(err) <= 30.0, err
+    assert all(b["scored"] > 600 for _, _, _, _, b in tracked_lifts)

@@ -1,0 +1,28 @@
+"""fsv-bench train: trains on a generated dataset, saves a loadable model, checks --folds before work."""
+
+import numpy as np
+
+from benchmark.cli import main
+from fsv.learn import load
+
+
+def test_train_writes_a_model_that_predicts_on_its_data(learn_oracle_dataset, tmp_path, capsys):
+    _, folder, _ = learn_oracle_dataset
+    out = tmp_path / "model.pt"
+    code = main(["train", "--data", str(folder), "--out", str(out), "--folds", "2", "--epochs", "60", "--members", "1"])
+    assert code == 0, capsys.readouterr().err
+    text = capsys.readouterr().out
+    assert "2-fold CV" in text and "from 2 episodes" in text
+    model = load(out)
+    assert model.metadata["episodes"] == 2 and model.metadata["cross_validation"]["folds"] == 2
+    assert model.metadata["dataset"]["contacts"] == "oracle"
+    assert model.config.epochs == 60 and model.config.members == 1
+
+
+def test_train_refuses_more_folds_than_episodes_before_training(learn_oracle_dataset, tmp_path, capsys):
+    _, folder, _ = learn_oracle_dataset
+    out = tmp_path / "model.pt"
+    assert main(["train", "--data", str(folder), "--out", str(out)]) == 2  # default 5 folds, 2 episodes
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--folds 5 needs between 2 and the dataset's 2 episodes" in err
+    assert not out.exists()
