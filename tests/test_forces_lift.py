@@ -10,6 +10,7 @@ from benchmark.contact_error import contacts_from_truth
 from benchmark.motion import oracle_kinematics
 from benchmark.score_forces import add_arguments, run_stage, score_forces, true_net_wrench
 from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
+from pictures import assert_figure
 
 
 @pytest.fixture(scope="module")
@@ -50,10 +51,11 @@ def test_the_decomposition_recovers_the_true_normal_forces(lift):
     tr = episode.truth
     measured = np.where(contacts.active, np.einsum("tki,tki->tk", tr.contact_force, tr.contact_normal), np.nan)
     dec = decompose_forces(kin, contacts, episode.object_model, measured, gravity=tr.gravity)
-    ok = dec.status == FrameStatus.OPTIMAL
-    assert ok.mean() > 0.95
-    assert np.abs(dec.internal_wrench[ok]).max() < 1e-6
-    assert np.abs((dec.normal_force - np.nan_to_num(measured))[ok][contacts.active[ok]]).max() < 0.05
+    # Measured on this 2.5 s lift: all 76 frames optimal, internal wrench 3e-15, largest normal-force
+    # misfit 1.8e-4 N (gates: every frame, 1e-9, 5e-3 N).
+    assert np.all(dec.status == FrameStatus.OPTIMAL), np.flatnonzero(dec.status != FrameStatus.OPTIMAL)
+    assert np.abs(dec.internal_wrench).max() < 1e-9
+    assert np.abs((dec.normal_force - np.nan_to_num(measured))[contacts.active]).max() < 5e-3
 
 
 def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
@@ -70,7 +72,7 @@ def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
         assert key in block
     assert block["contacts"].startswith("oracle") and "contacts" in block["oracle"]
     assert block["net_force_err_n_rms"] < 0.05
-    assert (tmp_path / "forces_fig5.png").stat().st_size > 10_000
+    assert_figure(tmp_path / "forces_fig5.png", min_height=800, colours={"thumb (C0)": (31, 119, 180), "index (C1)": (255, 127, 14)})
     assert "ORACLE" in run.lines[0]
     json.dumps(block)  # summary.json must be able to hold it
 

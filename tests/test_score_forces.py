@@ -7,6 +7,7 @@ from benchmark.score_forces import plot_fig5, score_forces, sensitivity, true_ne
 from forces_oracle import grasp_truth
 from fsv import Kinematics
 from fsv.forces import FrameStatus, nominal_forces
+from pictures import assert_figure
 
 
 def _kin(truth):
@@ -29,7 +30,7 @@ def test_scores_of_nominal_forces_on_a_consistent_truth(tmp_path):
         [np.einsum("tji,j->ti", kin.rot, [1.0, 0, 0]), np.zeros((40, 3))], axis=1)})
     assert abs(score_forces(shifted, truth, kin.rot)["net_force_err_n_rms"] - 1.0) < 1e-6
     png = plot_fig5(sol, truth, kin.rot, tmp_path / "fig5.png", title="test")
-    assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
+    assert_figure(png, min_height=800, colours={"thumb (C0)": (31, 119, 180), "index (C1)": (255, 127, 14)})
 
 
 def test_true_net_wrench_is_what_newton_euler_requires():

@@ -10,6 +10,7 @@ from benchmark.scenario import Scenario
 from benchmark.table1 import PAPER, Table1, error_stats, plot_fig4, score_table1, tune, write_outputs
 from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig
+from pictures import assert_figure
 
 
 def _biased(truth, acc_bias_body, gyro_bias_body):
@@ -88,7 +89,7 @@ def test_tuning_prefers_the_window_that_wins_on_calibration_episodes(analytic_tr
 def test_write_outputs_writes_table_and_png(analytic_truth, tmp_path):
     table, kins = score_table1(analytic_truth, tracker_like_poses(analytic_truth, Scenario(seed=0)))
     paths = write_outputs(table, analytic_truth, kins, tmp_path / "out")
-    assert paths["plot"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and paths["plot"].stat().st_size > 20000
+    assert_figure(paths["plot"], min_width=1000, colours={"algebraic (tab:blue)": (31, 119, 180), "central (tab:red)": (214, 39, 40), "truth (black)": (0, 0, 0)})
     assert "Algebraic (ours / paper)" in paths["markdown"].read_text()
     assert paths["csv"].read_text().startswith("method,acc_mean")
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["fig4_kinematics.png", "table1.csv", "table1.md"]
@@ -125,7 +126,7 @@ def test_cli_stage_prints_and_writes_table1_and_labels_the_oracle(lift_episode, 
     text = "\n".join(run.lines)
     assert "1.686" in text and "Algebraic (ours / paper)" in text
     assert ("ORACLE" in text) == (choice == "oracle")
-    assert (tmp_path / "fig4_kinematics.png").stat().st_size > 20000
+    assert_figure(tmp_path / "fig4_kinematics.png", min_width=1000, colours={"algebraic (tab:blue)": (31, 119, 180), "central (tab:red)": (214, 39, 40), "truth (black)": (0, 0, 0)})
     assert (tmp_path / "table1.md").read_text().startswith("| | Central")
 
 

@@ -97,7 +97,17 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
     ep, est = tracked_lift
     path = plot_overlay(ep.depth, ep.calib, est.tracking, ep.object_model, ep.hand_model, tmp_path / "o.png", frames=4)
     data = path.read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    from PIL import Image
+
+    img = np.asarray(Image.open(path).convert("RGB")).astype(int)
+    assert img.shape[1] > 3 * img.shape[0]  # four panels side by side
+
+    def share(rgb, tol=40):
+        return float(np.mean(np.all(np.abs(img - np.array(rgb)) <= tol, axis=-1)))
+
+    # the tracked box's edges (lime), the fingertips seen (red) and the contacts (cyan) are drawn
+    assert share((0, 255, 0)) > 1e-4 and share((255, 0, 0)) > 1e-5 and share((0, 255, 255), tol=60) > 1e-5
     assert [p.name for p in tmp_path.iterdir()] == ["o.png"]  # written atomically, no temp file left
 
 
