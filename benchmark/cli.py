@@ -113,7 +113,8 @@ STAGES.append(Stage(name="forces", add_arguments=_score_forces.add_arguments, ru
 from benchmark import learning as _learning  # noqa: E402
 
 STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_learning.run_stage))
-SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2"}
+SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2",
+               "reproduce": "benchmark.reproduce"}
 
 
 def _subcommand(argv: list) -> int:

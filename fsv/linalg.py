@@ -1,8 +1,8 @@
 """Small linear algebra in a fixed order of operations: the same bits on every CPU and BLAS kernel.
 
-NumPy hands ``@``, ``np.dot``, ``np.linalg.norm`` of a whole array, ``np.linalg.solve`` and
-``np.linalg.inv`` to BLAS and LAPACK. OpenBLAS picks its kernels by CPU (or by
-``OPENBLAS_CORETYPE``), and kernels with and without fused multiply-adds, or with other blockings,
+NumPy hands ``@``, ``np.dot``, ``np.correlate``, ``np.convolve``, ``np.linalg.norm`` of a whole
+array, ``np.linalg.solve`` and ``np.linalg.inv`` to BLAS and LAPACK. OpenBLAS picks its kernels by
+CPU (or by ``OPENBLAS_CORETYPE``), and kernels with and without fused multiply-adds, or with other blockings,
 round differently in the last bits. Fed back through a simulation or an iterative fit, those bits
 grow into visibly different trajectories. Every product and solve in the simulation loop, the
 renderer's inputs, the tracker and the force stage therefore goes through this module instead:
@@ -64,6 +64,19 @@ def norm(x: np.ndarray) -> float:
     """Euclidean norm of a whole array (what ``np.linalg.norm(x)`` computes through BLAS)."""
     x = np.ravel(x)
     return float(np.sqrt(np.einsum("i,i->", x, x)))
+
+
+def correlate_valid(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``np.correlate(x, w, "valid")`` of 1-D arrays: out[j] = sum_k x[j + k] w[k], (N,), (L,) -> (N - L + 1,)."""
+    x, w = np.asarray(x, dtype=float), np.asarray(w, dtype=float)
+    return np.einsum("nk,k->n", np.lib.stride_tricks.sliding_window_view(x, w.shape[0]), w)
+
+
+def convolve_full(a: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``np.convolve(a, v)`` ("full") of 1-D arrays: (N,), (M,) -> (N + M - 1,)."""
+    a, v = np.asarray(a, dtype=float), np.asarray(v, dtype=float)
+    pad = np.concatenate([np.zeros(v.shape[0] - 1), a, np.zeros(v.shape[0] - 1)])
+    return correlate_valid(pad, v[::-1])
 
 
 def gram(J: np.ndarray, w: np.ndarray | None = None) -> np.ndarray:

@@ -35,6 +35,13 @@ def test_gram_and_transposed_product(rng):
     np.testing.assert_allclose(linalg.tmv(J, r), J.T @ r, atol=1e-12)
 
 
+def test_correlation_and_convolution_equal_numpys(rng):
+    x, w = rng.normal(size=50), rng.normal(size=7)
+    np.testing.assert_allclose(linalg.correlate_valid(x, w), np.correlate(x, w, "valid"), atol=1e-13)
+    np.testing.assert_allclose(linalg.convolve_full(x, w), np.convolve(x, w), atol=1e-13)
+    assert linalg.convolve_full([1.0, 2.0], [0.5, 0.0, -0.5]).tolist() == [0.5, 1.0, -0.5, -1.0]
+
+
 def test_solve_and_inverse(rng):
     A = rng.normal(size=(9, 9)) + 3 * np.eye(9)
     b = rng.normal(size=9)
@@ -57,7 +64,8 @@ rng = np.random.default_rng(3)
 A = rng.normal(size=(40, 3, 3)); J = rng.normal(size=(500, 26)); b = rng.normal(size=26)
 G = linalg.gram(J) + np.eye(26)
 out = [linalg.mm(A, A), linalg.vm(J[:, :3], A[0]), linalg.gram(J), linalg.solve(G, b), linalg.inv(G[:6, :6]),
-       np.array(linalg.norm(J)), linalg.tmv(J, J[:, 0])]
+       np.array(linalg.norm(J)), linalg.tmv(J, J[:, 0]),
+       linalg.correlate_valid(J[:, 0], b[:9]), linalg.convolve_full(b, J[:5, 1])]
 print(hashlib.sha256(b"".join(np.ascontiguousarray(o).tobytes() for o in out)).hexdigest())
 """
 

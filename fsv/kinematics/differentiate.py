@@ -28,7 +28,7 @@ import numpy as np
 
 from fsv.errors import InputError
 from fsv.kinematics import so3
-from fsv.linalg import mv
+from fsv.linalg import correlate_valid, mv
 from fsv.rotation import quat_to_rot
 from fsv.kinematics.stencils import AlgebraicConfig, CentralConfig, GaussianConfig
 from fsv.types import Kinematics, Poses
@@ -132,7 +132,7 @@ def _apply(x: np.ndarray, offsets: np.ndarray, coeffs: np.ndarray, lo: int, hi: 
     seg = x[lo + first : hi + first + dense.size - 1]
     out = np.zeros_like(x, dtype=float)
     for i in range(x.shape[1]):
-        out[lo:hi, i] = np.correlate(seg[:, i], dense, "valid")
+        out[lo:hi, i] = correlate_valid(seg[:, i], dense)
     return out
 
 

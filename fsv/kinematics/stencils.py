@@ -51,7 +51,7 @@ import numpy as np
 from scipy import special
 
 from fsv.errors import InputError
-from fsv.linalg import mv, rows_mt, solve
+from fsv.linalg import convolve_full, mv, rows_mt, solve
 
 
 @dataclass(frozen=True)
@@ -283,7 +283,7 @@ class GaussianConfig:
         if order == 0:
             return _finish(0, self.kernel(), dt, exact_degree=1)
         diff = np.array([0.5, 0.0, -0.5]) if order == 1 else np.array([1.0, -2.0, 1.0])
-        w = np.convolve(self.kernel(), diff)
+        w = convolve_full(self.kernel(), diff)
         return _finish(order, w, dt, exact_degree=2 if order == 1 else 3)
 
     def describe(self) -> str:

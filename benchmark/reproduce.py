@@ -1,0 +1,369 @@
+"""``fsv-bench reproduce``: regenerate every committed result and check it against the committed values.
+
+    fsv-bench reproduce [--only NAMES] [--write] [--data DIR] [--workers N] [--list]
+
+Each committed result (the reference run of the main command, Table 1, Table 2 and its variants,
+the shipped internal-force model) is a :class:`Result`: the documented commands that make it, the
+datasets it needs (generated once into ``--data``, default ``data/``, and resumed), and a
+comparison with tolerances. Without ``--write`` the results are made in a temporary folder and
+compared with the committed ones; every value that moved beyond its tolerance is printed and the
+command exits 1. With ``--write`` the committed files are replaced (each folder swapped in whole
+once complete) and ``results/reproduce.json`` records, per result, the code fingerprint and the
+machine (:func:`fsv.provenance.provenance`) that made it.
+
+Tolerances. On one machine every stage is deterministic; across OpenBLAS kernels the world, the
+tracker and the kinematics are bit-identical (fixed-order arithmetic, :mod:`fsv.linalg`) and the
+cone solver differs in the tenth digit. Numbers are therefore compared to a relative 1e-6
+(``REL_TOL``) and an absolute 1e-9; a machine whose NumPy dispatches other SIMD code (for example
+AVX-512 transcendental functions) may move tracked results further, and the comparison says where.
+
+Staleness without regenerating: :func:`code_fingerprint` hashes the source that produces the
+results (``fsv/``, ``sim_assets/`` and the world and scoring modules of ``benchmark/``) with
+comments and docstrings stripped; a test compares it with the fingerprint recorded at the last
+``--write``, so a change to the world, the tracker or the learning that forgets to regenerate
+fails the test suite.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import hashlib
+import json
+import math
+import os
+import pathlib
+import shutil
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+from benchmark.errors import BenchmarkError
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RECORD = "results/reproduce.json"
+REL_TOL = 1e-6
+ABS_TOL = 1e-9
+
+# Keys whose values are measurements of this run's speed or of where it ran, never compared.
+_UNCOMPARED = ("timing", "per_s", "seconds", "_ms_per_frame", "provenance", "path", "overlay", "episode",
+               "summary", "fig", "plot", "command", "train_seconds")
+
+# Source that decides the committed numbers; benchmark modules for the command line, pictures,
+# speed measurements and this command are not in it.
+_FINGERPRINTED_BENCHMARK = ("contact_error", "dataset", "episode", "grip", "hand", "learning", "motion", "pose_error",
+                            "render", "scenario", "score_forces", "sensor", "simulate", "table1", "table2", "tactile",
+                            "tracking", "training", "truth", "world")
+
+
+class ReproduceError(BenchmarkError):
+    """A committed result differs from its regeneration, or a regeneration failed."""
+
+
+_TABLE2_GRID = ["--tasks", "lift", "--grasps", "0,1", "--masses", "1,4", "--seeds", "0-5"]
+
+DATASETS = {
+    "table2": _TABLE2_GRID + ["--users", "0,4"],
+    "table2-users-0-1": _TABLE2_GRID + ["--users", "0,1"],
+    "table2-error-model": _TABLE2_GRID + ["--users", "0,4", "--contacts", "error-model"],
+    "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
+    "default": ["--tasks", "lift", "--users", "0-3", "--grasps", "0-3", "--masses", "0,2", "--seeds", "100"],
+}
+"""``fsv-bench generate`` arguments of every dataset a committed result is made from."""
+
+
+@dataclass(frozen=True)
+class Result:
+    """One committed result.
+
+    Attributes:
+        name: Name used by ``--only``.
+        path: The committed file or folder, relative to the repository.
+        datasets: Names in :data:`DATASETS` it is made from.
+        commands: Its ``fsv-bench`` (or ``python -m``) commands, ``{data}``/``{out}`` to be filled in.
+        compare: ``(new, committed) -> [difference, ...]`` on the two paths.
+    """
+
+    name: str
+    path: str
+    datasets: tuple
+    commands: tuple
+    compare: Callable
+
+
+def _leaves(obj, prefix=""):
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield from _leaves(v, f"{prefix}/{k}")
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            yield from _leaves(v, f"{prefix}[{i}]")
+    else:
+        yield prefix, obj
+
+
+def compare_values(new, old, where: str = "") -> list[str]:
+    """Differences between two JSON-like values beyond the tolerances (uncompared keys skipped).
+
+    Args:
+        new: The regenerated value (nested dicts and lists of numbers, strings, booleans, None).
+        old: The committed value.
+        where: Label prefixed to every difference.
+
+    Returns:
+        One line per differing leaf: ``where/key: committed -> regenerated``.
+    """
+    a, b = dict(_leaves(new)), dict(_leaves(old))
+    out = []
+    for key in sorted(set(a) | set(b)):
+        if any(s in key.lower() for s in _UNCOMPARED):
+            continue
+        x, y = a.get(key, "<missing>"), b.get(key, "<missing>")
+        if isinstance(x, (int, float)) and isinstance(y, (int, float)) and not isinstance(x, bool):
+            if (math.isnan(x) and math.isnan(y)) or math.isclose(x, y, rel_tol=REL_TOL, abs_tol=ABS_TOL):
+                continue
+        elif x == y:
+            continue
+        out.append(f"{where}{key}: {y!r} -> {x!r}")
+    return out
+
+
+def _compare_json(name: str):
+    def compare(new: pathlib.Path, old: pathlib.Path) -> list[str]:
+        if not (old / name).exists():
+            return [f"{old / name}: not committed"]
+        return compare_values(json.loads((new / name).read_text()), json.loads((old / name).read_text()),
+                              f"{old.name}/{name}")
+    return compare
+
+
+def _compare_csv(name: str):
+    def compare(new: pathlib.Path, old: pathlib.Path) -> list[str]:
+        import pandas as pd
+
+        if not (old / name).exists():
+            return [f"{old / name}: not committed"]
+        a, b = pd.read_csv(new / name), pd.read_csv(old / name)
+        return compare_values(a.to_dict("list"), b.to_dict("list"), f"{old.name}/{name}")
+    return compare
+
+
+def _compare_model(new: pathlib.Path, old: pathlib.Path) -> list[str]:
+    from fsv.learn import load
+
+    a, b = load(new), load(old)
+    diffs = compare_values(a.metadata.get("cross_validation"), b.metadata.get("cross_validation"), "cross_validation")
+    sa, sb = a.state(), b.state()
+    for key in ("net_l2", "net_decomp"):
+        for i, (x, y) in enumerate(zip(sa[key], sb[key])):
+            for p in x:
+                d = float((x[p] - y[p]).abs().max())
+                if d > REL_TOL:
+                    diffs.append(f"{key}[{i}].{p}: weights differ by up to {d:.2e}")
+    return diffs
+
+
+def _table2(out_sub: str, data: str, extra: tuple = ()) -> Result:
+    path = "results/table2" + (f"/{out_sub}" if out_sub else "")
+    return Result(name="table2" + (f"-{out_sub}" if out_sub else ""), path=path, datasets=(data,),
+                  commands=(("fsv-bench", "table2", "--data", f"{{data}}/{data}", "--out", "{out}") + extra,),
+                  compare=_compare_json("table2.json"))
+
+
+RESULTS = (
+    Result(name="shipped-model", path="fsv/data/internal_forces.pt", datasets=("default",),
+           commands=(("fsv-bench", "train", "--data", "{data}/default", "--out", "{out}", "--folds", "3"),),
+           compare=_compare_model),
+    Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
+           commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
+           compare=lambda new, old: _compare_json("summary.json")(new, old) + _compare_csv("table1.csv")(new, old)),
+    Result(name="table1", path="results/table1", datasets=(),
+           commands=(("python", "-m", "benchmark.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
+           compare=_compare_csv("table1.csv")),
+    _table2("", "table2"),
+    _table2("paper-rule-only", "table2", ("--max-excess", "inf")),
+    _table2("users-0-1", "table2-users-0-1", ("--users", "0,1")),
+    _table2("error-model", "table2-error-model"),
+    _table2("oracle-contacts", "table2-oracle-contacts"),
+)
+"""Every committed result, in the order they are made (the reference run uses the shipped model)."""
+
+
+def code_fingerprint(root: pathlib.Path = ROOT) -> str:
+    """sha256 of the source that produces the committed results, comments and docstrings stripped.
+
+    Covers every ``.py`` file of ``fsv/``, the data files of ``fsv/data`` and ``sim_assets/``, and
+    the modules of ``benchmark/`` named in ``_FINGERPRINTED_BENCHMARK`` (with ``benchmark/tasks/``).
+    """
+    files = sorted(p for p in (root / "fsv").rglob("*.py"))
+    files += sorted((root / "benchmark" / "tasks").glob("*.py"))
+    files += [root / "benchmark" / f"{m}.py" for m in _FINGERPRINTED_BENCHMARK]
+    data = sorted(p for d in ("sim_assets", "fsv/data") for p in (root / d).iterdir()
+                  if p.is_file() and p.suffix in (".xml", ".yaml", ".json") and not p.name.startswith("."))
+    h = hashlib.sha256()
+    for p in files:
+        h.update(str(p.relative_to(root)).encode())
+        h.update(_normalised_source(p.read_text()).encode())
+    for p in data:
+        h.update(str(p.relative_to(root)).encode())
+        h.update(p.read_bytes())
+    return h.hexdigest()
+
+
+def _normalised_source(src: str) -> str:
+    tree = ast.parse(src)
+    for node in ast.walk(tree):
+        body = getattr(node, "body", None)
+        if isinstance(body, list) and body and isinstance(body[0], ast.Expr) \
+                and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str):
+            node.body = body[1:] or [ast.Pass()]
+    return ast.dump(tree)
+
+
+def recorded() -> dict:
+    """The record of the last ``--write`` (``results/reproduce.json``), or {} if none."""
+    path = ROOT / RECORD
+    return json.loads(path.read_text()) if path.exists() else {}
+
+
+def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: str, log) -> None:
+    argv = [c.format(data=data, out=out) for c in command]
+    print("$ " + " ".join(argv), file=log, flush=True)
+    if argv[0] == "fsv-bench":
+        from benchmark.cli import main
+
+        saved = sys.argv  # what a model records as its command: the documented one
+        sys.argv = [c.format(data="data", out=documented_out) for c in command]
+        try:
+            code = main(argv[1:])
+        finally:
+            sys.argv = saved
+    else:
+        import runpy
+
+        module = argv[2]
+        saved = sys.argv
+        sys.argv = [module] + argv[3:]
+        try:
+            runpy.run_module(module, run_name="__main__")
+            code = 0
+        except SystemExit as e:
+            code = e.code or 0
+        finally:
+            sys.argv = saved
+    if code != 0:
+        raise ReproduceError(f"{' '.join(argv)} exited with status {code}")
+
+
+def _generate(name: str, data: pathlib.Path, workers: int | None, log) -> None:
+    from benchmark.cli import main
+
+    argv = ["generate", "--out", str(data / name), *DATASETS[name], "--no-progress"]
+    if workers:
+        argv += ["--workers", str(workers)]
+    print("$ fsv-bench " + " ".join(argv), file=log, flush=True)
+    if main(argv) != 0:
+        raise ReproduceError(f"fsv-bench {' '.join(argv)} failed")
+
+
+def make(result: Result, data: pathlib.Path, out: pathlib.Path, *, workers: int | None = None, log=sys.stdout) -> None:
+    """Makes one result into ``out`` (a file path for a model, a folder otherwise), datasets first."""
+    for name in result.datasets:
+        _generate(name, data, workers, log)
+    for command in result.commands:
+        _run(command, data, out, result.path, log)
+    if result.name == "reference-run":  # the committed reference omits the episode file
+        (out / "episode.npz").unlink(missing_ok=True)
+
+
+def _select(only: str | None) -> list[Result]:
+    if not only:
+        return list(RESULTS)
+    names = [n.strip() for n in only.split(",") if n.strip()]
+    known = {r.name: r for r in RESULTS}
+    bad = [n for n in names if n not in known]
+    if bad:
+        raise ValueError(f"--only {','.join(bad)}: no such result; accepted: {', '.join(known)}")
+    return [known[n] for n in names]
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--only", default=None, help="comma-separated result names (default: all; see --list)")
+    p.add_argument("--write", action="store_true", help="replace the committed results (default: only compare)")
+    p.add_argument("--data", default="data", help="folder of the datasets, generated or resumed (default: data)")
+    p.add_argument("--workers", type=int, default=None, help="local worker processes for the datasets")
+    p.add_argument("--list", action="store_true", help="list the results and their commands, then exit")
+
+
+def run(args: argparse.Namespace) -> list[str]:
+    """Runs ``fsv-bench reproduce``; returns the differences (raises ReproduceError if any)."""
+    results = _select(args.only)
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {args.workers}")
+    if args.list:
+        for r in results:
+            print(f"{r.name}: {r.path}\n  datasets: " + (", ".join(
+                f"{d} ({' '.join(DATASETS[d])})" for d in r.datasets) or "none"))
+            for c in r.commands:
+                print("  " + " ".join(c))
+        return []
+    from fsv.provenance import provenance
+
+    data = pathlib.Path(args.data).resolve()
+    data.mkdir(parents=True, exist_ok=True)
+    differences, record = [], recorded()
+    record.setdefault("results", {})
+    with tempfile.TemporaryDirectory(prefix="fsv-reproduce-") as tmp:
+        for r in results:
+            t0 = time.perf_counter()
+            committed = ROOT / r.path
+            new = pathlib.Path(tmp) / (r.name + (".pt" if committed.suffix == ".pt" else ""))
+            make(r, data, new, workers=args.workers)
+            diffs = r.compare(new, committed) if committed.exists() else [f"{r.path}: not committed yet"]
+            differences += [f"{r.name}: {d}" for d in diffs]
+            status = "unchanged" if not diffs else f"{len(diffs)} values moved"
+            if args.write:
+                _replace(new, committed)
+                record["results"][r.name] = {"path": r.path, "commands": [" ".join(c) for c in r.commands],
+                                             "datasets": {d: DATASETS[d] for d in r.datasets},
+                                             "seconds": time.perf_counter() - t0}
+                record["code_fingerprint"] = code_fingerprint()
+                record["provenance"] = provenance()
+                from benchmark.atomic import write_text
+
+                write_text(ROOT / RECORD, json.dumps(record, indent=1) + "\n")
+                status += ", written"
+            print(f"reproduce {r.name}: {status} ({time.perf_counter() - t0:.0f} s)", flush=True)
+    for d in differences:
+        print("  " + d)
+    if differences and not args.write:
+        raise ReproduceError(f"{len(differences)} committed values differ from their regeneration (listed above); "
+                             f"`fsv-bench reproduce --write` replaces them")
+    return differences
+
+
+def _replace(new: pathlib.Path, committed: pathlib.Path) -> None:
+    """Swaps ``new`` in for ``committed`` (a file, or a folder whose sub-folders of other results are kept)."""
+    committed.parent.mkdir(parents=True, exist_ok=True)
+    if new.is_file():
+        tmp = committed.with_name(f".{committed.name}.new")
+        shutil.copyfile(new, tmp)
+        os.replace(tmp, committed)
+        return
+    staging = committed.with_name(f".{committed.name}.new")
+    shutil.rmtree(staging, ignore_errors=True)
+    shutil.copytree(new, staging)
+    if committed.exists():  # keep nested results (results/table2/<variant>/) that are made separately
+        for child in committed.iterdir():
+            if child.is_dir() and not (staging / child.name).exists():
+                shutil.copytree(child, staging / child.name)
+        old = committed.with_name(f".{committed.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(committed, old)
+        os.replace(staging, committed)
+        shutil.rmtree(old)
+    else:
+        os.replace(staging, committed)
+

@@ -1,0 +1,72 @@
+"""fsv-bench reproduce: the committed results are those of this code, and the comparison catches moves."""
+
+import argparse
+import json
+import pathlib
+
+import pytest
+
+from benchmark import reproduce
+from benchmark.cli import main
+
+
+def test_compare_values_tolerates_rounding_and_names_what_moved():
+    old = {"a": 1.0, "b": {"c": [2.0, 3.0]}, "timing_s": {"total": 5.0}, "name": "x"}
+    assert reproduce.compare_values({"a": 1.0 + 1e-9, "b": {"c": [2.0, 3.0]}, "timing_s": {"total": 9.0}, "name": "x"}, old) == []
+    diffs = reproduce.compare_values({"a": 1.01, "b": {"c": [2.0]}, "timing_s": {"total": 5.0}, "name": "y"}, old, "s")
+    assert diffs == ["s/a: 1.0 -> 1.01", "s/b/c[1]: 3.0 -> '<missing>'", "s/name: 'x' -> 'y'"]
+
+
+def test_code_fingerprint_ignores_docstrings_and_comments_not_code(tmp_path):
+    for d in ("fsv/data", "sim_assets", "benchmark/tasks"):
+        (tmp_path / d).mkdir(parents=True)
+    for m in reproduce._FINGERPRINTED_BENCHMARK:
+        (tmp_path / "benchmark" / f"{m}.py").write_text("")
+    mod = tmp_path / "fsv" / "track.py"
+    mod.write_text('def f(x):\n    """Doc."""\n    return x + 1  # add one\n')
+    (tmp_path / "sim_assets" / "box.yaml").write_text("size: 1\n")
+    base = reproduce.code_fingerprint(tmp_path)
+    mod.write_text('def f(x):\n    """Other words."""\n    # reworded\n    return x + 1\n')
+    assert reproduce.code_fingerprint(tmp_path) == base
+    mod.write_text('def f(x):\n    return x + 2\n')
+    assert reproduce.code_fingerprint(tmp_path) != base
+    mod.write_text('def f(x):\n    return x + 1\n')
+    assert reproduce.code_fingerprint(tmp_path) == base
+    (tmp_path / "sim_assets" / "box.yaml").write_text("size: 2\n")
+    assert reproduce.code_fingerprint(tmp_path) != base
+
+
+def test_committed_results_were_made_by_this_code():
+    """Fails when the world, the method or the learning changed after the last
+    `fsv-bench reproduce --write`: regenerate the committed results in the same change."""
+    record = reproduce.recorded()
+    assert record, "results/reproduce.json is missing: run `fsv-bench reproduce --write`"
+    assert set(record["results"]) == {r.name for r in reproduce.RESULTS}
+    assert record["code_fingerprint"] == reproduce.code_fingerprint(), (
+        "the committed results are stale: run `fsv-bench reproduce --write`")
+
+
+@pytest.mark.accuracy
+def test_the_reference_run_regenerates_to_its_committed_values(tmp_path):
+    """The main command on the default lift, compared with results/lift-u0-g0-m0-s0 (every value but
+    timings and provenance, to a relative 1e-6; measured: identical)."""
+    result = {r.name: r for r in reproduce.RESULTS}["reference-run"]
+    reproduce.make(result, tmp_path / "data", tmp_path / "run", log=open(tmp_path / "log", "w"))
+    assert not (tmp_path / "run" / "episode.npz").exists()
+    diffs = result.compare(tmp_path / "run", reproduce.ROOT / result.path)
+    assert diffs == []
+
+
+def test_bad_result_names_exit_2_before_any_work(tmp_path, capsys):
+    assert main(["reproduce", "--only", "table3", "--data", str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "table3" in err and "accepted: shipped-model" in err
+    assert not (tmp_path / "d").exists()
+
+
+def test_list_names_every_result_and_its_commands(capsys):
+    reproduce.run(argparse.Namespace(only=None, write=False, data="unused", workers=None, list=True))
+    text = capsys.readouterr().out
+    for r in reproduce.RESULTS:
+        assert f"{r.name}: {r.path}" in text
+    assert "fsv-bench train --data {data}/default" in text
