@@ -102,12 +102,12 @@ class Table2Protocol:
 
 def object_models(out) -> dict:
     """The object model and gravity of each episode of a dataset: ``{episode: (ObjectModel, gravity)}``."""
-    import pyarrow.parquet as pq
+    from benchmark.dataset import read_episode_file, read_manifest
 
-    man = pd.read_parquet(os.path.join(os.fspath(out), "manifest.parquet"))
     models = {}
-    for ep, f in zip(man["episode"], man["file"]):
-        meta = json.loads(pq.read_schema(os.path.join(os.fspath(out), f)).metadata[b"fsv"])
+    for row in read_manifest(out).to_dict("records"):  # every file checked against its digests
+        ep = row["episode"]
+        _, meta, _ = read_episode_file(os.path.join(os.fspath(out), row["file"]), row["sha256"])
         if "object_model" in meta:
             om = meta["object_model"]
             models[ep] = (ObjectModel(**om), np.asarray(meta["gravity"], float))
