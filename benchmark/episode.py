@@ -16,6 +16,7 @@ from benchmark.scenario import Scenario
 from benchmark.truth import Truth
 from fsv import Calibration, DepthVideo, FsvError, HandModel, ObjectModel
 from fsv.digest import array_sha256, tree_sha256
+from fsv.errors import one_line
 
 
 @dataclass(frozen=True)
@@ -252,7 +253,7 @@ def load_episode(path) -> Episode:
     except EpisodeFileError:
         raise
     except Exception as e:  # zip, zlib, CRC, .npy header or JSON errors: whatever damaged bytes raise
-        raise EpisodeFileError(f"{path} is truncated or corrupt (entry {entry!r}): {e}") from e
+        raise EpisodeFileError(f"{path} is truncated or corrupt (entry {entry!r}): {one_line(e)}") from e
     try:
         scenario = Scenario(**meta["scenario"])
         truth = _truth_from(arrays["truth"], meta["truth"])

@@ -23,7 +23,7 @@ import pyarrow.parquet as pq
 
 from benchmark.errors import DatasetFileError
 from fsv.digest import tree_sha256
-from fsv.errors import InputError
+from fsv.errors import InputError, one_line
 
 KEY = b"fsv"
 
@@ -110,7 +110,7 @@ def read_sealed(data: bytes, name: str) -> tuple[pa.Table, dict]:
         meta = metadata(table)
         digest = table_sha256(table)
     except Exception as e:  # Arrow, Thrift, JSON or Unicode errors: whatever damaged bytes raise
-        raise DatasetFileError(f"{name} is truncated or corrupt: {e}") from e
+        raise DatasetFileError(f"{name} is truncated or corrupt: {one_line(e)}") from e
     if "sha256" not in meta:
         raise DatasetFileError(f"{name} carries no SHA-256 of its content (written by an fsv-bench without "
                                "dataset digests): generate it again")

@@ -50,7 +50,7 @@ import numpy as np
 import torch
 
 from fsv.digest import tree_sha256
-from fsv.errors import InputError
+from fsv.errors import InputError, one_line
 from fsv.features import GRAVITY, Features, grasp_features
 from fsv.forces import ForceSettings, ForceSolution, reconstruct_forces
 from fsv.models import ObjectModel
@@ -336,7 +336,7 @@ def load(path) -> InternalForceModel:
     try:
         st = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as e:  # a truncated, corrupt or foreign file: report it as bad input
-        raise InputError(f"{path!r} is not a readable internal-force model: {e}") from e
+        raise InputError(f"{path!r} is not a readable internal-force model: {one_line(e)}") from e
     if not isinstance(st, dict) or st.get("format") != FORMAT:
         raise InputError(f"{path!r} is not an {FORMAT} file")
     if st.get("version") != VERSION:
@@ -364,7 +364,7 @@ def load(path) -> InternalForceModel:
             net_l2, net_decomp, st["metadata"],
         )
     except (KeyError, TypeError, AttributeError, RuntimeError, InputError) as e:
-        raise InputError(f"{path!r} has inconsistent internal-force model data: {e}") from e
+        raise InputError(f"{path!r} has inconsistent internal-force model data: {one_line(e)}") from e
 
 
 def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_names=None, metadata=None) -> InternalForceModel:

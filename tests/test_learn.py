@@ -261,3 +261,11 @@ def test_the_shipped_model_carries_a_verified_digest():
     assert st["version"] == VERSION and st["sha256"] == content_sha256(st)
     m = default_model()
     assert m.num_fingers == 5 and "provenance" in m.metadata
+
+
+def test_a_torch_error_is_reported_on_one_line(small_file, tmp_path):
+    bad = tmp_path / "cut.pt"
+    bad.write_bytes(small_file.read_bytes()[:5000])
+    with pytest.raises(InputError) as e:
+        load(bad)
+    assert "\n" not in str(e.value) and "cut.pt' is not a readable internal-force model" in str(e.value)
