@@ -26,6 +26,7 @@ from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.report import format_world, scenario_block, world_block, write_json
 from benchmark.scenario import Scenario
 from fsv.errors import InputError
+from fsv.provenance import provenance
 
 
 @dataclass
@@ -204,6 +205,7 @@ def main(argv: list | None = None) -> int:
         path = save_episode(run.episode, out / "episode.npz")
         run.timing_s["total"] = time.perf_counter() - start
         run.summary["timing_s"] = run.timing_s
+        run.summary["provenance"] = provenance()
         write_json(out / "summary.json", run.summary)
     except (ScenarioError, InputError) as e:
         print(f"fsv-bench: error: {e}", file=sys.stderr)

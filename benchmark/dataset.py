@@ -24,9 +24,20 @@ paper's measured contact-point error (mean -1.55 mm, std 6.13 mm per axis, white
 
 Layout of a dataset folder::
 
-    dataset.json              spec, sources, format version (a resumed run must match it)
+    dataset.json              spec, sources, format version (a resumed run must match it), and the
+                              provenance of the run that made it (``resumed_with``: of later runs)
     episodes/<id>.parquet     one table per episode (one row per kept frame), written atomically
-    manifest.parquet          one row per episode (counts, timing, status), rebuilt from the files
+    manifest.parquet          one row per episode (counts, timing, status, SHA-256 of the file's
+                              bytes), rebuilt from the files
+
+Integrity. Every table (episodes and manifest) carries the SHA-256 of its own content in its
+metadata (:mod:`benchmark.sealed_table`), and the manifest records the SHA-256 of each episode
+file's bytes. :func:`load_dataset` checks both and that each file holds the episode its name says;
+so does a resumed :func:`generate`, which reports a bad file on stderr and builds it again. Both
+digests are needed: the content digest lets a file be checked on its own (an interrupted run has
+no manifest yet), but about one in ten random 4-byte flips in a Parquet file hits bytes that no
+reader uses (e.g. column statistics) and leaves the content as it was; the bytes' digest in the
+manifest sees every flip.
 
 Columns of an episode table: ``episode, task, user, grasp, mass, seed, frame, t``; the world-frame
 kinematics ``pos_*, rot_00..rot_22, vel_*, acc_*, omega_*, alpha_*``; the features ``p1, p3,
@@ -51,6 +62,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import io
 import json
 import os
 import sys
@@ -64,14 +76,16 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from benchmark.atomic import atomic_path, write_text
-from benchmark.errors import BenchmarkError, DatasetError
+from benchmark.atomic import write_bytes, write_text
+from benchmark.errors import BenchmarkError, DatasetError, DatasetFileError
 from benchmark.scenario import Scenario
+from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
+from fsv.provenance import provenance
 
 FORMAT = "fsv-bench-dataset"
-VERSION = 1
+VERSION = 2  # version 1 had no digests
 KINEMATICS = ("algebraic", "central", "gaussian", "oracle")
 CONTACTS = ("tracker", "error-model", "oracle")
 _AX = "xyz"
@@ -340,9 +354,12 @@ def _run_one(scenario: Scenario, spec: DatasetSpec, build) -> pa.Table:
     return table.replace_schema_metadata({b"fsv": json.dumps(meta).encode()})
 
 
-def _atomic_write_table(table: pa.Table, path: str) -> None:
-    with atomic_path(path) as tmp:
-        pq.write_table(table, tmp)
+def _write_sealed(table: pa.Table, path: str) -> str:
+    """Seals ``table`` (:func:`benchmark.sealed_table.seal`), writes it atomically and returns the
+    SHA-256 of the bytes written."""
+    data = to_bytes(seal(table))
+    write_bytes(path, data)
+    return file_sha256(data)
 
 
 def _prepare(spec: DatasetSpec, out: str) -> str:
@@ -355,19 +372,113 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
     if os.path.exists(path):
         with open(path) as fh:
             old = json.load(fh)
-        if old != header:
+        if old.get("format") != FORMAT or old.get("version") != VERSION:
+            raise DatasetError(f"{out!r} holds a dataset of format {old.get('format')!r} version {old.get('version')!r}; "
+                               f"this fsv-bench writes version {VERSION} (with digests): use a new folder")
+        if old.get("spec") != header["spec"]:
             raise DatasetError(
                 f"{out!r} holds a dataset made with another spec ({old.get('spec')}); "
                 f"use a new folder or the same arguments ({header['spec']})"
             )
+        now = provenance()
+        if now != old.get("provenance") and now not in old.get("resumed_with", []):
+            old["resumed_with"] = old.get("resumed_with", []) + [now]
+            write_text(path, json.dumps(old, indent=1))
     else:
-        write_text(path, json.dumps(header, indent=1))
+        write_text(path, json.dumps(dict(header, provenance=provenance()), indent=1))
     return episodes
+
+
+def _expected_stem(meta: dict) -> str | None:
+    sc = meta.get("scenario")
+    if not isinstance(sc, dict):
+        return None
+    return f"{sc.get('task')}_u{sc.get('user')}_g{sc.get('grasp')}_m{sc.get('mass')}_s{sc.get('seed')}"
+
+
+def read_episode_file(path: str, sha256: str | None = None, data: bytes | None = None) -> tuple[pa.Table, dict, str]:
+    """Reads one episode table and checks it.
+
+    Args:
+        path: The ``episodes/<id>.parquet`` file.
+        sha256: The SHA-256 of the file's bytes recorded in the manifest, if any.
+        data: The file's bytes, if the caller has read them already.
+
+    Returns:
+        ``(table, fsv metadata, SHA-256 of the file's bytes)``.
+
+    Raises:
+        DatasetFileError: If the file cannot be read, its bytes differ from ``sha256``, its
+            content differs from its own digest, or it holds another episode than its name says
+            (e.g. a copy of another episode's file); the message names the file.
+    """
+    if data is None:
+        try:
+            with open(path, "rb") as fh:
+                data = fh.read()
+        except OSError as e:
+            raise DatasetFileError(f"cannot read {path}: {e}") from e
+    table, meta = read_sealed(data, path)
+    stem = os.path.basename(path)[: -len(".parquet")]
+    if meta.get("episode") != stem or _expected_stem(meta) != stem:
+        raise DatasetFileError(f"{path} holds episode {meta.get('episode')!r} (scenario {_expected_stem(meta)!r}), "
+                               f"not {stem!r}: a renamed or copied file")
+    if meta.get("format") != FORMAT or meta.get("version") != VERSION:
+        raise DatasetFileError(f"{path} is a {meta.get('format')!r} table of version {meta.get('version')!r}; "
+                               f"this fsv-bench reads {FORMAT!r} version {VERSION}")
+    digest = file_sha256(data)
+    if sha256 is not None and digest != sha256:  # sees damaged bytes that the content digest cannot
+        raise DatasetFileError(f"{path} is corrupt: its bytes do not match the SHA-256 in the manifest")
+    return table, meta, digest
+
+
+def _check_existing(spec: DatasetSpec, out: str, episodes: str) -> dict:
+    """Checks the episode files of an existing dataset folder before resuming.
+
+    Every file must read, match its digest (and the SHA-256 of its bytes in ``manifest.parquet``,
+    if listed there) and hold the episode its name says, made with ``spec``. A file that does not
+    is reported on stderr and removed, so that it is built again; the manifest is then rewritten
+    without it.
+
+    Returns:
+        ``{relative file path: SHA-256 of its bytes}`` of the good files.
+    """
+    listed = {}
+    if os.path.exists(os.path.join(out, "manifest.parquet")):
+        try:
+            man = read_manifest(out)
+            listed = dict(zip(man["file"], man["sha256"]))
+        except DatasetFileError as e:
+            print(f"generate: {e}; it is rebuilt from the episode files", file=sys.stderr)
+    expected = {episode_id(sc): sc for sc in spec.scenarios()}
+    good, bad = {}, 0
+    for path in sorted(glob.glob(os.path.join(episodes, "*.parquet"))):
+        rel = os.path.relpath(path, out)
+        try:
+            _, meta, digest = read_episode_file(path, listed.get(rel))
+            sc = expected.get(meta["episode"])
+            if sc is not None and (meta.get("scenario") != asdict(sc) or meta.get("kinematics") != spec.kinematics
+                                   or meta.get("contacts") != spec.contacts):
+                raise DatasetFileError(f"{path} holds episode {meta['episode']} made with another scenario or "
+                                       f"sources ({meta.get('scenario')}, {meta.get('kinematics')}, {meta.get('contacts')})")
+        except DatasetFileError as e:
+            print(f"generate: {e}; {'rebuilding' if os.path.basename(path)[:-8] in expected else 'removing'} it",
+                  file=sys.stderr)
+            os.unlink(path)
+            bad += 1
+            continue
+        good[rel] = digest
+    if bad and listed:
+        write_manifest(out, good)
+    return good
 
 
 def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address: str | None = None,
              progress: bool = True, build=build_episode) -> pd.DataFrame:
     """Generates (or completes) the dataset ``spec`` in folder ``out``.
+
+    Resuming checks every episode file already there (:func:`read_episode_file`): a truncated,
+    corrupt or misnamed file is reported on stderr and built again.
 
     Args:
         spec: The grid of scenarios and the sample rules.
@@ -382,18 +493,20 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
         The manifest (one row per episode), also written to ``out/manifest.parquet``.
     """
     out = os.fspath(out)
-    episodes = _prepare(spec, out)
-    todo = [sc for sc in spec.scenarios() if not os.path.exists(os.path.join(episodes, episode_id(sc) + ".parquet"))]
-    total = len(spec.scenarios())
     if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
         raise DatasetError(f"workers must be a positive integer, got {workers!r}")
+    episodes = _prepare(spec, out)
+    written = _check_existing(spec, out, episodes)
+    todo = [sc for sc in spec.scenarios() if os.path.join("episodes", episode_id(sc) + ".parquet") not in written]
+    total = len(spec.scenarios())
     from tqdm.auto import tqdm
 
     bar = tqdm(total=total, initial=total - len(todo), unit="episode", desc="generate", disable=not progress, file=sys.stderr)
 
     def done(table: pa.Table) -> None:
         meta = json.loads(table.schema.metadata[b"fsv"])
-        _atomic_write_table(table, os.path.join(episodes, meta["episode"] + ".parquet"))
+        rel = os.path.join("episodes", meta["episode"] + ".parquet")
+        written[rel] = _write_sealed(table, os.path.join(out, rel))
         bar.update(1)
 
     try:
@@ -406,7 +519,7 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
             _run_pool(todo, spec, build, min(int(workers or os.cpu_count() or 1), len(todo)), done)
     finally:
         bar.close()
-    return write_manifest(out)
+    return write_manifest(out, written)
 
 
 def _exit_with_parent(parent_pid: int) -> None:
@@ -458,48 +571,103 @@ def _run_ray(todo, spec, build, address, done) -> None:
         raise
 
 
-def write_manifest(out) -> pd.DataFrame:
-    """Rebuilds ``out/manifest.parquet`` from the episode files present (atomically) and returns it."""
+MANIFEST_COLUMNS = (
+    "episode", "file", "sha256", "task", "user", "grasp", "mass", "seed", "status", "frames", "rows",
+    "dropped_contacts", "dropped_gap", "dropped_solver", "seconds", "kinematics", "contacts",
+)
+
+
+def write_manifest(out, checked: dict | None = None) -> pd.DataFrame:
+    """Rebuilds ``out/manifest.parquet`` from the episode files present (atomically) and returns it.
+
+    Args:
+        out: Dataset folder.
+        checked: ``{relative file path: SHA-256 of its bytes}`` of files already checked with
+            :func:`read_episode_file` (by the caller); the others are checked here.
+
+    Raises:
+        DatasetFileError: If an episode file that was not checked yet fails the check.
+    """
     out = os.fspath(out)
+    checked = dict(checked or {})
     rows = []
     for path in sorted(glob.glob(os.path.join(out, "episodes", "*.parquet"))):
-        meta = json.loads(pq.read_schema(path).metadata[b"fsv"])
+        rel = os.path.relpath(path, out)
+        if rel in checked:
+            meta = json.loads(pq.read_schema(path).metadata[b"fsv"])
+        else:
+            _, meta, checked[rel] = read_episode_file(path)
         sc = meta.pop("scenario")
         rows.append(dict(
-            episode=meta["episode"], file=os.path.relpath(path, out), task=sc["task"], user=sc["user"],
+            episode=meta["episode"], file=rel, sha256=checked[rel], task=sc["task"], user=sc["user"],
             grasp=sc["grasp"], mass=sc["mass"], seed=sc["seed"], status=meta["status"],
             frames=meta.get("frames", 0), rows=meta.get("rows", 0), dropped_contacts=meta.get("dropped_contacts", 0),
             dropped_gap=meta.get("dropped_gap", 0), dropped_solver=meta.get("dropped_solver", 0),
             seconds=meta.get("seconds", float("nan")), kinematics=meta["kinematics"], contacts=meta["contacts"],
         ))
-    manifest = pd.DataFrame(rows, columns=[
-        "episode", "file", "task", "user", "grasp", "mass", "seed", "status", "frames", "rows", "dropped_contacts",
-        "dropped_gap", "dropped_solver", "seconds", "kinematics", "contacts",
-    ])
-    _atomic_write_table(pa.Table.from_pandas(manifest, preserve_index=False), os.path.join(out, "manifest.parquet"))
+    manifest = pd.DataFrame(rows, columns=list(MANIFEST_COLUMNS))
+    table = pa.Table.from_pandas(manifest, preserve_index=False)
+    meta = {b"fsv": json.dumps(dict(format=FORMAT + "-manifest", version=VERSION)).encode()}
+    _write_sealed(table.replace_schema_metadata({**(table.schema.metadata or {}), **meta}),
+                  os.path.join(out, "manifest.parquet"))
     return manifest
+
+
+def read_manifest(out) -> pd.DataFrame:
+    """Reads ``out/manifest.parquet`` and checks its digest.
+
+    Raises:
+        DatasetError: If the folder has no manifest.
+        DatasetFileError: If the manifest is corrupt or was written without digests.
+    """
+    out = os.fspath(out)
+    path = os.path.join(out, "manifest.parquet")
+    if not os.path.exists(path):
+        raise DatasetError(f"{out!r} is not a dataset folder (no manifest.parquet); make one with `fsv-bench generate`")
+    with open(path, "rb") as fh:
+        data = fh.read()
+    _, meta = read_sealed(data, path)
+    if meta.get("version") != VERSION:
+        raise DatasetFileError(f"{path} is of dataset version {meta.get('version')!r}; this fsv-bench reads {VERSION}")
+    return pd.read_parquet(io.BytesIO(data))
+
+
+def read_episode_frame(out, row) -> pd.DataFrame:
+    """One episode's table as a DataFrame, checked against the manifest ``row`` (a mapping with
+    ``file`` and ``sha256``) and its own digest (:func:`read_episode_file`)."""
+    path = os.path.join(os.fspath(out), row["file"])
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as e:
+        raise DatasetFileError(f"cannot read {path}: {e}") from e
+    read_episode_file(path, row["sha256"], data)
+    return pd.read_parquet(io.BytesIO(data))
 
 
 def load_dataset(out, max_excess_n: float | None = None, **where) -> pd.DataFrame:
     """All kept samples of a dataset as one DataFrame, optionally filtered by scenario fields.
+
+    Every file read is checked: the manifest against its digest, each episode file against the
+    SHA-256 of its bytes in the manifest, its own content digest and its name.
 
     Args:
         out: Dataset folder.
         max_excess_n: If given, also drop the rows whose nominal forces exceed the tactile readings
             by more than this (the plausibility rule, :func:`nominal_excess_n`), [N].
         **where: Column filters, e.g. ``user=[0]`` or ``grasp=1`` (a value or a list of values).
+
+    Raises:
+        DatasetFileError: If a file is corrupt, truncated, renamed or without digests (names it).
     """
     out = os.fspath(out)
-    path = os.path.join(out, "manifest.parquet")
-    if not os.path.exists(path):
-        raise DatasetError(f"{out!r} is not a dataset folder (no manifest.parquet); make one with `fsv-bench generate`")
-    man = pd.read_parquet(path)
+    man = read_manifest(out)
     man = man[man["status"] == "ok"]
     for key, val in where.items():
         if key not in ("task", "user", "grasp", "mass", "seed"):
             raise DatasetError(f"cannot filter on {key!r}; accepted: task, user, grasp, mass, seed")
         man = man[man[key].isin(val if isinstance(val, (list, tuple, set)) else [val])]
-    frames = [pd.read_parquet(os.path.join(out, f)) for f in man["file"]]
+    frames = [read_episode_frame(out, row) for row in man.to_dict("records")]
     frames = [f for f in frames if len(f)]
     if not frames:
         raise DatasetError(f"no samples in {out!r} for {where or 'the whole dataset'}")

@@ -6,7 +6,6 @@ import dataclasses
 import json
 import pathlib
 import zipfile
-import zlib
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
@@ -16,6 +15,8 @@ from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.scenario import Scenario
 from benchmark.truth import Truth
 from fsv import Calibration, DepthVideo, FsvError, HandModel, ObjectModel
+from fsv.digest import array_sha256, tree_sha256
+from fsv.errors import one_line
 
 
 @dataclass(frozen=True)
@@ -110,15 +111,16 @@ def depth_from_arrays(arrays) -> tuple[DepthVideo | None, Calibration | None, np
 # --- the episode file -------------------------------------------------------------------------
 
 FORMAT = "fsv-bench-episode"
-VERSION = 1
+VERSION = 2
 FORMAT_DOC = """\
 An episode file is a NumPy ``.npz`` archive (zip, deflate-compressed) holding only plain arrays
 (no pickles). Entry ``meta.json`` is a uint8 array of UTF-8 JSON:
 
-    {"format": "fsv-bench-episode", "version": 1, "scenario": {Scenario fields},
-     "sections": [names of the sections present], "<section>": {scalars of that section}}
+    {"format": "fsv-bench-episode", "version": 2, "scenario": {Scenario fields},
+     "sections": [names of the sections present], "<section>": {scalars of that section},
+     "array_sha256": {"<section>/<field>": SHA-256 of that array}, "meta_sha256": SHA-256}
 
-Array entries are named ``<section>/<field>``. Sections of version 1:
+Array entries are named ``<section>/<field>``. Sections of version 2:
 
     truth/*    every array field of benchmark.truth.Truth (scalars ``mass`` in the JSON)
     object/*   fsv.ObjectModel arrays (size_m, inertia); mass_kg and frictions in the JSON
@@ -126,8 +128,12 @@ Array entries are named ``<section>/<field>``. Sections of version 1:
     render/*   after rendering only: the arrays of :func:`depth_arrays` (uint16 depth counts and
                their quantum, fps, calibration, labels)
 
-A reader must refuse another format or version. Writers replace the file atomically and use fixed
-zip timestamps, so the same episode always gives the same bytes.
+``array_sha256`` holds :func:`fsv.digest.array_sha256` of every array entry (over its name, dtype,
+shape and bytes) and ``meta_sha256`` is :func:`fsv.digest.tree_sha256` of the JSON without
+``meta_sha256``: a reader recomputes both and refuses the file if one differs, or if an array is
+missing or not listed. A reader must refuse another format or version (version 1 had no digests).
+Writers replace the file atomically and use fixed zip timestamps, so the same episode always gives
+the same bytes.
 """
 
 
@@ -190,6 +196,8 @@ def save_episode(episode: Episode, path) -> pathlib.Path:
         meta[name] = scalars
         for k, v in arrs.items():
             arrays[f"{name}/{k}"] = v
+    meta["array_sha256"] = {name: array_sha256(value, name) for name, value in arrays.items()}
+    meta["meta_sha256"] = tree_sha256(meta)
     arrays["meta.json"] = np.frombuffer(json.dumps(meta, sort_keys=True).encode(), dtype=np.uint8)
     with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as z:
         for name, value in arrays.items():
@@ -202,15 +210,16 @@ def save_episode(episode: Episode, path) -> pathlib.Path:
 
 
 def load_episode(path) -> Episode:
-    """Reads an episode file written by :func:`save_episode`.
+    """Reads an episode file written by :func:`save_episode` and checks its digests.
 
     Raises:
-        EpisodeFileError: If the file is missing, truncated or corrupt, of another format, or of
-            another version.
+        EpisodeFileError: If the file is missing, truncated or corrupt (the message names the file
+            and, if it can, the damaged array), of another format, or of another version.
     """
     path = pathlib.Path(path)
     if not path.is_file():
         raise EpisodeFileError(f"no episode file at {path}")
+    entry = "meta.json"
     try:
         with np.load(path, allow_pickle=False) as z:
             if "meta.json" not in z.files:
@@ -221,15 +230,30 @@ def load_episode(path) -> Episode:
             if meta.get("version") != VERSION:
                 raise EpisodeFileError(f"{path} is episode format version {meta.get('version')!r}; "
                                        f"this fsv-bench reads version {VERSION}")
+            if meta.get("meta_sha256") != tree_sha256({k: v for k, v in meta.items() if k != "meta_sha256"}):
+                raise EpisodeFileError(f"{path} is corrupt: entry 'meta.json' does not match its SHA-256")
+            digests = meta.get("array_sha256")
+            if not isinstance(digests, dict):
+                raise EpisodeFileError(f"{path} has missing or inconsistent episode data: no array digests")
+            stored = [k for k in z.files if k != "meta.json"]
+            for name in digests:
+                if name not in stored:
+                    raise EpisodeFileError(f"{path} has missing or inconsistent episode data: array {name!r} "
+                                           "listed in meta.json is missing")
             arrays = {}
-            for key in z.files:
-                if key != "meta.json":
-                    section, _, name = key.partition("/")
-                    arrays.setdefault(section, {})[name] = z[key]
+            for entry in stored:
+                if entry not in digests:
+                    raise EpisodeFileError(f"{path} has missing or inconsistent episode data: array {entry!r} "
+                                           "is not listed in meta.json")
+                value = z[entry]
+                if array_sha256(value, entry) != digests[entry]:
+                    raise EpisodeFileError(f"{path} is corrupt: array {entry!r} does not match its SHA-256")
+                section, _, name = entry.partition("/")
+                arrays.setdefault(section, {})[name] = value
     except EpisodeFileError:
         raise
-    except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile, zlib.error, UnicodeDecodeError) as e:
-        raise EpisodeFileError(f"{path} is truncated or corrupt: {e}") from e
+    except Exception as e:  # zip, zlib, CRC, .npy header or JSON errors: whatever damaged bytes raise
+        raise EpisodeFileError(f"{path} is truncated or corrupt (entry {entry!r}): {one_line(e)}") from e
     try:
         scenario = Scenario(**meta["scenario"])
         truth = _truth_from(arrays["truth"], meta["truth"])

@@ -27,3 +27,8 @@ class SimulationError(BenchmarkError):
 
 class DatasetError(BenchmarkError, ValueError):
     """A dataset folder or specification is invalid (e.g. resuming with other arguments)."""
+
+
+class DatasetFileError(DatasetError):
+    """A dataset file is truncated, corrupt, renamed from another episode or without a digest; the
+    message names the file."""

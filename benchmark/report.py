@@ -1,7 +1,8 @@
 """Human-readable and JSON summaries of a run (DESIGN.md, "Results schema").
 
-``summary.json`` is a dict of blocks: ``scenario`` and ``world`` (this module), ``timing_s``, and
-one block per later stage (kinematics, tracking, forces, learning) added by that stage. Only
+``summary.json`` is a dict of blocks: ``scenario`` and ``world`` (this module), ``timing_s``, one
+block per later stage (kinematics, tracking, forces, learning) added by that stage, and
+``provenance`` (code, libraries, BLAS kernel and CPU: :func:`fsv.provenance.provenance`). Only
 blocks that were really computed are written.
 """
 

@@ -49,6 +49,7 @@ from benchmark.errors import DatasetError
 from fsv import ObjectModel
 from fsv.forces import FrameStatus, reconstruct_forces
 from fsv.learn import InternalForceModel, LearnConfig, relative_errors_pct, train
+from fsv.provenance import provenance
 
 #: The paper's Table 2: (user, mass, grasp seen in partial training; partial avg, std; full avg, std) [%].
 PAPER = (
@@ -102,12 +103,12 @@ class Table2Protocol:
 
 def object_models(out) -> dict:
     """The object model and gravity of each episode of a dataset: ``{episode: (ObjectModel, gravity)}``."""
-    import pyarrow.parquet as pq
+    from benchmark.dataset import read_episode_file, read_manifest
 
-    man = pd.read_parquet(os.path.join(os.fspath(out), "manifest.parquet"))
     models = {}
-    for ep, f in zip(man["episode"], man["file"]):
-        meta = json.loads(pq.read_schema(os.path.join(os.fspath(out), f)).metadata[b"fsv"])
+    for row in read_manifest(out).to_dict("records"):  # every file checked against its digests
+        ep = row["episode"]
+        _, meta, _ = read_episode_file(os.path.join(os.fspath(out), row["file"]), row["sha256"])
         if "object_model" in meta:
             om = meta["object_model"]
             models[ep] = (ObjectModel(**om), np.asarray(meta["gravity"], float))
@@ -318,12 +319,14 @@ def plot_fig6(result: dict, path: str) -> None:
 
 
 def write(result: dict, out) -> None:
-    """Writes table2.md, table2.csv, table2.json and fig6.png to folder ``out``."""
+    """Writes table2.md, table2.csv, table2.json (with the run's provenance,
+    :func:`fsv.provenance.provenance`) and fig6.png to folder ``out``."""
     out = os.fspath(out)
     os.makedirs(out, exist_ok=True)
     write_text(os.path.join(out, "table2.md"), markdown(result))
     write_text(os.path.join(out, "table2.csv"), pd.DataFrame(result["rows"]).to_csv(index=False))
     slim = {k: v for k, v in result.items() if k != "fig6"}
+    slim["provenance"] = provenance()
     write_text(os.path.join(out, "table2.json"), json.dumps(slim, indent=1))
     plot_fig6(result, os.path.join(out, "fig6.png"))
 

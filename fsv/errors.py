@@ -22,3 +22,10 @@ class SolverError(FsvError):
 
 class TrackingError(FsvError):
     """The tracker cannot continue (e.g. no object visible in the first frame)."""
+
+
+def one_line(error: BaseException, limit: int = 240) -> str:
+    """An exception's message on one line (a library's may span several), cut to ``limit`` characters,
+    for error messages that must stay one line."""
+    text = " ".join(str(error).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."

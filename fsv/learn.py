@@ -32,8 +32,12 @@ Forces. :func:`learned_forces` chains the features, the networks and the reconst
 whose internal normal components follow the predictions.
 
 Files. :meth:`InternalForceModel.save` writes one ``torch.save`` archive (weights, input and
-target normalisation, config, finger names, free-form metadata) atomically; :func:`load` reads it
-back with ``weights_only=True`` and predicts bit-identically.
+target normalisation, config, finger names, free-form metadata with the provenance of the
+environment that first wrote it, :func:`fsv.provenance.provenance`) atomically, with a SHA-256 of
+all of that (:func:`content_sha256`); :func:`load` reads it back with ``weights_only=True``,
+recomputes the digest and refuses the file if it differs, and predicts bit-identically. The digest
+is needed: torch's zip reader does not check the archive's CRCs, so flipped bytes in the weights
+load without an error.
 """
 
 from __future__ import annotations
@@ -45,15 +49,15 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import torch
 
-from fsv.errors import InputError
+from fsv.digest import tree_sha256
+from fsv.errors import InputError, one_line
 from fsv.features import GRAVITY, Features, grasp_features
 from fsv.forces import ForceSettings, ForceSolution, reconstruct_forces
 from fsv.models import ObjectModel
 from fsv.types import Contacts, Kinematics
 
 FORMAT = "fsv-internal-forces"
-VERSION = 2
-_READABLE = (1, 2)  # version 1: a single pair of networks stored as two state dicts
+VERSION = 3  # versions 1 and 2 carried no digest and are not read
 
 
 @dataclass(frozen=True)
@@ -256,7 +260,17 @@ class InternalForceModel:
         return self.predict(features.matrix(), features.active)[2]
 
     def state(self) -> dict:
-        return {
+        """What :meth:`save` writes: the model, its metadata and ``sha256``, the digest of the rest.
+
+        The metadata gains ``provenance`` (:func:`fsv.provenance.provenance`) unless it has one
+        already (a model read from a file keeps the provenance of the environment that wrote it).
+        """
+        from fsv.provenance import provenance
+
+        metadata = dict(self.metadata)
+        if "provenance" not in metadata:
+            metadata["provenance"] = provenance()
+        st = {
             "format": FORMAT,
             "version": VERSION,
             "config": asdict(self.config),
@@ -267,8 +281,10 @@ class InternalForceModel:
             "l2_std": self.l2_std,
             "net_l2": [n.state_dict() for n in self.net_l2],
             "net_decomp": [n.state_dict() for n in self.net_decomp],
-            "metadata": self.metadata,
+            "metadata": metadata,
         }
+        st["sha256"] = content_sha256(st)
+        return st
 
     def save(self, path) -> None:
         """Writes the model to ``path`` atomically (temporary file in the same folder, then rename)."""
@@ -289,36 +305,66 @@ class InternalForceModel:
             raise
 
 
+def content_sha256(state: dict) -> str:
+    """SHA-256 of a model file's content: every entry of ``state`` but ``sha256`` (format, config,
+    finger names, normalisation, every weight tensor's dtype, shape and bytes, metadata), in a
+    canonical order (:func:`fsv.digest.tree_sha256`)."""
+
+    def plain(obj):
+        if isinstance(obj, torch.Tensor):
+            return obj.detach().cpu().contiguous().numpy()
+        if isinstance(obj, dict):
+            return {k: plain(v) for k, v in obj.items()}
+        if isinstance(obj, (list, tuple)):
+            return [plain(v) for v in obj]
+        return obj
+
+    return tree_sha256({k: plain(v) for k, v in state.items() if k != "sha256"})
+
+
 def load(path) -> InternalForceModel:
-    """Reads a model written by :meth:`InternalForceModel.save`.
+    """Reads a model written by :meth:`InternalForceModel.save` and checks its digest.
 
     Raises:
-        InputError: If the file is missing or is not an internal-force model of this version.
+        InputError: If the file is missing, is not an internal-force model of this version, or its
+            content does not match the digest stored in it (flipped bytes, a truncated or edited
+            file); the message names the file.
     """
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise InputError(f"no internal-force model at {path!r}")
     try:
         st = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as e:  # a truncated or foreign file: report it as bad input
-        raise InputError(f"{path!r} is not a readable internal-force model: {e}") from e
-    if not isinstance(st, dict) or st.get("format") != FORMAT or st.get("version") not in _READABLE:
-        raise InputError(f"{path!r} is not an {FORMAT} file of version {' or '.join(map(str, _READABLE))}")
-    cfg = dict(st["config"])
-    config = LearnConfig(**cfg)
-    K = len(st["finger_names"])
-    gen = torch.Generator().manual_seed(0)
-    states = {k: st[k] if isinstance(st[k], list) else [st[k]] for k in ("net_l2", "net_decomp")}
-    net_l2, net_decomp = [], []
-    for a, b in zip(states["net_l2"], states["net_decomp"]):
-        net_l2.append(_mlp(2 + 3 * K, config.hidden_l2, 1, gen))
-        net_decomp.append(_mlp(2 + 3 * K, config.hidden_decomp, K, gen))
-        net_l2[-1].load_state_dict(a)
-        net_decomp[-1].load_state_dict(b)
-    return InternalForceModel(
-        config, st["finger_names"], st["x_mean"].numpy(), st["x_std"].numpy(), st["l2_mean"], st["l2_std"],
-        net_l2, net_decomp, st["metadata"],
-    )
+    except Exception as e:  # a truncated, corrupt or foreign file: report it as bad input
+        raise InputError(f"{path!r} is not a readable internal-force model: {one_line(e)}") from e
+    if not isinstance(st, dict) or st.get("format") != FORMAT:
+        raise InputError(f"{path!r} is not an {FORMAT} file")
+    if st.get("version") != VERSION:
+        raise InputError(f"{path!r} is an {FORMAT} file of version {st.get('version')!r}; this fsv reads version "
+                         f"{VERSION} (files of versions 1 and 2 carry no digest: train the model again)")
+    try:
+        digest = content_sha256(st)
+    except InputError as e:
+        raise InputError(f"{path!r} is corrupt: {e}") from e
+    if st.get("sha256") != digest:
+        raise InputError(f"{path!r} is corrupt: its content has SHA-256 {digest[:16]}..., the file records "
+                         f"{str(st.get('sha256'))[:16]}...")
+    try:
+        config = LearnConfig(**dict(st["config"]))
+        K = len(st["finger_names"])
+        gen = torch.Generator().manual_seed(0)
+        net_l2, net_decomp = [], []
+        for a, b in zip(st["net_l2"], st["net_decomp"]):
+            net_l2.append(_mlp(2 + 3 * K, config.hidden_l2, 1, gen))
+            net_decomp.append(_mlp(2 + 3 * K, config.hidden_decomp, K, gen))
+            net_l2[-1].load_state_dict(a)
+            net_decomp[-1].load_state_dict(b)
+        return InternalForceModel(
+            config, st["finger_names"], st["x_mean"].numpy(), st["x_std"].numpy(), st["l2_mean"], st["l2_std"],
+            net_l2, net_decomp, st["metadata"],
+        )
+    except (KeyError, TypeError, AttributeError, RuntimeError, InputError) as e:
+        raise InputError(f"{path!r} has inconsistent internal-force model data: {one_line(e)}") from e
 
 
 def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_names=None, metadata=None) -> InternalForceModel:

@@ -20,6 +20,13 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert summary["world"]["ne_force_residual_n"] < 0.01
     assert summary["world"]["lift_height_m"] > 0.05
     assert set(summary["timing_s"]) >= {"simulate", "total"}
+    from fsv.provenance import provenance
+
+    prov = summary["provenance"]  # where the numbers came from
+    now = provenance()
+    assert prov["fsv_bench"] == now["fsv_bench"] and prov["dependencies"] == now["dependencies"]
+    assert prov["dependencies"]["mujoco"] and prov["dependencies"]["threadpoolctl"]
+    assert prov["cpu"] == now["cpu"] and prov["blas"] == now["blas"]
     ep = load_episode(out / "episode.npz")
     assert len(ep.truth.t) == 46
     assert np.isfinite(ep.truth.contact_force).all()

@@ -151,3 +151,164 @@ def test_plausibility_rule_on_a_constructed_frame(learn_oracle_dataset):
     assert len(load_dataset(out, max_excess_n=1.5)) == len(everything)
     strict = load_dataset(out, max_excess_n=-0.5)  # nominal at least 0.5 N below every reading
     assert 0 < len(strict) < len(everything)
+
+
+# --- integrity: digests, damaged, truncated and renamed files ------------------------------------
+
+
+def _flip(path, offset, n=4):
+    data = bytearray(path.read_bytes())
+    for i in range(offset, offset + n):
+        data[i] ^= 0xFF
+    path.write_bytes(bytes(data))
+
+
+def _small(tmp_path, seeds=(0, 1, 2)):
+    spec = DatasetSpec(seeds=seeds)
+    generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
+    return spec
+
+
+def test_every_table_carries_its_digest_and_the_manifest_the_files_bytes(tmp_path):
+    import hashlib
+    import json
+
+    import pyarrow.parquet as pq
+
+    from benchmark.sealed_table import table_sha256
+
+    _small(tmp_path)
+    man = pq.read_table(tmp_path / "manifest.parquet")
+    assert json.loads(man.schema.metadata[b"fsv"])["sha256"] == table_sha256(man)
+    for row in man.to_pylist():
+        path = tmp_path / row["file"]
+        assert row["sha256"] == hashlib.sha256(path.read_bytes()).hexdigest()
+        table = pq.read_table(path)
+        assert json.loads(table.schema.metadata[b"fsv"])["sha256"] == table_sha256(table)
+
+
+def test_dataset_json_records_the_provenance_and_later_runs(tmp_path):
+    import json
+
+    from fsv.provenance import provenance
+
+    spec = _small(tmp_path, seeds=(0,))
+    header = json.loads((tmp_path / "dataset.json").read_text())
+    assert header["provenance"] == provenance() and "resumed_with" not in header
+    header["provenance"]["python"]["version"] = "0.0.0"  # as if made elsewhere
+    (tmp_path / "dataset.json").write_text(json.dumps(header))
+    generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
+    generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
+    header = json.loads((tmp_path / "dataset.json").read_text())
+    assert header["provenance"]["python"]["version"] == "0.0.0" and header["resumed_with"] == [provenance()]
+
+
+def test_a_dataset_of_the_version_without_digests_is_not_resumed(tmp_path):
+    import json
+
+    (tmp_path / "dataset.json").write_text(json.dumps(dict(format="fsv-bench-dataset", version=1, spec=DatasetSpec().as_dict())))
+    with pytest.raises(DatasetError, match="version 1; this fsv-bench writes version 2"):
+        generate(DatasetSpec(), tmp_path, workers=1, progress=False, build=cheap_build)
+
+
+@pytest.fixture()
+def oracle_copy(learn_oracle_dataset, tmp_path):
+    """A copy of the small simulated dataset that a test may damage."""
+    import shutil
+
+    spec, out, _ = learn_oracle_dataset
+    shutil.copytree(out, tmp_path / "d")
+    return spec, tmp_path / "d"
+
+
+def test_four_flipped_bytes_in_an_episode_file_are_refused_naming_it(oracle_copy):
+    import pyarrow.parquet as pq
+
+    from benchmark.dataset import read_episode_file
+    from benchmark.errors import DatasetFileError
+
+    spec, out = oracle_copy
+    path = out / "episodes" / "lift_u0_g0_m0_s1.parquet"
+    chunk = pq.ParquetFile(path).metadata.row_group(0).column(20)  # a float column's values
+    _flip(path, chunk.data_page_offset + chunk.total_compressed_size // 2)
+    with pytest.raises(DatasetFileError, match=str(path)):
+        load_dataset(out)
+    with pytest.raises(DatasetFileError, match=f"{path} is (corrupt: its content|truncated or corrupt)"):
+        read_episode_file(str(path))  # without the manifest: the file's own digest sees it
+    assert len(load_dataset(out, seed=0)) > 20  # the other episode is fine
+
+
+def test_a_flip_that_leaves_the_content_intact_is_seen_by_the_manifest(oracle_copy):
+    """Some bytes (e.g. the magic number, column statistics) change nothing a reader gets: the
+    content digest cannot see them there, the SHA-256 of the bytes in the manifest does."""
+    from benchmark.dataset import read_episode_file
+    from benchmark.errors import DatasetFileError
+
+    spec, out = oracle_copy
+    path = out / "episodes" / "lift_u0_g0_m0_s0.parquet"
+    _flip(path, 0)  # "PAR1" at the start: readers use the footer's copy
+    _, meta, _ = read_episode_file(str(path))  # the content is intact
+    assert meta["episode"] == "lift_u0_g0_m0_s0"
+    with pytest.raises(DatasetFileError, match=f"{path} is corrupt: its bytes do not match the SHA-256 in the manifest"):
+        load_dataset(out)
+
+
+def test_a_damaged_manifest_is_refused_and_rebuilt_on_resume(tmp_path, capsys):
+    from benchmark.errors import DatasetFileError
+
+    spec = _small(tmp_path)
+    man = tmp_path / "manifest.parquet"
+    _flip(man, man.stat().st_size // 3)
+    with pytest.raises(DatasetFileError, match=str(man)):
+        load_dataset(tmp_path)
+    CALLS.clear()
+    generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
+    assert CALLS == [] and f"generate: {man}" in capsys.readouterr().err
+    assert len(load_dataset(tmp_path)) == 9
+
+
+def test_resume_rebuilds_a_truncated_episode_file_and_says_so(tmp_path, capsys):
+    spec = _small(tmp_path)
+    path = tmp_path / "episodes" / "lift_u0_g0_m0_s1.parquet"
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+    CALLS.clear()
+    man = generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
+    err = capsys.readouterr().err
+    assert f"generate: {path} is truncated or corrupt" in err and "rebuilding it" in err
+    assert CALLS == ["lift_u0_g0_m0_s1"] and len(man) == 3
+    assert sorted(load_dataset(tmp_path)["p1"].unique()) == [0.0, 1.0, 2.0]
+
+
+def test_an_episode_file_copied_over_another_is_detected_and_rebuilt(tmp_path, capsys):
+    import shutil
+
+    from benchmark.dataset import read_episode_file
+    from benchmark.errors import DatasetFileError
+
+    spec = _small(tmp_path)
+    a, b = (tmp_path / "episodes" / f"lift_u0_g0_m0_s{s}.parquet" for s in (0, 2))
+    shutil.copyfile(a, b)
+    with pytest.raises(DatasetFileError, match=f"{b} holds episode 'lift_u0_g0_m0_s0'.*renamed or copied"):
+        read_episode_file(str(b))
+    with pytest.raises(DatasetFileError, match=str(b)):
+        load_dataset(tmp_path)
+    CALLS.clear()
+    generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
+    assert CALLS == ["lift_u0_g0_m0_s2"] and f"{b} holds episode 'lift_u0_g0_m0_s0'" in capsys.readouterr().err
+    df = load_dataset(tmp_path, seed=2)
+    assert set(df["p1"]) == {2.0} and set(df["episode"]) == {"lift_u0_g0_m0_s2"}
+
+
+def test_an_episode_of_another_scenario_under_the_right_name_is_rebuilt(tmp_path, capsys):
+    import shutil
+
+    generate(DatasetSpec(seeds=(0,), duration_s=1.0), tmp_path / "one", workers=1, progress=False, build=cheap_build)
+    spec = DatasetSpec(seeds=(0,), duration_s=2.0)
+    generate(spec, tmp_path / "two", workers=1, progress=False, build=cheap_build)
+    name = "episodes/lift_u0_g0_m0_s0.parquet"
+    shutil.copyfile(tmp_path / "one" / name, tmp_path / "two" / name)
+    (tmp_path / "two" / "manifest.parquet").unlink()  # as after an interrupted run: the file must speak for itself
+    CALLS.clear()
+    generate(spec, tmp_path / "two", workers=1, progress=False, build=cheap_build)
+    assert CALLS == ["lift_u0_g0_m0_s0"] and "made with another scenario" in capsys.readouterr().err
+    assert len(load_dataset(tmp_path / "two")) == 3

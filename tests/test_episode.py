@@ -130,3 +130,92 @@ def test_depth_beyond_uint16_at_0_1_mm_falls_back_to_1_cm(saved, tmp_path):
     back = load_episode(save_episode(ep, tmp_path / "far.npz"))
     np.testing.assert_allclose(back.depth.depth_m, depth, atol=0.005 + 1e-6)
     assert back.labels is None
+
+
+# --- digests: every array and the JSON are checked on load ---------------------------------------
+
+
+def _entry_span(path, name):
+    """(start, end) of an entry's compressed bytes in the zip file."""
+    with zipfile.ZipFile(path) as z:
+        info = z.getinfo(name)
+    raw = path.read_bytes()
+    name_len = int.from_bytes(raw[info.header_offset + 26:info.header_offset + 28], "little")
+    extra_len = int.from_bytes(raw[info.header_offset + 28:info.header_offset + 30], "little")
+    start = info.header_offset + 30 + name_len + extra_len
+    return start, start + info.compress_size
+
+
+@pytest.mark.parametrize("entry", ["truth/contact_force.npy", "hand/geom_fromto.npy", "meta.json.npy"])
+def test_flipped_bytes_name_the_file_and_the_array(saved, tmp_path, entry):
+    _, path = saved
+    start, end = _entry_span(path, entry)
+    data = bytearray(path.read_bytes())
+    for i in range((start + end) // 2, (start + end) // 2 + 4):
+        data[i] ^= 0xFF
+    bad = tmp_path / "flipped.npz"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(EpisodeFileError) as e:
+        load_episode(bad)
+    assert str(bad) in str(e.value) and repr(entry[:-len(".npy")]) in str(e.value)
+
+
+def test_flipped_bytes_in_the_middle_of_the_file_are_refused(saved, tmp_path):
+    _, path = saved
+    data = bytearray(path.read_bytes())
+    mid = len(data) // 2
+    data[mid:mid + 4] = bytes(b ^ 0xFF for b in data[mid:mid + 4])
+    (tmp_path / "mid.npz").write_bytes(bytes(data))
+    with pytest.raises(EpisodeFileError, match=r"mid\.npz is (truncated or corrupt \(entry '\w+/\w+'\)|corrupt: array)"):
+        load_episode(tmp_path / "mid.npz")
+
+
+def _rewrite(path, dest, arrays=None, meta_changes=None):
+    """The file's entries, some replaced, written again as a valid zip with the original digests."""
+    with np.load(path) as z:
+        entries = {k: z[k] for k in z.files}
+    entries.update(arrays or {})
+    meta = json.loads(bytes(entries["meta.json"]).decode())
+    for section, values in (meta_changes or {}).items():
+        meta[section].update(values)
+    entries["meta.json"] = np.frombuffer(json.dumps(meta).encode(), np.uint8)
+    np.savez_compressed(dest, **entries)
+    return dest
+
+
+def test_a_changed_array_in_a_valid_zip_is_refused_by_its_digest(saved, tmp_path):
+    _, path = saved
+    with np.load(path) as z:
+        force = z["truth/contact_force"].copy()
+    force[3, 0, 2] = np.nextafter(force[3, 0, 2], np.inf)  # one ulp
+    bad = _rewrite(path, tmp_path / "ulp.npz", arrays={"truth/contact_force": force})
+    with pytest.raises(EpisodeFileError, match=r"ulp\.npz is corrupt: array 'truth/contact_force' does not match its SHA-256"):
+        load_episode(bad)
+    bad = _rewrite(path, tmp_path / "int.npz", arrays={"truth/contact_force": force.astype(np.float32)})
+    with pytest.raises(EpisodeFileError, match="'truth/contact_force' does not match"):
+        load_episode(bad)
+
+
+def test_a_changed_scalar_in_meta_json_is_refused(saved, tmp_path):
+    _, path = saved
+    bad = _rewrite(path, tmp_path / "mass.npz", meta_changes={"object": {"mass_kg": 0.31}})
+    with pytest.raises(EpisodeFileError, match=r"mass\.npz is corrupt: entry 'meta.json' does not match its SHA-256"):
+        load_episode(bad)
+
+
+def test_an_array_that_meta_json_does_not_list_is_refused(saved, tmp_path):
+    _, path = saved
+    bad = _rewrite(path, tmp_path / "extra.npz", arrays={"truth/extra": np.zeros(3)})
+    with pytest.raises(EpisodeFileError, match="array 'truth/extra' is not listed in meta.json"):
+        load_episode(bad)
+
+
+def test_every_array_has_a_digest_in_meta_json(saved):
+    from fsv.digest import array_sha256, tree_sha256
+
+    _, path = saved
+    with np.load(path) as z:
+        meta = json.loads(bytes(z["meta.json"]).decode())
+        assert set(meta["array_sha256"]) == set(z.files) - {"meta.json"}
+        assert all(meta["array_sha256"][k] == array_sha256(z[k], k) for k in meta["array_sha256"])
+    assert meta["meta_sha256"] == tree_sha256({k: v for k, v in meta.items() if k != "meta_sha256"})

@@ -155,3 +155,117 @@ def test_learned_forces_explain_the_motion_and_follow_the_predictions():
     np.testing.assert_allclose(sol.internal_normal, pred, atol=1e-3)  # ... and the internal parts follow them
     with pytest.raises(InputError, match="fingers"):
         learned_forces(model, kin, Contacts(("a", "b", "c"), con.active, con.sliding, con.point, con.normal, con.slide_dir), obj)
+
+
+# --- model files: digest, corruption, provenance ------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def small_file(tmp_path_factory):
+    m = train(synthetic(200, 4), LearnConfig(epochs=20, seed=3, members=2), finger_names=("thumb", "index", "middle", "ring"))
+    path = tmp_path_factory.mktemp("model") / "small.pt"
+    m.save(path)
+    return path
+
+
+def _flipped(src, dest, offset, n):
+    data = bytearray(src.read_bytes())
+    for i in range(offset, offset + n):
+        data[i] ^= 0xFF
+    dest.write_bytes(bytes(data))
+    return dest
+
+
+def _largest_tensor_offset(path):
+    import zipfile
+
+    with zipfile.ZipFile(path) as z:
+        info = max((i for i in z.infolist() if "/data/" in i.filename), key=lambda i: i.file_size)
+        header = 30 + len(info.filename.encode()) + len(info.extra)  # local header: fixed part, name, extra
+        return info.header_offset + header + info.file_size // 2
+
+
+@pytest.mark.parametrize("where", ["middle", "tensor", "pickle"])
+def test_flipped_bytes_are_refused_with_the_files_name(small_file, tmp_path, where):
+    offset = {"middle": small_file.stat().st_size // 2, "tensor": _largest_tensor_offset(small_file), "pickle": 300}[where]
+    bad = _flipped(small_file, tmp_path / f"flipped-{where}.pt", offset, 32)
+    with pytest.raises(InputError, match=r"flipped-%s\.pt' (is corrupt|is not a readable)" % where):
+        load(bad)
+
+
+def test_torch_alone_does_not_see_flipped_weights_but_the_digest_does(small_file, tmp_path):
+    """torch's zip reader does not check CRCs: the digest is what refuses the file."""
+    import torch
+
+    bad = _flipped(small_file, tmp_path / "w.pt", _largest_tensor_offset(small_file), 4)
+    good, flipped = (torch.load(p, weights_only=True) for p in (small_file, bad))
+    changed = [k for k in good["net_decomp"][0] if not torch.equal(good["net_decomp"][0][k], flipped["net_decomp"][0][k])]
+    changed += [k for k in good["net_decomp"][1] if not torch.equal(good["net_decomp"][1][k], flipped["net_decomp"][1][k])]
+    assert changed and flipped["sha256"] == good["sha256"]  # weights differ, the file still loads in torch
+    with pytest.raises(InputError, match=r"'.*w\.pt' is corrupt: its content has SHA-256"):
+        load(bad)
+
+
+def test_an_edited_weight_or_metadata_with_the_old_digest_is_refused(small_file, tmp_path):
+    import torch
+
+    from fsv.learn import content_sha256
+
+    st = torch.load(small_file, weights_only=True)
+    assert st["sha256"] == content_sha256(st) and len(st["sha256"]) == 64
+    st["net_l2"][1]["0.bias"][0] += 1e-12
+    torch.save(st, tmp_path / "edited.pt")
+    with pytest.raises(InputError, match=r"edited\.pt' is corrupt"):
+        load(tmp_path / "edited.pt")
+    st = torch.load(small_file, weights_only=True)
+    st["metadata"]["samples"] = 201
+    torch.save(st, tmp_path / "meta.pt")
+    with pytest.raises(InputError, match=r"meta\.pt' is corrupt"):
+        load(tmp_path / "meta.pt")
+
+
+def test_files_without_a_digest_are_not_read(small_file, tmp_path):
+    import torch
+
+    st = torch.load(small_file, weights_only=True)
+    del st["sha256"]
+    st["version"] = 2
+    torch.save(st, tmp_path / "v2.pt")
+    with pytest.raises(InputError, match=r"v2\.pt' is an fsv-internal-forces file of version 2; this fsv reads version 3"):
+        load(tmp_path / "v2.pt")
+    st["version"] = 3
+    torch.save(st, tmp_path / "nodigest.pt")
+    with pytest.raises(InputError, match=r"nodigest\.pt' is corrupt"):
+        load(tmp_path / "nodigest.pt")
+
+
+def test_model_files_record_their_provenance_and_keep_it_when_saved_again(small_file, tmp_path):
+    from fsv.provenance import provenance
+
+    m = load(small_file)
+    assert m.metadata["provenance"]["fsv_bench"] == provenance()["fsv_bench"]
+    assert m.metadata["provenance"]["dependencies"]["torch"] == provenance()["dependencies"]["torch"]
+    m.metadata["provenance"]["python"]["version"] = "0.0.0"  # as if written elsewhere
+    m.save(tmp_path / "again.pt")
+    assert load(tmp_path / "again.pt").metadata["provenance"]["python"]["version"] == "0.0.0"
+
+
+def test_the_shipped_model_carries_a_verified_digest():
+    import torch
+    from importlib.resources import files
+
+    from fsv.learn import VERSION, content_sha256, default_model
+
+    path = files("fsv").joinpath("data", "internal_forces.pt")
+    st = torch.load(path, weights_only=True)
+    assert st["version"] == VERSION and st["sha256"] == content_sha256(st)
+    m = default_model()
+    assert m.num_fingers == 5 and "provenance" in m.metadata
+
+
+def test_a_torch_error_is_reported_on_one_line(small_file, tmp_path):
+    bad = tmp_path / "cut.pt"
+    bad.write_bytes(small_file.read_bytes()[:5000])
+    with pytest.raises(InputError) as e:
+        load(bad)
+    assert "\n" not in str(e.value) and "cut.pt' is not a readable internal-force model" in str(e.value)

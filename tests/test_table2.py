@@ -50,7 +50,12 @@ def test_score_writes_the_table_and_the_figure(learn_oracle_dataset, tmp_path):
     write(result, tmp_path)
     assert {p.name for p in tmp_path.iterdir()} == {"table2.md", "table2.csv", "table2.json", "fig6.png"}
     assert "| ○ | ○ | ○ |" in markdown(result)
-    assert json.loads((tmp_path / "table2.json").read_text())["sources"] == {"kinematics": "oracle", "contacts": "oracle"}
+    written = json.loads((tmp_path / "table2.json").read_text())
+    assert written["sources"] == {"kinematics": "oracle", "contacts": "oracle"}
+    from fsv.provenance import provenance
+
+    assert written["provenance"]["fsv_bench"] == provenance()["fsv_bench"]
+    assert written["provenance"]["dependencies"]["torch"] and written["provenance"]["cpu"] == provenance()["cpu"]
 
 
 def test_user_blind_prediction_averages_the_two_users_frame_by_frame():
@@ -79,3 +84,18 @@ def test_users_option_takes_two_different_users(tmp_path, capsys, users):
     err = capsys.readouterr().err
     assert code == 2 and f"--users {users!r}: expected two different user indices" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_object_models_come_only_from_checked_files(learn_oracle_dataset, tmp_path):
+    import shutil
+
+    from benchmark.errors import DatasetFileError
+
+    _, out, _ = learn_oracle_dataset
+    shutil.copytree(out, tmp_path / "d")
+    path = tmp_path / "d" / "episodes" / "lift_u0_g0_m0_s0.parquet"
+    data = bytearray(path.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    path.write_bytes(bytes(data))
+    with pytest.raises(DatasetFileError, match=str(path)):
+        object_models(tmp_path / "d")
