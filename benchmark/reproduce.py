@@ -27,8 +27,6 @@ fails the test suite.
 from __future__ import annotations
 
 import argparse
-import ast
-import hashlib
 import json
 import math
 import os
@@ -41,6 +39,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from benchmark.errors import BenchmarkError
+from benchmark.fingerprint import results_fingerprint
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RECORD = "results/reproduce.json"
@@ -50,13 +49,6 @@ ABS_TOL = 1e-9
 # Keys whose values are measurements of this run's speed or of where it ran, never compared.
 _UNCOMPARED = ("timing", "per_s", "seconds", "_ms_per_frame", "provenance", "path", "overlay", "episode",
                "summary", "fig", "plot", "command", "train_seconds")
-
-# Source that decides the committed numbers; benchmark modules for the command line, pictures,
-# speed measurements and this command are not in it.
-_FINGERPRINTED_BENCHMARK = ("contact_error", "dataset", "episode", "grip", "hand", "learning", "motion", "pose_error",
-                            "render", "scenario", "score_forces", "sensor", "simulate", "table1", "table2", "tactile",
-                            "tracking", "training", "truth", "world")
-
 
 class ReproduceError(BenchmarkError):
     """A committed result differs from its regeneration, or a regeneration failed."""
@@ -192,34 +184,8 @@ RESULTS = (
 
 
 def code_fingerprint(root: pathlib.Path = ROOT) -> str:
-    """sha256 of the source that produces the committed results, comments and docstrings stripped.
-
-    Covers every ``.py`` file of ``fsv/``, the data files of ``fsv/data`` and ``sim_assets/``, and
-    the modules of ``benchmark/`` named in ``_FINGERPRINTED_BENCHMARK`` (with ``benchmark/tasks/``).
-    """
-    files = sorted(p for p in (root / "fsv").rglob("*.py"))
-    files += sorted((root / "benchmark" / "tasks").glob("*.py"))
-    files += [root / "benchmark" / f"{m}.py" for m in _FINGERPRINTED_BENCHMARK]
-    data = sorted(p for d in ("sim_assets", "fsv/data") for p in (root / d).iterdir()
-                  if p.is_file() and p.suffix in (".xml", ".yaml", ".json") and not p.name.startswith("."))
-    h = hashlib.sha256()
-    for p in files:
-        h.update(str(p.relative_to(root)).encode())
-        h.update(_normalised_source(p.read_text()).encode())
-    for p in data:
-        h.update(str(p.relative_to(root)).encode())
-        h.update(p.read_bytes())
-    return h.hexdigest()
-
-
-def _normalised_source(src: str) -> str:
-    tree = ast.parse(src)
-    for node in ast.walk(tree):
-        body = getattr(node, "body", None)
-        if isinstance(body, list) and body and isinstance(body[0], ast.Expr) \
-                and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str):
-            node.body = body[1:] or [ast.Pass()]
-    return ast.dump(tree)
+    """:func:`benchmark.fingerprint.results_fingerprint`: what the committed results depend on."""
+    return results_fingerprint(root)
 
 
 def recorded() -> dict:

@@ -1,0 +1,226 @@
+"""``fsv-bench eval``: score the method on a suite and give a verdict for CI.
+
+    fsv-bench eval --suite smoke --out DIR [--gates FILE] [--cache DIR] [--quiet]
+
+Every episode of the suite is simulated and rendered once and cached (``--cache``, default
+``$XDG_CACHE_HOME/fsv-bench/episodes`` or ``~/.cache/fsv-bench/episodes``), keyed by the scenario,
+the suite's name and version and the fingerprint of the world's code
+(:func:`benchmark.fingerprint.world_fingerprint`); a second evaluation on the same suite renders
+nothing. The method runs on each episode's depth, every stage is scored
+(:mod:`benchmark.scores.episode`), the medians and means get 95 % bootstrap intervals, and the
+suite's gates (or ``--gates FILE``, a JSON list of ``{"metric", "op", "limit", "statistic"}``) give
+the verdict. ``DIR`` receives ``scores.json`` (per episode and aggregate, strict JSON, with
+provenance), ``report.md`` and ``junit.xml`` (one test case per gate); it is written into a
+temporary folder and moved into place when complete. Exit status: 0 when every gate holds, 1 when
+one fails (named on the console), 2 on bad input (before any work).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import os
+import pathlib
+import shutil
+import sys
+import tempfile
+import time
+from dataclasses import asdict
+
+from benchmark.errors import BenchmarkError, EpisodeFileError
+from benchmark.scenario import Scenario
+from benchmark.suites import Gate, Suite, get_suite
+
+METHOD_NAME = "fsv reference (tracker, algebraic kinematics, nominal forces, shipped internal-force model)"
+
+
+class GateFailure(BenchmarkError):
+    """At least one gate of the evaluated suite does not hold."""
+
+
+def default_cache() -> pathlib.Path:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return pathlib.Path(base) / "fsv-bench" / "episodes"
+
+
+def episode_key(suite: Suite, scenario: Scenario) -> str:
+    """Cache key of a rendered episode: scenario, suite name and version, world code."""
+    from benchmark.fingerprint import world_fingerprint
+
+    text = json.dumps({"scenario": asdict(scenario), "suite": suite.name, "version": suite.version,
+                       "world": world_fingerprint()}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
+    """The rendered episode from the cache, simulated and rendered (and cached) if missing or damaged.
+
+    Returns:
+        ``(episode, rendered)``: ``rendered`` is True when it had to be made.
+    """
+    from benchmark import load_episode, render, save_episode, simulate
+
+    path = cache / suite.name / f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}-{episode_key(suite, scenario)}.npz"
+    if path.exists():
+        try:
+            return load_episode(path), False
+        except EpisodeFileError as e:
+            print(f"fsv-bench eval: rebuilding a damaged cached episode: {e}", file=sys.stderr)
+    episode = render(simulate(scenario))
+    save_episode(episode, path)
+    return episode, True
+
+
+def reference_method(episode):
+    """The reference FSV method on an episode's camera inputs: ``fsv.pipeline.Estimate``."""
+    from benchmark.tracking import tracker_init
+    from fsv import run_pipeline
+    from fsv.learn import default_model
+
+    init = tracker_init(episode.truth, episode.scenario, episode.hand_model)
+    return run_pipeline(episode.depth, episode.calib, episode.object_model, episode.hand_model, init,
+                        gravity=episode.truth.gravity, internal_model=default_model(),
+                        rng=episode.scenario.rng("tracker"))
+
+
+def evaluate(suite: Suite, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True) -> dict:
+    """Scores the reference method on every episode of ``suite``.
+
+    Returns:
+        The content of ``scores.json`` (``episodes``, ``aggregate``, ``per_task``, ``gates``,
+        ``verdict``, ``rendered`` episodes, ``provenance``).
+    """
+    from benchmark.scores.aggregate import aggregate_all
+    from benchmark.scores.episode import METRICS, score_episode
+    from benchmark.scores.verdict import check_gates
+    from fsv.learn import default_model
+    from fsv.provenance import provenance
+
+    cache = pathlib.Path(cache or default_cache())
+    gates = suite.gates if gates is None else gates
+    t0 = time.perf_counter()
+    rows, rendered = [], 0
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
+    for sc in suite.scenarios:
+        t_ep = time.perf_counter()
+        episode, made = cached_episode(suite, sc, cache)
+        rendered += made
+        estimate = reference_method(episode)
+        metrics = score_episode(episode, estimate, default_model())
+        rows.append({"episode": f"{sc.task}-u{sc.user}-g{sc.grasp}-m{sc.mass}-s{sc.seed}", "task": sc.task,
+                     "scenario": asdict(sc), **metrics, "seconds": time.perf_counter() - t_ep, "rendered": made})
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    aggregates = aggregate_all(rows, METRICS)
+    results = check_gates(gates, aggregates)
+    return {
+        "suite": {"name": suite.name, "version": suite.version, "description": suite.description},
+        "method": METHOD_NAME, "metrics": list(METRICS), "episodes": rows, "aggregate": aggregates,
+        "per_task": aggregate_all(rows, METRICS, by="task"),
+        "gates": [asdict(r) for r in results], "verdict": "pass" if all(r.passed for r in results) else "fail",
+        "rendered": rendered, "seconds": time.perf_counter() - t0, "provenance": provenance(),
+    }
+
+
+def strict(obj):
+    """``obj`` with NaN and infinities replaced by None (strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [strict(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def write_outputs(scores: dict, suite: Suite, out: pathlib.Path) -> None:
+    """Writes ``scores.json``, ``report.md`` and ``junit.xml`` into a temporary folder, then swaps it in."""
+    from benchmark.scores.verdict import GateResult, junit_xml, report_markdown
+    from benchmark.scores.episode import METRICS
+
+    results = [GateResult(**{**g, "ci": tuple(g["ci"]) if g["ci"] is not None else None}) for g in scores["gates"]]
+    out = pathlib.Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        (tmp / "scores.json").write_text(json.dumps(strict(scores), indent=1, allow_nan=False) + "\n")
+        (tmp / "report.md").write_text(report_markdown(suite, scores["method"], scores["episodes"], scores["aggregate"],
+                                                       scores["per_task"], results, METRICS))
+        (tmp / "junit.xml").write_bytes(junit_xml(suite.name, results, scores["seconds"]))
+        os.chmod(tmp, 0o755)
+        if out.exists():
+            old = out.with_name(f".{out.name}.old")
+            shutil.rmtree(old, ignore_errors=True)
+            os.replace(out, old)
+            os.replace(tmp, out)
+            shutil.rmtree(old)
+        else:
+            os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def load_gates(path) -> tuple:
+    """Gates from a JSON file: a list of ``{"metric", "op", "limit"[, "statistic"]}``."""
+    from benchmark.scores.episode import METRICS
+
+    try:
+        data = json.loads(pathlib.Path(path).read_text())
+        gates = tuple(Gate(metric=g["metric"], op=g["op"], limit=float(g["limit"]),
+                           statistic=g.get("statistic", "median")) for g in data)
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise ValueError(f"--gates {path}: not a JSON list of {{\"metric\", \"op\", \"limit\"[, \"statistic\"]}}: {e}") from e
+    bad = [g.metric for g in gates if g.metric not in METRICS]
+    if bad:
+        raise ValueError(f"--gates {path}: unknown metric {bad[0]!r}; accepted: {', '.join(METRICS)}")
+    return gates
+
+
+def _check_out(out: pathlib.Path) -> None:
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out}: exists and is not a folder")
+    parent = out.parent if out.parent != pathlib.Path("") else pathlib.Path(".")
+    probe = parent
+    while not probe.exists():
+        probe = probe.parent
+    if not os.access(probe, os.W_OK):
+        raise ValueError(f"--out {out}: {probe} is not writable")
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from benchmark.suites import SUITES
+
+    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (scores.json, report.md, junit.xml)")
+    p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
+    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> dict:
+    """Runs ``fsv-bench eval``: checks every input, evaluates, writes, prints; raises GateFailure on a failed gate."""
+    suite = get_suite(args.suite)
+    gates = load_gates(args.gates) if args.gates else None
+    _check_out(args.out)
+    scores = evaluate(suite, gates=gates, cache=args.cache, progress=not args.quiet)
+    write_outputs(scores, suite, args.out)
+    print(f"fsv-bench eval: suite {suite.name} v{suite.version}, {len(scores['episodes'])} episodes "
+          f"({scores['rendered']} rendered, the rest from the cache), {scores['seconds']:.0f} s")
+    for g in scores["gates"]:
+        ci = "" if g["ci"] is None else f" [{g['ci'][0]:.4g}, {g['ci'][1]:.4g}]"
+        value = "nothing scored" if g["value"] is None else f"{g['value']:.4g}"
+        print(f"  {'pass' if g['passed'] else 'FAIL'}  {g['name']}: {value}{ci}")
+    print(f"written to {args.out}/ (scores.json, report.md, junit.xml)")
+    failed = [g["name"] for g in scores["gates"] if not g["passed"]]
+    if failed:
+        raise GateFailure(f"{len(failed)} gate(s) failed: {'; '.join(failed)}")
+    return scores

@@ -1,0 +1,83 @@
+"""Per-episode metrics of every stage of the method, pure functions of (estimate, truth).
+
+Metrics (all floats; NaN where a stage has nothing to score):
+
+* tracking (:func:`benchmark.tracking.score_tracking`): ``box_pos_err_mm`` and ``box_rot_err_deg``
+  (medians over frames), ``contact_err_mm_mean`` / ``contact_err_mm_std`` (per axis, pooled),
+  ``contact_recall``, ``contact_precision``;
+* kinematics: ``acc_err_rms`` [m/s^2] and ``gyro_err_rms`` [rad/s], the AHRS-frame errors of the
+  estimated kinematics against the truth's simulated AHRS over the valid frames (Table 1's signals);
+* nominal forces (:func:`benchmark.score_forces.score_forces`): ``net_force_err_n_rms`` [N],
+  ``net_torque_err_nm_rms`` [N m], ``least_violation_frac`` (fraction of the scored frames whose
+  programs were infeasible);
+* learned forces (:func:`benchmark.learning.score_episode`): ``learned_rel_err_pct`` (Table 2's
+  relative error) and ``learned_mae_n``, the mean absolute error of the reconstructed normal force
+  per finger-frame [N] over the frames where estimate and truth both have the contact and the
+  reconstruction solved.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+METRICS = ("box_pos_err_mm", "box_rot_err_deg", "contact_err_mm_mean", "contact_err_mm_std", "contact_recall",
+           "contact_precision", "acc_err_rms", "gyro_err_rms", "net_force_err_n_rms", "net_torque_err_nm_rms",
+           "least_violation_frac", "learned_rel_err_pct", "learned_mae_n")
+"""Names of the per-episode metrics, in report order."""
+
+
+def score_episode(episode, estimate, model=None) -> dict:
+    """Every metric of one episode.
+
+    Args:
+        episode: A rendered ``benchmark.Episode`` (its truth is the reference).
+        estimate: The method's ``fsv.pipeline.Estimate`` on the episode's depth.
+        model: The internal-force model whose learned forces are scored (None: learned metrics NaN).
+
+    Returns:
+        ``{metric: float}`` for every name in :data:`METRICS`.
+    """
+    from benchmark.score_forces import score_forces
+    from benchmark.tracking import score_tracking
+
+    tr = episode.truth
+    t = score_tracking(estimate.tracking, tr, estimate.contacts)
+    out = {
+        "box_pos_err_mm": t["box_pos_err_mm_median"], "box_rot_err_deg": t["box_rot_err_deg_median"],
+        "contact_err_mm_mean": t["contact_err_mm_mean"], "contact_err_mm_std": t["contact_err_mm_std"],
+        "contact_recall": t["contact_recall"], "contact_precision": t["contact_precision"],
+    }
+    out.update(kinematics_errors(estimate.kinematics, tr))
+    if estimate.nominal is not None:
+        f = score_forces(estimate.nominal, tr, estimate.kinematics.rot)
+        out.update(net_force_err_n_rms=f["net_force_err_n_rms"], net_torque_err_nm_rms=f["net_torque_err_nm_rms"],
+                   least_violation_frac=f["solver_failures"] / max(f["frames_scored"], 1))
+    else:
+        out.update(net_force_err_n_rms=np.nan, net_torque_err_nm_rms=np.nan, least_violation_frac=np.nan)
+    out.update(learned_errors(episode, estimate, model))
+    return {k: float(out[k]) for k in METRICS}
+
+
+def kinematics_errors(kinematics, truth) -> dict:
+    """RMS of the AHRS-frame acceleration and angular-velocity errors over the valid frames."""
+    acc, gyro = kinematics.imu(truth.gravity)
+    v = kinematics.valid
+    if not v.any():
+        return {"acc_err_rms": np.nan, "gyro_err_rms": np.nan}
+    da, dg = acc[v] - truth.imu_acc[v], gyro[v] - truth.imu_gyro[v]
+    return {"acc_err_rms": float(np.sqrt(np.mean(da * da))), "gyro_err_rms": float(np.sqrt(np.mean(dg * dg)))}
+
+
+def learned_errors(episode, estimate, model) -> dict:
+    """Table 2's relative error and the per-finger mean absolute error of the learned forces."""
+    if model is None:
+        return {"learned_rel_err_pct": np.nan, "learned_mae_n": np.nan}
+    from benchmark.learning import score_episode as score_learned
+    from benchmark.score_forces import true_normal_forces
+    from fsv.forces import FrameStatus
+
+    block, sol, _ = score_learned(episode, model, estimate.kinematics, estimate.contacts)
+    tr = episode.truth
+    both = estimate.contacts.active & tr.contact_active & (sol.status == int(FrameStatus.OPTIMAL))[:, None]
+    mae = float(np.mean(np.abs(sol.normal_force - true_normal_forces(tr))[both])) if both.any() else np.nan
+    return {"learned_rel_err_pct": block["rel_err_pct_mean"], "learned_mae_n": mae}

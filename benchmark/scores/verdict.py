@@ -1,0 +1,87 @@
+"""Gates on a suite's aggregates, and the verdict as a report and as JUnit XML for CI systems."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class GateResult:
+    """A gate and the aggregate it was checked on.
+
+    Attributes:
+        name: ``"<statistic> <metric> <op> <limit>"``.
+        value: The aggregate (None when nothing was scored: the gate fails).
+        ci: The aggregate's 95 % interval, ``(low, high)`` or None.
+        passed: Whether the gate holds.
+    """
+
+    name: str
+    value: float | None
+    ci: tuple | None
+    passed: bool
+
+
+def check_gates(gates, aggregates: dict) -> list[GateResult]:
+    """Checks every gate on ``aggregates`` (``{metric: {statistic: {"value", "ci_low", "ci_high"}}}``).
+
+    Raises:
+        ValueError: If a gate names a metric that was not scored.
+    """
+    out = []
+    for g in gates:
+        if g.metric not in aggregates:
+            raise ValueError(f"gate {g.name!r} names the unknown metric {g.metric!r}; accepted: {', '.join(aggregates)}")
+        a = aggregates[g.metric][g.statistic]
+        value = a["value"]
+        out.append(GateResult(name=g.name, value=value, ci=None if value is None else (a["ci_low"], a["ci_high"]),
+                              passed=value is not None and g.holds(value)))
+    return out
+
+
+def junit_xml(suite_name: str, results: list[GateResult], elapsed_s: float) -> bytes:
+    """One JUnit test case per gate (a failure names the value and its interval)."""
+    failures = sum(not r.passed for r in results)
+    root = ET.Element("testsuites")
+    ts = ET.SubElement(root, "testsuite", name=f"fsv-bench.{suite_name}", tests=str(len(results)),
+                       failures=str(failures), errors="0", time=f"{elapsed_s:.3f}")
+    for r in results:
+        case = ET.SubElement(ts, "testcase", classname=f"fsv-bench.{suite_name}", name=r.name, time="0")
+        if not r.passed:
+            f = ET.SubElement(case, "failure", message=f"{r.name}: measured {_fmt(r.value)} {_fmt_ci(r.ci)}")
+            f.text = f"{r.name} does not hold: measured {_fmt(r.value)} {_fmt_ci(r.ci)}"
+    return ET.tostring(root, encoding="utf-8", xml_declaration=True)
+
+
+def _fmt(v) -> str:
+    return "nothing scored" if v is None else f"{v:.4g}"
+
+
+def _fmt_ci(ci) -> str:
+    return "" if ci is None else f"(95 % CI {ci[0]:.4g}-{ci[1]:.4g})"
+
+
+def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_task: dict, results: list,
+                    metrics) -> str:
+    """``report.md``: the verdict, the gates, the aggregates with intervals, per task and per episode."""
+    ok = all(r.passed for r in results)
+    lines = [f"# {suite.name} (version {suite.version}): {method}", "",
+             f"**Verdict: {'every gate holds' if ok else 'FAILED: ' + ', '.join(r.name for r in results if not r.passed)}**",
+             "", suite.description, "", "## Gates", "", "| gate | measured | 95 % CI | |", "|---|---|---|---|"]
+    for r in results:
+        lines.append(f"| {r.name} | {_fmt(r.value)} | {_fmt_ci(r.ci).strip('()').replace('95 % CI ', '')} | "
+                     f"{'pass' if r.passed else '**FAIL**'} |")
+    lines += ["", f"## Aggregates over {len(rows)} episodes (median [95 % CI], mean)", "",
+              "| metric | median | 95 % CI | mean |", "|---|---|---|---|"]
+    for m in metrics:
+        med, mean = aggregates[m]["median"], aggregates[m]["mean"]
+        lines.append(f"| {m} | {_fmt(med['value'])} | {_fmt_ci((med['ci_low'], med['ci_high']) if med['value'] is not None else None).strip('()').replace('95 % CI ', '')} | {_fmt(mean['value'])} |")
+    lines += ["", "## Per task (median)", "", "| task | " + " | ".join(metrics) + " |",
+              "|---|" + "---|" * len(metrics)]
+    for task, agg in per_task.items():
+        lines.append(f"| {task} | " + " | ".join(_fmt(agg[m]["median"]["value"]) for m in metrics) + " |")
+    lines += ["", "## Per episode", "", "| episode | " + " | ".join(metrics) + " |", "|---|" + "---|" * len(metrics)]
+    for r in rows:
+        lines.append(f"| {r['episode']} | " + " | ".join(_fmt(r[m] if r[m] == r[m] else None) for m in metrics) + " |")
+    return "\n".join(lines) + "\n"

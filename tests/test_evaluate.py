@@ -1,0 +1,89 @@
+"""fsv-bench eval: suites scored with intervals and a verdict; bad input exits 2, failed gates 1."""
+
+import json
+
+import pytest
+
+import benchmark.suites.registry as registry
+from benchmark.cli import main
+from benchmark.scenario import Scenario
+from benchmark.suites import SUITES, Gate, Suite
+from benchmark.world import validate
+
+TINY = Suite(name="tiny", version=1, scenarios=(Scenario(task="lift", seed=21, duration_s=1.5),),
+             gates=(Gate("box_pos_err_mm", "<=", 1.5), Gate("learned_rel_err_pct", "<=", 60.0)),
+             description="one short lift, for the tests")
+
+
+@pytest.fixture
+def tiny(monkeypatch):
+    monkeypatch.setitem(SUITES, "tiny", TINY)
+    return TINY
+
+
+@pytest.mark.parametrize("name", sorted(SUITES))
+def test_every_registered_suite_is_valid(name):
+    suite = SUITES[name]
+    assert suite.version >= 1 and suite.description and suite.gates
+    for sc in suite.scenarios:
+        validate(sc)  # task, user, grasp, mass exist; duration suits the task
+    from benchmark.scores.episode import METRICS
+
+    assert all(g.metric in METRICS for g in suite.gates)
+
+
+def test_eval_writes_scores_report_junit_and_the_second_run_renders_nothing(tiny, tmp_path, capsys):
+    out, cache = tmp_path / "out", tmp_path / "cache"
+    assert main(["eval", "--suite", "tiny", "--out", str(out), "--cache", str(cache), "--quiet"]) == 0
+    first = json.loads((out / "scores.json").read_text(), parse_constant=lambda c: pytest.fail(f"non-strict JSON {c}"))
+    assert first["rendered"] == 1 and first["verdict"] == "pass"
+    assert first["suite"] == {"name": "tiny", "version": 1, "description": "one short lift, for the tests"}
+    ep = first["episodes"][0]
+    assert ep["episode"] == "lift-u0-g0-m0-s21" and 0 < ep["box_pos_err_mm"] < 1.5
+    agg = first["aggregate"]["box_pos_err_mm"]["median"]
+    assert agg["n"] == 1 and agg["ci_low"] == agg["value"] == agg["ci_high"] == ep["box_pos_err_mm"]
+    assert "provenance" in first and (out / "report.md").read_text().startswith("# tiny (version 1)")
+    junit = (out / "junit.xml").read_text()
+    assert junit.count("<testcase") == 2 and "<failure" not in junit
+    assert "every gate holds" in (out / "report.md").read_text()
+    capsys.readouterr()
+    assert main(["eval", "--suite", "tiny", "--out", str(out), "--cache", str(cache), "--quiet"]) == 0
+    second = json.loads((out / "scores.json").read_text())
+    assert second["rendered"] == 0  # the episode came from the cache
+    assert [{k: v for k, v in e.items() if k not in ("seconds", "rendered")} for e in second["episodes"]] == \
+           [{k: v for k, v in e.items() if k not in ("seconds", "rendered")} for e in first["episodes"]]
+    assert "(0 rendered" in capsys.readouterr().out
+
+
+def test_a_failing_gate_exits_1_names_it_and_fails_its_junit_case(tiny, tmp_path, capsys):
+    gates = tmp_path / "gates.json"
+    gates.write_text(json.dumps([{"metric": "box_pos_err_mm", "op": "<=", "limit": 0.001},
+                                 {"metric": "contact_recall", "op": ">=", "limit": 0.5}]))
+    out = tmp_path / "out"
+    code = main(["eval", "--suite", "tiny", "--out", str(out), "--gates", str(gates), "--cache", str(tmp_path / "c"), "--quiet"])
+    assert code == 1
+    err = capsys.readouterr().err
+    assert "1 gate(s) failed: median box_pos_err_mm <= 0.001" in err
+    junit = (out / "junit.xml").read_text()
+    assert junit.count("<failure") == 1 and 'failures="1"' in junit
+    assert json.loads((out / "scores.json").read_text())["verdict"] == "fail"
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--suite", "nope"], "--suite 'nope': no such suite; accepted: smoke"),
+    (["--suite", "smoke", "--gates", "missing.json"], "--gates missing.json: not a JSON list"),
+])
+def test_bad_input_exits_2_with_one_line_before_any_work(tmp_path, capsys, argv, needle, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "out"
+    assert main(["eval", *argv, "--out", str(out), "--cache", str(tmp_path / "cache")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err
+    assert not out.exists() and not (tmp_path / "cache").exists()
+
+
+def test_gates_file_with_an_unknown_metric_is_refused(tmp_path, capsys):
+    gates = tmp_path / "g.json"
+    gates.write_text(json.dumps([{"metric": "speed", "op": "<=", "limit": 1}]))
+    assert main(["eval", "--suite", "smoke", "--gates", str(gates), "--out", str(tmp_path / "o")]) == 2
+    assert "unknown metric 'speed'; accepted: box_pos_err_mm" in capsys.readouterr().err

@@ -1,0 +1,32 @@
+"""Gates on aggregates, JUnit XML and the Markdown report."""
+
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from benchmark.scores.verdict import check_gates, junit_xml
+from benchmark.suites import Gate
+
+AGG = {"a": {"median": {"value": 1.0, "ci_low": 0.5, "ci_high": 1.5}, "mean": {"value": 2.0, "ci_low": 1.0, "ci_high": 3.0}},
+       "b": {"median": {"value": None, "ci_low": None, "ci_high": None}, "mean": {"value": None, "ci_low": None, "ci_high": None}}}
+
+
+def test_gates_hold_fail_and_fail_when_nothing_was_scored():
+    r = check_gates([Gate("a", "<=", 1.0), Gate("a", "<=", 1.5, statistic="mean"), Gate("a", ">=", 0.9), Gate("b", "<=", 9)], AGG)
+    assert [x.passed for x in r] == [True, False, True, False]
+    assert r[1].name == "mean a <= 1.5" and r[1].value == 2.0 and r[1].ci == (1.0, 3.0) and r[3].ci is None
+    with pytest.raises(ValueError, match="unknown metric 'c'"):
+        check_gates([Gate("c", "<=", 1)], AGG)
+    with pytest.raises(ValueError, match="Gate.op"):
+        Gate("a", "<", 1)
+
+
+def test_junit_has_one_case_per_gate_and_a_failure_naming_the_value():
+    results = check_gates([Gate("a", "<=", 1.0), Gate("a", "<=", 1.5, statistic="mean")], AGG)
+    root = ET.fromstring(junit_xml("smoke", results, 12.5))
+    suite = root.find("testsuite")
+    assert suite.get("tests") == "2" and suite.get("failures") == "1"
+    cases = suite.findall("testcase")
+    assert [c.get("name") for c in cases] == ["median a <= 1", "mean a <= 1.5"]
+    assert cases[0].find("failure") is None
+    assert "measured 2 (95 % CI 1-3)" in cases[1].find("failure").get("message")
