@@ -1,4 +1,4 @@
-"""Human-readable and JSON summaries of a run (DESIGN.md, "Results schema").
+"""Human-readable and JSON summaries of a run (docs/design.md, "Results schema").
 
 ``summary.json`` is a dict of blocks: ``scenario`` and ``world`` (this module), ``timing_s``, one
 block per later stage (kinematics, tracking, forces, learning) added by that stage, and

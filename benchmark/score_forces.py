@@ -1,6 +1,6 @@
 """Scores of the force stage against the truth: the paper's §4.2 and Fig. 5.
 
-Metric definitions (DESIGN.md):
+Metric definitions (docs/design.md):
 
 * Net force / torque error: the resultant of the estimated contact forces (fingers and, where the
   method models it, the table) minus the resultant of the true contact forces (fingers and the

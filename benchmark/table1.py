@@ -1,6 +1,6 @@
 """The paper's Table 1: kinematics from vision against the AHRS, for three differentiators.
 
-Metric (DESIGN.md, "Metric definitions"): for each method, the error is the estimate minus the
+Metric (docs/design.md, "Metric definitions"): for each method, the error is the estimate minus the
 truth, per axis, pooled over the three axes and over the frames of the scored window; we report
 its mean and (population) standard deviation. Translational acceleration is compared with the
 simulated AHRS's specific force ``Truth.imu_acc`` = R^T (a - g) (box frame, gravity included, as

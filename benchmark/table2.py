@@ -26,7 +26,7 @@ do tell the users apart.
 
 For each evaluation frame, the networks' predicted internal normal forces go into the
 reconstruction SOCP (eq. 14, :func:`fsv.forces.reconstruct_forces`), whose total normal force per
-finger is compared with the truth's normal force (DESIGN.md's metric; the paper used its tactile
+finger is compared with the truth's normal force (docs/design.md's metric; the paper used its tactile
 readings, ours are those plus sensor noise):
 the relative error of finger k at frame i with true normal force f >= 1 N is |f̂ - f| / f, in percent;
 the table reports its mean and standard deviation over the scored (frame, finger) pairs.

@@ -5,7 +5,7 @@ is): the scenario's nominal start (the box and the hand as the simulation starts
 perturbed by seeded Gaussian errors from ``Scenario.rng("tracker-init")`` with the standard
 deviations of :data:`INIT_PERTURBATION`; no later frame of the truth is ever used.
 
-Scores (DESIGN.md, "Metric definitions"):
+Scores (docs/design.md, "Metric definitions"):
 
 * box position error: Euclidean distance of the tracked centre from the true one, median over
   frames, [mm]; box rotation error: geodesic angle, median, [deg];

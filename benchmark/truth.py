@@ -1,4 +1,4 @@
-"""Ground truth recorded by the simulator at frame times (see DESIGN.md, "Truth")."""
+"""Ground truth recorded by the simulator at frame times (see docs/design.md, "Truth")."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Stage interfaces of the FSV method: small immutable records of numpy arrays.
 
-Conventions (see DESIGN.md): SI units; time axis first; frames at t_k = k / fps; world frame
+Conventions (see docs/design.md): SI units; time axis first; frames at t_k = k / fps; world frame
 with origin on the table top and z up; object frame at the box's centre of mass with axes along
 its edges; camera frame in OpenCV's pinhole convention (x right, y down, z forward).
 Every record checks its shapes on construction and raises :class:`fsv.errors.InputError`.

@@ -1,6 +1,6 @@
 """Environment contacts: the box resting on the table, seen from the estimated pose.
 
-The table is the plane z = 0 of the world frame (DESIGN.md). The method does not observe the
+The table is the plane z = 0 of the world frame (docs/design.md). The method does not observe the
 table's force, so it models the contact from geometry alone, as point contacts at box corners,
 each with a Coulomb friction cone of coefficient ``ObjectModel.table_friction`` about the table's
 normal (world +z, which pushes into the box):
