@@ -16,9 +16,13 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 WORLD_MODULES = ("episode", "grip", "hand", "render", "scenario", "sensor", "simulate", "truth", "world")
 """``benchmark`` modules that decide an episode's truth and depth (with ``benchmark/tasks/``)."""
 
-RESULTS_MODULES = WORLD_MODULES + ("contact_error", "dataset", "learning", "motion", "pose_error", "score_forces",
-                                   "table1", "table2", "tactile", "tracking", "training")
-"""``benchmark`` modules that decide the committed results (with ``fsv/`` and ``benchmark/tasks/``)."""
+RESULTS_MODULES = WORLD_MODULES + ("contact_error", "dataset", "evaluate", "learning", "motion", "pose_error",
+                                   "score_forces", "table1", "table2", "tactile", "tracking", "training")
+"""``benchmark`` modules that decide the committed results (with ``fsv/`` and the packages of
+:data:`RESULTS_PACKAGES`)."""
+
+RESULTS_PACKAGES = ("tasks", "scores", "suites")
+"""``benchmark`` sub-packages that decide the committed results."""
 
 
 def source_fingerprint(root: pathlib.Path, python_files: list, data_files: list) -> str:
@@ -46,9 +50,11 @@ def world_fingerprint(root: pathlib.Path = ROOT) -> str:
 
 def results_fingerprint(root: pathlib.Path = ROOT) -> str:
     """Fingerprint of what the committed results depend on: ``fsv/`` (code and its data files, the
-    shipped model excepted, which is itself a result), ``sim_assets/``, ``benchmark/tasks/`` and
+    shipped model excepted, which is itself a result), ``sim_assets/``, :data:`RESULTS_PACKAGES` and
     :data:`RESULTS_MODULES`."""
-    files = sorted((root / "fsv").rglob("*.py")) + sorted((root / "benchmark" / "tasks").glob("*.py"))
+    files = sorted((root / "fsv").rglob("*.py"))
+    for pkg in RESULTS_PACKAGES:
+        files += sorted((root / "benchmark" / pkg).glob("*.py"))
     files += [root / "benchmark" / f"{m}.py" for m in sorted(RESULTS_MODULES)]
     data = [p for p in _data_files(root, ("sim_assets", "fsv/data")) if p.suffix != ".pt"]
     return source_fingerprint(root, files, data)

@@ -46,9 +46,9 @@ RECORD = "results/reproduce.json"
 REL_TOL = 1e-6
 ABS_TOL = 1e-9
 
-# Keys whose values are measurements of this run's speed or of where it ran, never compared.
-_UNCOMPARED = ("timing", "per_s", "seconds", "_ms_per_frame", "provenance", "path", "overlay", "episode",
-               "summary", "fig", "plot", "command", "train_seconds")
+_UNCOMPARED = frozenset({"timing_s", "provenance", "rendered", "seconds", "train_seconds", "frames_per_s", "steps_per_s",
+                         "stage_ms_per_frame", "overlay", "plot", "fig6", "command", "episode", "summary", "path"})
+"""Keys whose values measure this run's speed or name where it ran or what it wrote: never compared."""
 
 class ReproduceError(BenchmarkError):
     """A committed result differs from its regeneration, or a regeneration failed."""
@@ -110,7 +110,7 @@ def compare_values(new, old, where: str = "") -> list[str]:
     a, b = dict(_leaves(new)), dict(_leaves(old))
     out = []
     for key in sorted(set(a) | set(b)):
-        if any(s in key.lower() for s in _UNCOMPARED):
+        if any(seg.split("[")[0] in _UNCOMPARED for seg in key.split("/")):
             continue
         x, y = a.get(key, "<missing>"), b.get(key, "<missing>")
         if isinstance(x, (int, float)) and isinstance(y, (int, float)) and not isinstance(x, bool):
@@ -174,6 +174,9 @@ RESULTS = (
     Result(name="table1", path="results/table1", datasets=(),
            commands=(("python", "-m", "benchmark.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
            compare=_compare_csv("table1.csv")),
+    Result(name="smoke", path="results/smoke", datasets=(),
+           commands=(("fsv-bench", "eval", "--suite", "smoke", "--quiet", "--out", "{out}"),),
+           compare=lambda new, old: _compare_json("scores.json")(new, old)),
     _table2("", "table2"),
     _table2("paper-rule-only", "table2", ("--max-excess", "inf")),
     _table2("users-0-1", "table2-users-0-1", ("--users", "0,1")),

@@ -4,7 +4,7 @@ from benchmark.fingerprint import RESULTS_MODULES, WORLD_MODULES, results_finger
 
 
 def test_results_fingerprint_ignores_docstrings_and_comments_not_code(tmp_path):
-    for d in ("fsv/data", "sim_assets", "benchmark/tasks"):
+    for d in ("fsv/data", "sim_assets", "benchmark/tasks", "benchmark/scores", "benchmark/suites"):
         (tmp_path / d).mkdir(parents=True)
     for m in RESULTS_MODULES:
         (tmp_path / "benchmark" / f"{m}.py").write_text("")
