@@ -20,6 +20,6 @@ def test_learning_block_on_a_short_lift(episode_factory):
     block, sol, pred = score_episode(ep, default_model(), oracle_kinematics(ep.truth), contacts_from_truth(ep.truth))
     assert block["scored"] > 100 and block["solver_failures"] == 0
     assert block["residual_rel_max"] <= 1e-6  # the learned forces explain the motion
-    assert 0 < block["rel_err_pct_mean"] < 60
+    assert 0 < block["rel_err_pct_mean"] < 35  # measured 23.4 % (oracle contacts and kinematics, 3 s lift)
     held = ep.truth.contact_active.sum(axis=1) >= 2
     assert np.all(pred[held][ep.truth.contact_active[held]] >= 0)  # internal grip, never a pull
