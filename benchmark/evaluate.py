@@ -85,40 +85,62 @@ def reference_method(episode):
                         rng=episode.scenario.rng("tracker"))
 
 
-def evaluate(suite: Suite, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True) -> dict:
+def _episode_row(job) -> dict:
+    """One episode: cached or made, the method run on it, every metric (a worker's unit of work)."""
+    from benchmark.scores.episode import score_episode
+    from fsv.learn import default_model
+
+    suite, sc, cache = job
+    t0 = time.perf_counter()
+    episode, made = cached_episode(suite, sc, cache)
+    metrics = score_episode(episode, reference_method(episode), default_model())
+    return {"episode": f"{sc.task}-u{sc.user}-g{sc.grasp}-m{sc.mass}-s{sc.seed}", "task": sc.task,
+            "scenario": asdict(sc), **metrics, "seconds": time.perf_counter() - t0, "rendered": made}
+
+
+def evaluate(suite: Suite, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
+             workers: int = 1) -> dict:
     """Scores the reference method on every episode of ``suite``.
+
+    Episodes run in ``workers`` local processes (1: in this process); the scores do not depend on it.
 
     Returns:
         The content of ``scores.json`` (``episodes``, ``aggregate``, ``per_task``, ``gates``,
         ``verdict``, ``rendered`` episodes, ``provenance``).
     """
     from benchmark.scores.aggregate import aggregate_all
-    from benchmark.scores.episode import METRICS, score_episode
+    from benchmark.scores.episode import METRICS
     from benchmark.scores.verdict import check_gates
-    from fsv.learn import default_model
     from fsv.provenance import provenance
 
     cache = pathlib.Path(cache or default_cache())
     gates = suite.gates if gates is None else gates
     t0 = time.perf_counter()
-    rows, rendered = [], 0
+    rows = []
     bar = None
     if progress:
         from tqdm import tqdm
 
         bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
-    for sc in suite.scenarios:
-        t_ep = time.perf_counter()
-        episode, made = cached_episode(suite, sc, cache)
-        rendered += made
-        estimate = reference_method(episode)
-        metrics = score_episode(episode, estimate, default_model())
-        rows.append({"episode": f"{sc.task}-u{sc.user}-g{sc.grasp}-m{sc.mass}-s{sc.seed}", "task": sc.task,
-                     "scenario": asdict(sc), **metrics, "seconds": time.perf_counter() - t_ep, "rendered": made})
-        if bar is not None:
-            bar.update(1)
+    jobs = [(suite, sc, cache) for sc in suite.scenarios]
+    if workers == 1:
+        for job in jobs:
+            rows.append(_episode_row(job))
+            if bar is not None:
+                bar.update(1)
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            for row in pool.map(_episode_row, jobs):
+                rows.append(row)
+                if bar is not None:
+                    bar.update(1)
     if bar is not None:
         bar.close()
+    rendered = sum(r["rendered"] for r in rows)
     aggregates = aggregate_all(rows, METRICS)
     results = check_gates(gates, aggregates)
     return {
@@ -203,6 +225,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (scores.json, report.md, junit.xml)")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -210,8 +233,10 @@ def run(args: argparse.Namespace) -> dict:
     """Runs ``fsv-bench eval``: checks every input, evaluates, writes, prints; raises GateFailure on a failed gate."""
     suite = get_suite(args.suite)
     gates = load_gates(args.gates) if args.gates else None
+    if args.workers < 1:
+        raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     _check_out(args.out)
-    scores = evaluate(suite, gates=gates, cache=args.cache, progress=not args.quiet)
+    scores = evaluate(suite, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers)
     write_outputs(scores, suite, args.out)
     print(f"fsv-bench eval: suite {suite.name} v{suite.version}, {len(scores['episodes'])} episodes "
           f"({scores['rendered']} rendered, the rest from the cache), {scores['seconds']:.0f} s")

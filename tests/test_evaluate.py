@@ -87,3 +87,17 @@ def test_gates_file_with_an_unknown_metric_is_refused(tmp_path, capsys):
     gates.write_text(json.dumps([{"metric": "speed", "op": "<=", "limit": 1}]))
     assert main(["eval", "--suite", "smoke", "--gates", str(gates), "--out", str(tmp_path / "o")]) == 2
     assert "unknown metric 'speed'; accepted: box_pos_err_mm" in capsys.readouterr().err
+
+
+def test_two_worker_processes_give_the_same_scores_as_one(tmp_path):
+    from benchmark.evaluate import evaluate
+
+    suite = Suite(name="pair", version=1, scenarios=(Scenario(task="lift", seed=22, duration_s=1.5),
+                                                     Scenario(task="lift", user=1, seed=23, duration_s=1.5)),
+                  gates=(Gate("box_pos_err_mm", "<=", 1.5),), description="two short lifts")
+    one = evaluate(suite, cache=tmp_path, progress=False, workers=1)
+    two = evaluate(suite, cache=tmp_path, progress=False, workers=2)
+    assert one["rendered"] == 2 and two["rendered"] == 0
+    strip = lambda rows: [{k: v for k, v in r.items() if k not in ("seconds", "rendered")} for r in rows]
+    assert strip(two["episodes"]) == strip(one["episodes"])
+    assert two["aggregate"] == one["aggregate"]
