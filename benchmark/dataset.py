@@ -495,6 +495,8 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
     out = os.fspath(out)
     if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
         raise DatasetError(f"workers must be a positive integer, got {workers!r}")
+    if ray_address is not None:
+        check_ray_address(ray_address)
     episodes = _prepare(spec, out)
     written = _check_existing(spec, out, episodes)
     todo = [sc for sc in spec.scenarios() if os.path.join("episodes", episode_id(sc) + ".parquet") not in written]
@@ -550,6 +552,33 @@ def _run_pool(todo, spec, build, workers, done) -> None:
     pool.shutdown(wait=True)
 
 
+RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head node answers at once; Ray's own client retries for minutes
+
+
+def check_ray_address(address: str) -> None:
+    """Fails within seconds when nothing listens at a ``host:port`` or ``ray://host:port`` address.
+
+    ``"auto"`` (a cluster started on this machine) is left to Ray.
+
+    Raises:
+        DatasetError: Naming the address when it is malformed or nothing answers there.
+    """
+    import socket
+
+    if address == "auto":
+        return
+    hostport = address[len("ray://"):] if address.startswith("ray://") else address
+    host, _, port = hostport.rpartition(":")
+    if not host or not port.isdigit():
+        raise DatasetError(f"--ray-address {address!r}: expected 'auto', 'host:port' or 'ray://host:port'")
+    try:
+        with socket.create_connection((host, int(port)), timeout=RAY_CONNECT_TIMEOUT_S):
+            pass
+    except OSError as e:
+        raise DatasetError(f"--ray-address {address!r}: no Ray cluster answers there ({e}); start one with "
+                           "`ray start --head` or run without --ray-address to use the local process pool") from e
+
+
 def _run_ray(todo, spec, build, address, done) -> None:
     try:
         import ray
@@ -558,7 +587,9 @@ def _run_ray(todo, spec, build, address, done) -> None:
             f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
             "(or run without --ray-address to use the local process pool)"
         ) from e
-    ray.init(address=address, ignore_reinit_error=True, log_to_driver=False)
+    host = (address[len("ray://"):] if address.startswith("ray://") else address).rpartition(":")[0]
+    local = {"_node_ip_address": "127.0.0.1"} if host in ("127.0.0.1", "localhost") else {}  # stay on loopback
+    ray.init(address=address, ignore_reinit_error=True, log_to_driver=False, **local)
     remote = ray.remote(_run_one)
     refs = [remote.remote(sc, spec, build) for sc in todo]
     try:

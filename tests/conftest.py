@@ -9,6 +9,10 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
+# Ray, when a test starts a local cluster, stays on the loopback interface (it otherwise swaps
+# 127.0.0.1 for the machine's outward address); Ray reads this when it is imported.
+os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
+
 # --- kinematics (issue 4): an analytic box trajectory with exact derivatives -------------------
 
 

@@ -1,4 +1,5 @@
 import os
+import pathlib
 
 import numpy as np
 import pyarrow as pa
@@ -312,3 +313,61 @@ def test_an_episode_of_another_scenario_under_the_right_name_is_rebuilt(tmp_path
     generate(spec, tmp_path / "two", workers=1, progress=False, build=cheap_build)
     assert CALLS == ["lift_u0_g0_m0_s0"] and "made with another scenario" in capsys.readouterr().err
     assert len(load_dataset(tmp_path / "two")) == 3
+
+
+@pytest.fixture(scope="module")
+def ray_cluster():
+    """A local Ray cluster (head node on a free loopback port), stopped after the module."""
+    import shutil
+    import socket
+    import subprocess
+    import sys
+
+    assert os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] == "0"  # loopback only (tests/conftest.py)
+    pytest.importorskip("ray")
+    ray_cli = shutil.which("ray", path=str(pathlib.Path(sys.executable).parent))
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    subprocess.run([ray_cli, "start", "--head", "--node-ip-address", "127.0.0.1", "--port", str(port), "--num-cpus", "2",
+                    "--include-dashboard", "false", "--disable-usage-stats"], check=True, capture_output=True, timeout=120)
+    try:
+        yield f"127.0.0.1:{port}"
+    finally:
+        import ray
+
+        ray.shutdown()
+        subprocess.run([ray_cli, "stop", "--force"], capture_output=True, timeout=120)
+
+
+def test_a_local_ray_cluster_makes_the_same_dataset_as_the_local_pool(learn_oracle_dataset, ray_cluster, tmp_path):
+    import pandas as pd
+
+    spec, out, _ = learn_oracle_dataset
+    man = generate(spec, tmp_path, ray_address=ray_cluster, progress=False)
+    assert sorted(man["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1"] and (man["status"] == "ok").all()
+    pd.testing.assert_frame_equal(load_dataset(tmp_path), load_dataset(out))
+    import json
+
+    import pyarrow.parquet as pq
+
+    for f in man["file"]:  # every column and every metadata entry but the build time
+        a, b = pq.read_table(tmp_path / f), pq.read_table(out / f)
+        assert a.equals(b), f
+        meta_a, meta_b = (json.loads(t.schema.metadata[b"fsv"]) for t in (a, b))
+        meta_a.pop("seconds"), meta_b.pop("seconds")
+        meta_a.pop("sha256", None), meta_b.pop("sha256", None)
+        assert meta_a == meta_b, f
+
+
+def test_a_bad_ray_address_fails_within_seconds(tmp_path):
+    import time
+
+    spec = DatasetSpec(tasks=("lift",), seeds=(0,), duration_s=1.5, kinematics="oracle", contacts="oracle")
+    t0 = time.perf_counter()
+    with pytest.raises(DatasetError, match="'127.0.0.1:9': no Ray cluster answers there"):
+        generate(spec, tmp_path / "d", ray_address="127.0.0.1:9", progress=False)
+    assert time.perf_counter() - t0 < 10, time.perf_counter() - t0
+    assert not (tmp_path / "d").exists()  # refused before any work
+    with pytest.raises(DatasetError, match="expected 'auto', 'host:port'"):
+        generate(spec, tmp_path / "d", ray_address="nowhere", progress=False)
