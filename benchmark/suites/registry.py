@@ -22,7 +22,7 @@ SMOKE = Suite(
         Gate("acc_err_rms", "<=", 1.0, measured="median 0.61 m/s^2 (0.36-0.77)"),
         Gate("net_force_err_n_rms", "<=", 1.0, measured="median 0.41 N (0.19-2.21; rotate the worst)"),
         Gate("least_violation_frac", "<=", 0.15, statistic="mean", measured="mean 0.056 (rotate 0.22, others 0)"),
-        Gate("learned_rel_err_pct", "<=", 35.0, measured="median 20.0 % (11.7-40.4)"),
+        Gate("learned_rel_err_pct", "<=", 35.0, measured="median 21.4 % (15.4-45.1; rotate the worst)"),
     ),
     description=(
         "For CI: four 4 s episodes, one per task family (lift, place, rotate, release), each with "
