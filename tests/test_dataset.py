@@ -1,5 +1,4 @@
 import os
-import pathlib
 
 import numpy as np
 import pyarrow as pa
@@ -317,27 +316,14 @@ def test_an_episode_of_another_scenario_under_the_right_name_is_rebuilt(tmp_path
 
 @pytest.fixture(scope="module")
 def ray_cluster():
-    """A local Ray cluster (head node on a free loopback port), stopped after the module."""
-    import shutil
-    import socket
-    import subprocess
-    import sys
-
-    assert os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] == "0"  # loopback only (tests/conftest.py)
-    pytest.importorskip("ray")
-    ray_cli = shutil.which("ray", path=str(pathlib.Path(sys.executable).parent))
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    subprocess.run([ray_cli, "start", "--head", "--node-ip-address", "127.0.0.1", "--port", str(port), "--num-cpus", "2",
-                    "--include-dashboard", "false", "--disable-usage-stats"], check=True, capture_output=True, timeout=120)
+    """A local Ray cluster owned by this test process (loopback only, tests/conftest.py): its address."""
+    assert os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] == "0"
+    ray = pytest.importorskip("ray")
+    context = ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
-        yield f"127.0.0.1:{port}"
+        yield context.address_info["gcs_address"]
     finally:
-        import ray
-
         ray.shutdown()
-        subprocess.run([ray_cli, "stop", "--force"], capture_output=True, timeout=120)
 
 
 def test_a_local_ray_cluster_makes_the_same_dataset_as_the_local_pool(learn_oracle_dataset, ray_cluster, tmp_path):
