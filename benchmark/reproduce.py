@@ -174,6 +174,9 @@ RESULTS = (
     Result(name="table1", path="results/table1", datasets=(),
            commands=(("python", "-m", "benchmark.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
            compare=_compare_csv("table1.csv")),
+    Result(name="standard", path="results/standard", datasets=(),
+           commands=(("fsv-bench", "eval", "--suite", "standard", "--quiet", "--workers", "2", "--out", "{out}"),),
+           compare=lambda new, old: _compare_json("scores.json")(new, old)),
     Result(name="smoke", path="results/smoke", datasets=(),
            commands=(("fsv-bench", "eval", "--suite", "smoke", "--quiet", "--out", "{out}"),),
            compare=lambda new, old: _compare_json("scores.json")(new, old)),
@@ -222,7 +225,7 @@ def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: 
             code = e.code or 0
         finally:
             sys.argv = saved
-    if code != 0:
+    if code != 0 and not (code == 1 and argv[1:2] == ["eval"]):  # a failed gate is a result, written
         raise ReproduceError(f"{' '.join(argv)} exited with status {code}")
 
 
