@@ -13,7 +13,7 @@ import pytest  # noqa: E402
 # 127.0.0.1 for the machine's outward address); Ray reads this when it is imported.
 os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
 
-# --- kinematics (issue 4): an analytic box trajectory with exact derivatives -------------------
+# --- kinematics: an analytic box trajectory with exact derivatives -------------------
 
 
 def _min_jerk(t, t0, dur):
@@ -71,7 +71,7 @@ def analytic_truth_factory():
     return make_analytic_truth
 
 
-# --- world (issue 2): short simulated episodes, simulated once per session ----------------------
+# --- world: short simulated episodes, simulated once per session ----------------------
 
 
 @pytest.fixture(scope="session")
@@ -100,7 +100,7 @@ def episode_factory():
     return make
 
 
-# --- render (issue 3): the 2.5 s lift rendered once per session -----------------------------------
+# --- render: the 2.5 s lift rendered once per session -----------------------------------
 
 
 @pytest.fixture(scope="session")
@@ -111,7 +111,7 @@ def rendered_lift_episode(lift_episode):
     return render(lift_episode[0])
 
 
-# --- learning (issue 7): a small dataset of short, simulated episodes -------------------------
+# --- learning: a small dataset of short, simulated episodes -------------------------
 
 
 @pytest.fixture(scope="session")
@@ -126,7 +126,7 @@ def learn_oracle_dataset(tmp_path_factory):
     return spec, out, generate(spec, out, workers=1, progress=False)
 
 
-# --- tracking (issue 6): the whole method on the rendered 2.5 s lift, once per session ------------
+# --- tracking: the whole method on the rendered 2.5 s lift, once per session ------------
 
 
 @pytest.fixture(scope="session")
