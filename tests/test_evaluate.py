@@ -4,7 +4,6 @@ import json
 
 import pytest
 
-import benchmark.suites.registry as registry
 from benchmark.cli import main
 from benchmark.scenario import Scenario
 from benchmark.suites import SUITES, Gate, Suite

@@ -1,8 +1,6 @@
 """fsv-bench reproduce: the committed results are those of this code, and the comparison catches moves."""
 
 import argparse
-import json
-import pathlib
 
 import pytest
 

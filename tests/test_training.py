@@ -1,7 +1,5 @@
 """fsv-bench train: trains on a generated dataset, saves a loadable model, checks --folds before work."""
 
-import numpy as np
-
 from benchmark.cli import main
 from fsv.learn import load
 
