@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import os
 import pathlib
+import shutil
 import tempfile
 from typing import Iterator
 
@@ -37,6 +38,26 @@ def atomic_path(path: str | os.PathLike) -> Iterator[pathlib.Path]:
     except BaseException:
         pathlib.Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def swap_folder(new: str | os.PathLike, dest: str | os.PathLike) -> pathlib.Path:
+    """Moves the complete folder ``new`` into place as ``dest``, replacing any folder there.
+
+    ``new`` must be on the same file system as ``dest`` (a sibling): the old folder is first renamed
+    aside, then ``new`` is renamed in, then the old one is removed, so ``dest`` is always either the
+    old or the new folder, never a mixture.
+    """
+    new, dest = pathlib.Path(new), pathlib.Path(dest)
+    os.chmod(new, 0o755)  # mkdtemp makes it private; results are shared
+    if not dest.exists():
+        os.replace(new, dest)
+        return dest
+    old = dest.with_name(f".{dest.name}.old")
+    shutil.rmtree(old, ignore_errors=True)
+    os.replace(dest, old)
+    os.replace(new, dest)
+    shutil.rmtree(old)
+    return dest
 
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> pathlib.Path:

@@ -29,6 +29,7 @@ import tempfile
 import time
 from dataclasses import asdict
 
+from benchmark.atomic import swap_folder
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.scenario import Scenario
 from benchmark.suites import Gate, Suite, get_suite
@@ -177,15 +178,7 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path) -> None:
         (tmp / "report.md").write_text(report_markdown(suite, scores["method"], scores["episodes"], scores["aggregate"],
                                                        scores["per_task"], results, METRICS))
         (tmp / "junit.xml").write_bytes(junit_xml(suite.name, results, scores["seconds"]))
-        os.chmod(tmp, 0o755)
-        if out.exists():
-            old = out.with_name(f".{out.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            os.replace(out, old)
-            os.replace(tmp, out)
-            shutil.rmtree(old)
-        else:
-            os.replace(tmp, out)
+        swap_folder(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

@@ -38,6 +38,7 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
+from benchmark.atomic import swap_folder, write_text
 from benchmark.errors import BenchmarkError
 from benchmark.fingerprint import results_fingerprint
 
@@ -303,8 +304,6 @@ def run(args: argparse.Namespace) -> list[str]:
                                              "seconds": time.perf_counter() - t0}
                 record["code_fingerprint"] = code_fingerprint()
                 record["provenance"] = provenance()
-                from benchmark.atomic import write_text
-
                 write_text(ROOT / RECORD, json.dumps(record, indent=1) + "\n")
                 status += ", written"
             print(f"reproduce {r.name}: {status} ({time.perf_counter() - t0:.0f} s)", flush=True)
@@ -331,11 +330,5 @@ def _replace(new: pathlib.Path, committed: pathlib.Path) -> None:
         for child in committed.iterdir():
             if child.is_dir() and not (staging / child.name).exists():
                 shutil.copytree(child, staging / child.name)
-        old = committed.with_name(f".{committed.name}.old")
-        shutil.rmtree(old, ignore_errors=True)
-        os.replace(committed, old)
-        os.replace(staging, committed)
-        shutil.rmtree(old)
-    else:
-        os.replace(staging, committed)
+    swap_folder(staging, committed)
 
