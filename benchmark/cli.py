@@ -194,8 +194,9 @@ def main(argv: list | None = None) -> int:
     except (ScenarioError, InputError) as e:
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
-    out = args.out or pathlib.Path("runs") / (
-        f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}")
+    from benchmark.evaluate import episode_name
+
+    out = args.out or pathlib.Path("runs") / episode_name(scenario)
     run = Run(args=args, scenario=scenario, out=out)
     start = time.perf_counter()
     try:

@@ -46,6 +46,11 @@ def default_cache() -> pathlib.Path:
     return pathlib.Path(base) / "fsv-bench" / "episodes"
 
 
+def episode_name(scenario: Scenario) -> str:
+    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>``: how runs, cached episodes and score rows name a scenario."""
+    return f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
+
+
 def episode_key(suite: Suite, scenario: Scenario) -> str:
     """Cache key of a rendered episode: scenario, suite name and version, world code."""
     from benchmark.fingerprint import world_fingerprint
@@ -63,7 +68,7 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
     """
     from benchmark import load_episode, render, save_episode, simulate
 
-    path = cache / suite.name / f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}-{episode_key(suite, scenario)}.npz"
+    path = cache / suite.name / f"{episode_name(scenario)}-{episode_key(suite, scenario)}.npz"
     if path.exists():
         try:
             return load_episode(path), False
@@ -95,7 +100,7 @@ def _episode_row(job) -> dict:
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
     metrics = score_episode(episode, reference_method(episode), default_model())
-    return {"episode": f"{sc.task}-u{sc.user}-g{sc.grasp}-m{sc.mass}-s{sc.seed}", "task": sc.task,
+    return {"episode": episode_name(sc), "task": sc.task,
             "scenario": asdict(sc), **metrics, "seconds": time.perf_counter() - t0, "rendered": made}
 
 

@@ -17,7 +17,7 @@ cone solver differs in the tenth digit. Numbers are therefore compared to a rela
 (``REL_TOL``) and an absolute 1e-9; a machine whose NumPy dispatches other SIMD code (for example
 AVX-512 transcendental functions) may move tracked results further, and the comparison says where.
 
-Staleness without regenerating: :func:`code_fingerprint` hashes the source that produces the
+Staleness without regenerating: :func:`benchmark.fingerprint.results_fingerprint` hashes the source that produces the
 results (``fsv/``, ``sim_assets/`` and the world and scoring modules of ``benchmark/``) with
 comments and docstrings stripped; a test compares it with the fingerprint recorded at the last
 ``--write``, so a change to the world, the tracker or the learning that forgets to regenerate
@@ -190,11 +190,6 @@ RESULTS = (
 """Every committed result, in the order they are made (the reference run uses the shipped model)."""
 
 
-def code_fingerprint(root: pathlib.Path = ROOT) -> str:
-    """:func:`benchmark.fingerprint.results_fingerprint`: what the committed results depend on."""
-    return results_fingerprint(root)
-
-
 def recorded() -> dict:
     """The record of the last ``--write`` (``results/reproduce.json``), or {} if none."""
     path = ROOT / RECORD
@@ -302,7 +297,7 @@ def run(args: argparse.Namespace) -> list[str]:
                 record["results"][r.name] = {"path": r.path, "commands": [" ".join(c) for c in r.commands],
                                              "datasets": {d: DATASETS[d] for d in r.datasets},
                                              "seconds": time.perf_counter() - t0}
-                record["code_fingerprint"] = code_fingerprint()
+                record["code_fingerprint"] = results_fingerprint()
                 record["provenance"] = provenance()
                 write_text(ROOT / RECORD, json.dumps(record, indent=1) + "\n")
                 status += ", written"

@@ -5,6 +5,7 @@ import argparse
 import pytest
 
 from benchmark import reproduce
+from benchmark.fingerprint import results_fingerprint
 from benchmark.cli import main
 
 
@@ -21,7 +22,7 @@ def test_committed_results_were_made_by_this_code():
     record = reproduce.recorded()
     assert record, "results/reproduce.json is missing: run `fsv-bench reproduce --write`"
     assert set(record["results"]) == {r.name for r in reproduce.RESULTS}
-    assert record["code_fingerprint"] == reproduce.code_fingerprint(), (
+    assert record["code_fingerprint"] == results_fingerprint(), (
         "the committed results are stale: run `fsv-bench reproduce --write`")
 
 
