@@ -3,20 +3,16 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import pathlib
-import zipfile
 from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from benchmark.atomic import atomic_path
+from benchmark.archive import read_archive, write_archive
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.scenario import Scenario
 from benchmark.truth import Truth
 from fsv import Calibration, DepthVideo, FsvError, HandModel, ObjectModel
-from fsv.digest import array_sha256, tree_sha256
-from fsv.errors import one_line
 
 
 @dataclass(frozen=True)
@@ -189,24 +185,13 @@ def save_episode(episode: Episode, path) -> pathlib.Path:
     if path.suffix != ".npz":
         path = path.with_name(path.name + ".npz")
     sections = _sections(episode)
-    meta = {"format": FORMAT, "version": VERSION, "scenario": dataclasses.asdict(episode.scenario),
-            "sections": list(sections)}
+    meta = {"scenario": dataclasses.asdict(episode.scenario), "sections": list(sections)}
     arrays = {}
     for name, (arrs, scalars) in sections.items():
         meta[name] = scalars
         for k, v in arrs.items():
             arrays[f"{name}/{k}"] = v
-    meta["array_sha256"] = {name: array_sha256(value, name) for name, value in arrays.items()}
-    meta["meta_sha256"] = tree_sha256(meta)
-    arrays["meta.json"] = np.frombuffer(json.dumps(meta, sort_keys=True).encode(), dtype=np.uint8)
-    with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as z:
-        for name, value in arrays.items():
-            # fixed timestamps: the same episode gives the same bytes
-            info = zipfile.ZipInfo(name + ".npy", date_time=(1980, 1, 1, 0, 0, 0))
-            info.compress_type = zipfile.ZIP_DEFLATED
-            with z.open(info, "w", force_zip64=True) as out:
-                np.lib.format.write_array(out, np.asanyarray(value), allow_pickle=False)
-    return path
+    return write_archive(path, FORMAT, VERSION, meta, arrays)
 
 
 def load_episode(path) -> Episode:
@@ -217,43 +202,7 @@ def load_episode(path) -> Episode:
             and, if it can, the damaged array), of another format, or of another version.
     """
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise EpisodeFileError(f"no episode file at {path}")
-    entry = "meta.json"
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            if "meta.json" not in z.files:
-                raise EpisodeFileError(f"{path} is not an fsv-bench episode (no meta.json entry)")
-            meta = json.loads(bytes(z["meta.json"]).decode())
-            if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-                raise EpisodeFileError(f"{path} is not an fsv-bench episode (format {meta.get('format')!r})")
-            if meta.get("version") != VERSION:
-                raise EpisodeFileError(f"{path} is episode format version {meta.get('version')!r}; "
-                                       f"this fsv-bench reads version {VERSION}")
-            if meta.get("meta_sha256") != tree_sha256({k: v for k, v in meta.items() if k != "meta_sha256"}):
-                raise EpisodeFileError(f"{path} is corrupt: entry 'meta.json' does not match its SHA-256")
-            digests = meta.get("array_sha256")
-            if not isinstance(digests, dict):
-                raise EpisodeFileError(f"{path} has missing or inconsistent episode data: no array digests")
-            stored = [k for k in z.files if k != "meta.json"]
-            for name in digests:
-                if name not in stored:
-                    raise EpisodeFileError(f"{path} has missing or inconsistent episode data: array {name!r} "
-                                           "listed in meta.json is missing")
-            arrays = {}
-            for entry in stored:
-                if entry not in digests:
-                    raise EpisodeFileError(f"{path} has missing or inconsistent episode data: array {entry!r} "
-                                           "is not listed in meta.json")
-                value = z[entry]
-                if array_sha256(value, entry) != digests[entry]:
-                    raise EpisodeFileError(f"{path} is corrupt: array {entry!r} does not match its SHA-256")
-                section, _, name = entry.partition("/")
-                arrays.setdefault(section, {})[name] = value
-    except EpisodeFileError:
-        raise
-    except Exception as e:  # zip, zlib, CRC, .npy header or JSON errors: whatever damaged bytes raise
-        raise EpisodeFileError(f"{path} is truncated or corrupt (entry {entry!r}): {one_line(e)}") from e
+    meta, arrays = read_archive(path, FORMAT, VERSION, kind="episode", error=EpisodeFileError)
     try:
         scenario = Scenario(**meta["scenario"])
         truth = _truth_from(arrays["truth"], meta["truth"])

@@ -1,12 +1,15 @@
 """``fsv-bench eval``: score the method on a suite and give a verdict for CI.
 
-    fsv-bench eval --suite smoke --out DIR [--gates FILE] [--cache DIR] [--quiet]
+    fsv-bench eval --suite smoke --out DIR [--gates FILE] [--cache DIR] [--workers N] [--quiet]
+                   [--method M | --tracker M --differentiator M --forces M --internal M] [--oracle LIST]
 
 Every episode of the suite is simulated and rendered once and cached (``--cache``, default
 ``$XDG_CACHE_HOME/fsv-bench/episodes`` or ``~/.cache/fsv-bench/episodes``), keyed by the scenario,
 the suite's name and version and the fingerprint of the world's code
 (:func:`benchmark.fingerprint.world_fingerprint`); a second evaluation on the same suite renders
-nothing. The method runs on each episode's depth, every stage is scored
+nothing. The method (the reference, or the one ``--method``/``--tracker``/... name as
+``module:attribute``, see :class:`benchmark.method.MethodSpec`) runs on each episode's camera inputs
+through :func:`benchmark.method.run_method`, every stage is scored
 (:mod:`benchmark.scores.episode`), the medians and means get 95 % bootstrap intervals, and the
 suite's gates (or ``--gates FILE``, a JSON list of ``{"metric", "op", "limit", "statistic"}``) give
 the verdict. ``DIR`` receives ``scores.json`` (per episode and aggregate, strict JSON, with
@@ -33,9 +36,6 @@ from benchmark.atomic import swap_folder
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.scenario import Scenario
 from benchmark.suites import Gate, Suite, get_suite
-
-METHOD_NAME = "fsv reference (tracker, algebraic kinematics, nominal forces, shipped internal-force model)"
-
 
 class GateFailure(BenchmarkError):
     """At least one gate of the evaluated suite does not hold."""
@@ -79,59 +79,77 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
     return episode, True
 
 
-def reference_method(episode):
-    """The reference FSV method on an episode's camera inputs: ``fsv.pipeline.Estimate``."""
-    from benchmark.tracking import tracker_init
-    from fsv import run_pipeline
-    from fsv.learn import default_model
+def _episode_rows(job) -> list:
+    """One episode: cached or made, every method run on it, every metric (a worker's unit of work).
 
-    init = tracker_init(episode.truth, episode.scenario, episode.hand_model)
-    return run_pipeline(episode.depth, episode.calib, episode.object_model, episode.hand_model, init,
-                        gravity=episode.truth.gravity, internal_model=default_model(),
-                        rng=episode.scenario.rng("tracker"))
-
-
-def _episode_row(job) -> dict:
-    """One episode: cached or made, the method run on it, every metric (a worker's unit of work)."""
+    Methods whose stages differ only after the tracker share one tracking run of the episode.
+    """
+    from benchmark.method import camera_input, run_method
     from benchmark.scores.episode import score_episode
-    from fsv.learn import default_model
 
-    suite, sc, cache = job
+    suite, sc, cache, specs = job
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
-    metrics = score_episode(episode, reference_method(episode), default_model())
-    return {"episode": episode_name(sc), "task": sc.task,
-            "scenario": asdict(sc), **metrics, "seconds": time.perf_counter() - t0, "rendered": made}
+    inputs = camera_input(episode)
+    rows, tracked = [], {}
+    for spec in specs:
+        t1 = time.perf_counter()
+        shared = None if spec.method else tracked.get(spec.tracker)
+        estimate = run_method(spec, episode, inputs=inputs, tracking=shared)
+        if not spec.method:
+            tracked.setdefault(spec.tracker, estimate.tracking)
+        metrics = score_episode(episode, estimate)
+        seconds = time.perf_counter() - (t0 if not rows else t1)
+        rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc), **metrics,
+                     "seconds": seconds, "rendered": made and not rows})
+    return rows
 
 
-def evaluate(suite: Suite, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
+def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
              workers: int = 1) -> dict:
-    """Scores the reference method on every episode of ``suite``.
+    """Scores one method (default: the reference) on every episode of ``suite``.
 
     Episodes run in ``workers`` local processes (1: in this process); the scores do not depend on it.
 
     Returns:
         The content of ``scores.json`` (``episodes``, ``aggregate``, ``per_task``, ``gates``,
-        ``verdict``, ``rendered`` episodes, ``provenance``).
+        ``verdict``, ``rendered`` episodes, ``method`` and ``stages``, ``provenance``).
     """
+    from benchmark.method import MethodSpec
+
+    return evaluate_many(suite, [spec or MethodSpec()], gates=gates, cache=cache, progress=progress,
+                         workers=workers)[0]
+
+
+def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
+                  workers: int = 1) -> list:
+    """Scores several methods on every episode of ``suite``, each episode rendered (or read) once.
+
+    Returns:
+        One ``scores.json`` content per method, in the order of ``specs``.
+    """
+    from benchmark.method import method_label
     from benchmark.scores.aggregate import aggregate_all
     from benchmark.scores.episode import METRICS
     from benchmark.scores.verdict import check_gates
     from fsv.provenance import provenance
 
+    specs = list(specs)
+    for spec in specs:
+        spec.check()
     cache = pathlib.Path(cache or default_cache())
     gates = suite.gates if gates is None else gates
     t0 = time.perf_counter()
-    rows = []
+    per_episode = []
     bar = None
     if progress:
         from tqdm import tqdm
 
         bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
-    jobs = [(suite, sc, cache) for sc in suite.scenarios]
+    jobs = [(suite, sc, cache, specs) for sc in suite.scenarios]
     if workers == 1:
         for job in jobs:
-            rows.append(_episode_row(job))
+            per_episode.append(_episode_rows(job))
             if bar is not None:
                 bar.update(1)
     else:
@@ -140,22 +158,28 @@ def evaluate(suite: Suite, *, gates=None, cache: pathlib.Path | None = None, pro
 
         ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
         with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-            for row in pool.map(_episode_row, jobs):
-                rows.append(row)
+            for rows in pool.map(_episode_rows, jobs):
+                per_episode.append(rows)
                 if bar is not None:
                     bar.update(1)
     if bar is not None:
         bar.close()
-    rendered = sum(r["rendered"] for r in rows)
-    aggregates = aggregate_all(rows, METRICS)
-    results = check_gates(gates, aggregates)
-    return {
-        "suite": {"name": suite.name, "version": suite.version, "description": suite.description},
-        "method": METHOD_NAME, "metrics": list(METRICS), "episodes": rows, "aggregate": aggregates,
-        "per_task": aggregate_all(rows, METRICS, by="task"),
-        "gates": [asdict(r) for r in results], "verdict": "pass" if all(r.passed for r in results) else "fail",
-        "rendered": rendered, "seconds": time.perf_counter() - t0, "provenance": provenance(),
-    }
+    seconds = time.perf_counter() - t0
+    out = []
+    for m, spec in enumerate(specs):
+        rows = [ep_rows[m] for ep_rows in per_episode]
+        aggregates = aggregate_all(rows, METRICS)
+        results = check_gates(gates, aggregates)
+        out.append({
+            "suite": {"name": suite.name, "version": suite.version, "description": suite.description},
+            "method": method_label(spec), "method_spec": asdict(spec),
+            "stages": dict(getattr(spec.build(), "labels", None) or {}),
+            "metrics": list(METRICS), "episodes": rows, "aggregate": aggregates,
+            "per_task": aggregate_all(rows, METRICS, by="task"),
+            "gates": [asdict(r) for r in results], "verdict": "pass" if all(r.passed for r in results) else "fail",
+            "rendered": sum(r["rendered"] for r in rows), "seconds": seconds, "provenance": provenance(),
+        })
+    return out
 
 
 def strict(obj):
@@ -225,6 +249,36 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
     p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_method_arguments(p)
+
+
+def add_method_arguments(p: argparse.ArgumentParser) -> None:
+    """``--method``, ``--tracker``, ``--differentiator``, ``--forces``, ``--internal``, ``--oracle``."""
+    from benchmark.method import DIFFERENTIATORS, ORACLE_STAGES
+
+    g = p.add_argument_group("the method (default: the reference; replace a stage by module:attribute)")
+    g.add_argument("--method", default=None, metavar="MODULE:ATTR",
+                   help="a whole method: an fsv.method.Method (or a factory of one) or a callable (inputs, rng) -> Estimate")
+    g.add_argument("--tracker", default=None, metavar="MODULE:ATTR", help="(inputs, rng) -> tracking with .box and .contacts")
+    g.add_argument("--differentiator", default=None, metavar="NAME|MODULE:ATTR",
+                   help=f"(poses) -> Kinematics, or one of {', '.join(DIFFERENTIATORS)}")
+    g.add_argument("--forces", default=None, metavar="MODULE:ATTR",
+                   help="(kinematics, contacts, object_model, gravity) -> ForceSolution")
+    g.add_argument("--internal", default=None, metavar="none|MODULE:ATTR",
+                   help="(kinematics, contacts, object_model, gravity) -> (ForceSolution, predicted); none: nominal forces only")
+    g.add_argument("--oracle", default="", metavar="LIST",
+                   help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
+
+
+def spec_from_args(args: argparse.Namespace):
+    """The :class:`benchmark.method.MethodSpec` of the command line, loaded and checked (raises ValueError)."""
+    from benchmark.method import MethodSpec
+
+    spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=args.differentiator,
+                      forces=args.forces, internal=args.internal,
+                      oracle=tuple(o for o in args.oracle.split(",") if o))
+    spec.check()
+    return spec
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -234,16 +288,23 @@ def run(args: argparse.Namespace) -> dict:
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     _check_out(args.out)
-    scores = evaluate(suite, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers)
+    spec = spec_from_args(args)
+    scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers)
     write_outputs(scores, suite, args.out)
-    print(f"fsv-bench eval: suite {suite.name} v{suite.version}, {len(scores['episodes'])} episodes "
-          f"({scores['rendered']} rendered, the rest from the cache), {scores['seconds']:.0f} s")
+    print_verdict(scores, args.out, "eval")
+    return scores
+
+
+def print_verdict(scores: dict, out, command: str) -> None:
+    """Prints the gates of ``scores`` and raises GateFailure naming the failed ones."""
+    suite = scores["suite"]
+    print(f"fsv-bench {command}: suite {suite['name']} v{suite['version']}, {len(scores['episodes'])} episodes "
+          f"({scores['rendered']} rendered, the rest from the cache), {scores['seconds']:.0f} s\n  method: {scores['method']}")
     for g in scores["gates"]:
         ci = "" if g["ci"] is None else f" [{g['ci'][0]:.4g}, {g['ci'][1]:.4g}]"
         value = "nothing scored" if g["value"] is None else f"{g['value']:.4g}"
         print(f"  {'pass' if g['passed'] else 'FAIL'}  {g['name']}: {value}{ci}")
-    print(f"written to {args.out}/ (scores.json, report.md, junit.xml)")
+    print(f"written to {out}/ (scores.json, report.md, junit.xml)")
     failed = [g["name"] for g in scores["gates"] if not g["passed"]]
     if failed:
         raise GateFailure(f"{len(failed)} gate(s) failed: {'; '.join(failed)}")
-    return scores

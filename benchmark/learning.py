@@ -25,27 +25,29 @@ from fsv.features import grasp_features
 from fsv.forces import FrameStatus
 
 
-def score_episode(episode, model, kinematics: Kinematics, contacts: Contacts) -> tuple:
-    """Learned forces on one episode, scored against the truth's normal forces.
+def score_episode(episode, solution, kinematics: Kinematics, contacts: Contacts) -> dict:
+    """A method's final forces on one episode, scored against the truth's normal forces.
+
+    A pure function of the estimate (``solution``, ``kinematics``, ``contacts``) and the episode's
+    truth: the frames scored are chosen by the sample rules of the module docstring.
 
     Args:
         episode: A simulated ``benchmark.Episode``.
-        model: The internal-force networks (:class:`fsv.learn.InternalForceModel`).
-        kinematics: The object kinematics the method uses (estimated, or the oracle).
-        contacts: The contacts the method uses (tracked, vision-like, or the oracle).
+        solution: The method's final forces (:class:`fsv.forces.ForceSolution`; the reference: the
+            reconstruction of eq. 14 with learned internal forces).
+        kinematics: The object kinematics the method used (estimated, or the oracle).
+        contacts: The contacts the method used (tracked, vision-like, or the oracle).
 
     Returns:
-        ``(block, solution, predicted)``: the scores (``rel_err_pct_mean``, ``rel_err_pct_std``,
-        ``scored`` finger-frames, ``frames``, ``solver_failures``, ``residual_rel_max``, and
-        ``model``: what it was trained on), the reconstruction (:class:`fsv.forces.ForceSolution`)
-        and the predicted internal normal forces, shape (T, K), [N].
+        The scores: ``rel_err_pct_mean``, ``rel_err_pct_std``, ``scored`` finger-frames, ``frames``,
+        ``solver_failures``, ``residual_rel_max`` and the same error over all usable frames.
     """
     from benchmark.tactile import tactile_normal_forces
     from fsv.forces import decompose_forces
-    from fsv.learn import learned_forces, relative_errors_pct  # torch: only when the stage runs
+    from fsv.learn import relative_errors_pct
 
     tr = episode.truth
-    sol, pred = learned_forces(model, kinematics, contacts, episode.object_model, gravity=tr.gravity)
+    sol = solution
     feats = grasp_features(kinematics, contacts, episode.object_model, gravity=tr.gravity)
     usable, keep, _ = sample_mask(kinematics, contacts, feats, tr)
     # the plausibility rule, as in the dataset: the decomposition (eq. 9) with the tactile readings
@@ -65,7 +67,6 @@ def score_episode(episode, model, kinematics: Kinematics, contacts: Contacts) ->
     err_all = relative_errors_pct(sol.normal_force, true_normal_forces(tr), both & (usable & solved)[:, None])
     scale = np.maximum(np.linalg.norm(sol.required[ok], axis=1), 1.0)
     resid = float(np.max(np.linalg.norm(sol.residual[ok], axis=1) / scale)) if ok.any() else float("nan")
-    meta = model.metadata
     block = dict(
         rel_err_pct_mean=float(np.mean(err)) if err.size else float("nan"),
         rel_err_pct_std=float(np.std(err)) if err.size else float("nan"),
@@ -76,9 +77,14 @@ def score_episode(episode, model, kinematics: Kinematics, contacts: Contacts) ->
         scored_all=int(err_all.size),
         solver_failures=int(np.sum(keep & (sol.status != int(FrameStatus.OPTIMAL)))),
         residual_rel_max=resid,
-        model=dict(episodes=meta.get("episodes"), samples=meta.get("samples"), command=meta.get("command")),
     )
-    return block, sol, pred
+    return block
+
+
+def model_block(model) -> dict:
+    """What an internal-force model was trained on (episodes, samples, the command)."""
+    meta = model.metadata
+    return dict(episodes=meta.get("episodes"), samples=meta.get("samples"), command=meta.get("command"))
 
 
 def _take(x, idx):
@@ -101,10 +107,13 @@ def run_stage(run) -> None:
 
     path = getattr(run.args, "internal_model", None)
     model = default_model() if path is None else load(path)
+    from fsv.learn import learned_forces
+
     kin, contacts, labels = stage_inputs(run)
-    block, _, _ = score_episode(run.episode, model, kin, contacts)
+    sol, _ = learned_forces(model, kin, contacts, run.episode.object_model, gravity=run.episode.truth.gravity)
+    block = score_episode(run.episode, sol, kin, contacts)
     block = {**labels, "program": "ANN_L2 + ANN_decomp -> reconstruction (eq. 14)",
-             "internal_model": path or "fsv/data/internal_forces.pt", **block}
+             "internal_model": path or "fsv/data/internal_forces.pt", "model": model_block(model), **block}
     run.summary["learning"] = block
     tag = f"ORACLE {', '.join(labels['oracle'])}" if labels["oracle"] else "no oracle input"
     run.lines.append(

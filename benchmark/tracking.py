@@ -84,7 +84,8 @@ def score_tracking(tracking: Tracking, truth: Truth, contacts: Contacts | None =
     c = tracking.contacts if contacts is None else contacts
     pos_err = np.linalg.norm(tracking.box.pos - truth.box_pos, axis=1)
     rot_err = np.degrees(angle_between(tracking.box.rot, truth.box_rot))
-    tip_err = np.linalg.norm(tracking.fingertips - truth.fingertip_pos, axis=-1)
+    tips = getattr(tracking, "fingertips", None)  # optional for a tracker other than the reference
+    tip_err = np.linalg.norm(tips - truth.fingertip_pos, axis=-1) if tips is not None else np.full(1, np.nan)
     t_act = np.asarray(truth.contact_active, bool)
     both = c.active & t_act
     diff = (c.point - truth.contact_point)[both] * 1e3  # (P, 3) mm

@@ -8,12 +8,14 @@ from fsv.errors import FsvError, InputError, SolverError, TrackingError
 from fsv.models import HandModel, ObjectModel
 from fsv.types import Calibration, Contacts, DepthVideo, Kinematics, Poses
 
-# The whole method (issue 6): depth -> tracking -> contacts -> kinematics -> forces.
+# The whole method: depth -> tracking -> contacts -> kinematics -> forces.
 from fsv.pipeline import Estimate, run_pipeline
+from fsv.method import CameraInput, Method, make_method
 from fsv.track.tracker import TrackInit
 
 __all__ = [
     "Calibration",
+    "CameraInput",
     "Contacts",
     "DepthVideo",
     "Estimate",
@@ -21,10 +23,12 @@ __all__ = [
     "HandModel",
     "InputError",
     "Kinematics",
+    "Method",
     "ObjectModel",
     "Poses",
     "SolverError",
     "TrackInit",
     "TrackingError",
+    "make_method",
     "run_pipeline",
 ]

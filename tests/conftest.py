@@ -168,9 +168,9 @@ def tracked_lifts():
         ep = render(simulate(Scenario(task="lift", seed=seed)))
         init = tracker_init(ep.truth, ep.scenario, ep.hand_model)
         est = run_pipeline(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, gravity=ep.truth.gravity,
-                           rng=ep.scenario.rng("tracker"))
+                           internal_model=default_model(), rng=ep.scenario.rng("tracker"))
         tracking = score_tracking(est.tracking, ep.truth)
         forces = score_forces(est.nominal, ep.truth, est.kinematics.rot)
-        learned = score_episode(ep, default_model(), est.kinematics, est.contacts)[0]
+        learned = score_episode(ep, est.forces, est.kinematics, est.contacts)
         out.append((ep, est, tracking, forces, learned))
     return out

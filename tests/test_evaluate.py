@@ -100,3 +100,44 @@ def test_two_worker_processes_give_the_same_scores_as_one(tmp_path):
     strip = lambda rows: [{k: v for k, v in r.items() if k not in ("seconds", "rendered")} for r in rows]
     assert strip(two["episodes"]) == strip(one["episodes"])
     assert two["aggregate"] == one["aggregate"]
+
+
+def test_a_replaced_differentiator_changes_the_kinematics_scores_and_is_labelled(tiny, tmp_path):
+    """The example Savitzky-Golay differentiator, loaded by module:attribute, on an episode from the cache."""
+    from benchmark.evaluate import evaluate_many
+    from benchmark.method import MethodSpec
+
+    cache = tmp_path / "cache"
+    ref, savgol = evaluate_many(TINY, [MethodSpec(), MethodSpec(differentiator="examples.savgol:SavitzkyGolay")],
+                                cache=cache, progress=False)
+    assert ref["rendered"] == 1 and savgol["rendered"] == 0  # one episode rendered for both methods
+    assert savgol["stages"]["differentiator"] == "Savitzky-Golay (window 21 frames, order 3)"
+    assert "differentiator: Savitzky-Golay" in savgol["method"]
+    a, b = ref["episodes"][0], savgol["episodes"][0]
+    assert a["box_pos_err_mm"] == b["box_pos_err_mm"]  # the same tracking
+    assert a["acc_err_rms"] != b["acc_err_rms"] and 0 < b["acc_err_rms"] < 5  # measured 0.53 (reference 0.29)
+
+
+def test_a_broken_external_tracker_exits_1_naming_the_failed_gates(tiny, tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(["eval", "--suite", "tiny", "--out", str(out), "--cache", str(tmp_path / "cache"), "--quiet",
+                 "--tracker", "external_stages:FrozenTracker"])
+    captured = capsys.readouterr()
+    assert code == 1
+    assert "frozen tracker (a broken example)" in captured.out
+    assert "gate(s) failed: median box_pos_err_mm <= 1.5" in captured.err
+    scores = json.loads((out / "scores.json").read_text())
+    assert scores["stages"]["tracker"] == "frozen tracker (a broken example)" and scores["verdict"] == "fail"
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--tracker", "external_stages:Nope"], "--tracker 'external_stages:Nope': external_stages has no attribute 'Nope'"),
+    (["--differentiator", "median"], "--differentiator 'median': accepted: algebraic, central, gaussian, or module:attribute"),
+    (["--oracle", "forces"], "--oracle 'forces': accepted: contacts, kinematics"),
+])
+def test_a_bad_method_exits_2_before_any_work(tiny, tmp_path, capsys, argv, needle):
+    out = tmp_path / "out"
+    assert main(["eval", "--suite", "tiny", "--out", str(out), "--cache", str(tmp_path / "cache"), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err
+    assert not (tmp_path / "cache").exists() and not out.exists()

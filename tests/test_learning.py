@@ -3,7 +3,7 @@ import numpy as np
 from benchmark.contact_error import contacts_from_truth
 from benchmark.learning import score_episode
 from benchmark.motion import oracle_kinematics
-from fsv.learn import default_model
+from fsv.learn import default_model, learned_forces
 
 
 def test_shipped_model_was_trained_by_the_documented_command():
@@ -17,7 +17,9 @@ def test_shipped_model_was_trained_by_the_documented_command():
 
 def test_learning_block_on_a_short_lift(episode_factory):
     ep = episode_factory(task="lift", duration_s=3.0)
-    block, sol, pred = score_episode(ep, default_model(), oracle_kinematics(ep.truth), contacts_from_truth(ep.truth))
+    kin, con = oracle_kinematics(ep.truth), contacts_from_truth(ep.truth)
+    sol, pred = learned_forces(default_model(), kin, con, ep.object_model, gravity=ep.truth.gravity)
+    block = score_episode(ep, sol, kin, con)
     assert block["scored"] > 100 and block["solver_failures"] == 0
     assert block["residual_rel_max"] <= 1e-6  # the learned forces explain the motion
     assert 0 < block["rel_err_pct_mean"] < 35  # measured 23.4 % (oracle contacts and kinematics, 3 s lift)

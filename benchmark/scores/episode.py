@@ -26,13 +26,13 @@ METRICS = ("box_pos_err_mm", "box_rot_err_deg", "contact_err_mm_mean", "contact_
 """Names of the per-episode metrics, in report order."""
 
 
-def score_episode(episode, estimate, model=None) -> dict:
+def score_episode(episode, estimate) -> dict:
     """Every metric of one episode.
 
     Args:
         episode: A rendered ``benchmark.Episode`` (its truth is the reference).
-        estimate: The method's ``fsv.pipeline.Estimate`` on the episode's depth.
-        model: The internal-force model whose learned forces are scored (None: learned metrics NaN).
+        estimate: The method's ``fsv.method.Estimate`` on the episode's camera inputs (learned
+            metrics are NaN when it has no final forces).
 
     Returns:
         ``{metric: float}`` for every name in :data:`METRICS`.
@@ -54,7 +54,7 @@ def score_episode(episode, estimate, model=None) -> dict:
                    least_violation_frac=f["solver_failures"] / max(f["frames_scored"], 1))
     else:
         out.update(net_force_err_n_rms=np.nan, net_torque_err_nm_rms=np.nan, least_violation_frac=np.nan)
-    out.update(learned_errors(episode, estimate, model))
+    out.update(learned_errors(episode, estimate))
     return {k: float(out[k]) for k in METRICS}
 
 
@@ -68,15 +68,16 @@ def kinematics_errors(kinematics, truth) -> dict:
     return {"acc_err_rms": float(np.sqrt(np.mean(da * da))), "gyro_err_rms": float(np.sqrt(np.mean(dg * dg)))}
 
 
-def learned_errors(episode, estimate, model) -> dict:
-    """Table 2's relative error and the per-finger mean absolute error of the learned forces."""
-    if model is None:
+def learned_errors(episode, estimate) -> dict:
+    """Table 2's relative error and the per-finger mean absolute error of the final (learned) forces."""
+    if estimate.forces is None:
         return {"learned_rel_err_pct": np.nan, "learned_mae_n": np.nan}
     from benchmark.learning import score_episode as score_learned
     from benchmark.score_forces import true_normal_forces
     from fsv.forces import FrameStatus
 
-    block, sol, _ = score_learned(episode, model, estimate.kinematics, estimate.contacts)
+    sol = estimate.forces
+    block = score_learned(episode, sol, estimate.kinematics, estimate.contacts)
     tr = episode.truth
     both = estimate.contacts.active & tr.contact_active & (sol.status == int(FrameStatus.OPTIMAL))[:, None]
     mae = float(np.mean(np.abs(sol.normal_force - true_normal_forces(tr))[both])) if both.any() else np.nan

@@ -1,0 +1,70 @@
+"""The one way the benchmark enters a method: :func:`run_method` on an episode's camera inputs."""
+
+from __future__ import annotations
+
+from benchmark.method.spec import MethodSpec
+
+
+def camera_input(episode, init_scale: float = 1.0):
+    """What the method is given of a rendered episode (no truth beyond the perturbed first frame).
+
+    Args:
+        episode: A rendered ``benchmark.Episode``.
+        init_scale: Scale of the seeded first-frame perturbation (``benchmark.tracking.INIT_PERTURBATION``).
+
+    Returns:
+        An ``fsv.method.CameraInput``.
+    """
+    from benchmark.tracking import tracker_init
+    from fsv.method import CameraInput
+
+    init = tracker_init(episode.truth, episode.scenario, episode.hand_model, init_scale)
+    return CameraInput(depth=episode.depth, calib=episode.calib, object_model=episode.object_model,
+                       hand_model=episode.hand_model, init=init, gravity=episode.truth.gravity)
+
+
+def oracle_inputs(episode, oracle: tuple) -> dict:
+    """The truth's contacts and/or kinematics for a labelled oracle ablation (keyword arguments of a method call)."""
+    out = {}
+    if "contacts" in oracle:
+        from benchmark.contact_error import contacts_from_truth
+
+        out["contacts"] = contacts_from_truth(episode.truth)
+    if "kinematics" in oracle:
+        from benchmark.motion import oracle_kinematics
+
+        out["kinematics"] = oracle_kinematics(episode.truth)
+    return out
+
+
+def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None):
+    """Runs the method ``spec`` names on ``episode``'s camera inputs.
+
+    Args:
+        spec: Which method, and which inputs the truth replaces.
+        episode: A rendered ``benchmark.Episode``.
+        inputs: Its camera inputs, if already made (:func:`camera_input`).
+        tracking: The output of this method's tracker on this episode, if already computed by a
+            method with the same tracker (methods differing only after tracking share it).
+
+    Returns:
+        The ``fsv.method.Estimate``; the tracker's searches draw from ``episode.scenario.rng("tracker")``.
+    """
+    method = spec.build()
+    inputs = camera_input(episode) if inputs is None else inputs
+    oracle = oracle_inputs(episode, spec.oracle)
+    if tracking is not None:
+        return method.after_tracking(inputs, tracking, **oracle)
+    return method(inputs, episode.scenario.rng("tracker"), **oracle)
+
+
+def method_label(spec: MethodSpec) -> str:
+    """One line naming the method and every stage (``oracle`` for inputs taken from the truth)."""
+    method = spec.build()
+    labels = dict(getattr(method, "labels", None) or {})
+    if spec.method:
+        head = f"{spec.method}"
+        return head + (f" ({'; '.join(f'{k}: {v}' for k, v in labels.items())})" if labels else "")
+    for o in spec.oracle:
+        labels["differentiator" if o == "kinematics" else "contacts"] = "oracle"
+    return "; ".join(f"{k}: {v}" for k, v in labels.items())

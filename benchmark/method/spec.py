@@ -1,0 +1,107 @@
+"""Which method the benchmark runs: :class:`MethodSpec`, named by text so worker processes can rebuild it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+ORACLE_STAGES = ("contacts", "kinematics")
+"""The method's inputs the truth may replace (a labelled *oracle* ablation)."""
+
+DIFFERENTIATORS = ("algebraic", "central", "gaussian")
+"""Built-in names ``--differentiator`` accepts besides ``module:attribute``: the benchmark's
+calibrated stencil differentiators (``benchmark.motion.DECLARED``)."""
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """A method: the reference, with stages replaced by ``module:attribute`` specs, or a whole method.
+
+    Attributes:
+        method: A whole method replacing every stage: an ``fsv.method.Method`` (or a factory of one),
+            or any callable ``(inputs: fsv.method.CameraInput, rng) -> fsv.method.Estimate``.
+        tracker: Replaces the reference tracker.
+        differentiator: Replaces the algebraic differentiator; or one of :data:`DIFFERENTIATORS`.
+        forces: Replaces the nominal-force programs.
+        internal: Replaces the learned internal forces; "none" for nominal forces only.
+        oracle: Inputs replaced by the truth, a subset of :data:`ORACLE_STAGES`.
+    """
+
+    method: str | None = None
+    tracker: str | None = None
+    differentiator: str | None = None
+    forces: str | None = None
+    internal: str | None = None
+    oracle: tuple = field(default_factory=tuple)
+
+    def __post_init__(self):
+        object.__setattr__(self, "oracle", tuple(sorted(set(self.oracle))))
+        bad = [o for o in self.oracle if o not in ORACLE_STAGES]
+        if bad:
+            raise ValueError(f"--oracle {bad[0]!r}: accepted: {', '.join(ORACLE_STAGES)} (comma-separated)")
+        if self.method and any((self.tracker, self.differentiator, self.forces, self.internal)):
+            raise ValueError("--method replaces every stage; give it alone, or replace single stages with "
+                             "--tracker/--differentiator/--forces/--internal")
+
+    @property
+    def stage_specs(self) -> dict:
+        return {"tracker": self.tracker, "differentiator": self.differentiator, "forces": self.forces,
+                "internal": self.internal}
+
+    def build(self):
+        """The runnable method (cached per process): loads and checks every named stage.
+
+        Raises:
+            ValueError: One line naming a spec that cannot be loaded.
+        """
+        return _build(self)
+
+    def check(self) -> None:
+        """Loads every named stage now (bad specs fail before any expensive work)."""
+        self.build()
+
+
+@lru_cache(maxsize=16)
+def _build(spec: MethodSpec):
+    from benchmark.method.load import load_object
+    from fsv.errors import InputError
+    from fsv.method import Method, make_method
+
+    if spec.method:
+        method = load_object(spec.method, "--method")
+        if spec.oracle and not isinstance(method, Method):
+            raise ValueError(f"--oracle needs a method built by fsv.method.make_method; --method {spec.method} is not")
+        return method
+    stages = {}
+    for name, text in spec.stage_specs.items():
+        if text is None:
+            continue
+        if name == "differentiator" and ":" not in text and text not in DIFFERENTIATORS:
+            raise ValueError(f"--differentiator {text!r}: accepted: {', '.join(DIFFERENTIATORS)}, or module:attribute")
+        if name == "differentiator" and text in DIFFERENTIATORS:
+            from benchmark.motion import DECLARED
+            from fsv.method import StencilDifferentiator
+
+            stages[name] = StencilDifferentiator(DECLARED[text])
+        elif name == "internal" and text == "none":
+            stages[name] = False
+        else:
+            stage = load_object(text, f"--{name}")
+            stages[name] = _Named(stage, text) if not isinstance(getattr(stage, "name", None), str) else stage
+    try:
+        return make_method(**stages)
+    except InputError as e:
+        raise ValueError(str(e)) from e
+
+
+class _Named:
+    """A user's stage labelled with the spec that named it (when it has no ``name`` of its own)."""
+
+    def __init__(self, stage, name: str):
+        self.stage, self.name = stage, name
+
+    def __call__(self, *args, **kwargs):
+        return self.stage(*args, **kwargs)
+
+    def __reduce__(self):
+        return (_Named, (self.stage, self.name))

@@ -1,0 +1,54 @@
+"""What a force-sensing-from-vision method is given: :class:`CameraInput`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fsv.errors import InputError
+from fsv.models import HandModel, ObjectModel
+from fsv.track.tracker import TrackInit
+from fsv.types import Calibration, DepthVideo
+
+GRAVITY = np.array([0.0, 0.0, -9.81])
+"""Gravity in the world frame, [m/s^2] (z up, table top at z = 0)."""
+
+
+@dataclass(frozen=True)
+class CameraInput:
+    """Everything a method sees of one episode: what a real camera set-up provides.
+
+    Attributes:
+        depth: The depth video, T frames.
+        calib: Camera calibration (intrinsics; camera pose in the world, table top at z = 0).
+        object_model: The known box (size, mass, inertia, friction).
+        hand_model: The known hand (segments, joints, capsules, fingertips).
+        init: A coarse first-frame initialisation of the box and the hand.
+        gravity: Gravity in the world, shape (3,), [m/s^2].
+    """
+
+    depth: DepthVideo
+    calib: Calibration
+    object_model: ObjectModel
+    hand_model: HandModel
+    init: TrackInit
+    gravity: np.ndarray = field(default_factory=GRAVITY.copy)
+
+    def __post_init__(self):
+        for name, kind in (("depth", DepthVideo), ("calib", Calibration), ("object_model", ObjectModel),
+                           ("hand_model", HandModel), ("init", TrackInit)):
+            if not isinstance(getattr(self, name), kind):
+                raise InputError(f"CameraInput.{name} must be an {kind.__module__}.{kind.__name__}, "
+                                 f"got {type(getattr(self, name)).__name__}")
+        g = np.asarray(self.gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise InputError(f"CameraInput.gravity must be a finite (3,) vector in m/s^2, got {self.gravity!r}")
+        object.__setattr__(self, "gravity", g)
+        if self.init.joints.shape != (self.hand_model.num_joints,):
+            raise InputError(f"CameraInput.init.joints must have the hand's {self.hand_model.num_joints} angles, "
+                             f"got {self.init.joints.shape}")
+
+    @property
+    def num_frames(self) -> int:
+        return self.depth.num_frames

@@ -1,0 +1,47 @@
+"""benchmark.method: a method named by text, loaded by module:attribute, checked before any work."""
+
+import pathlib
+
+import pytest
+
+from benchmark.method import MethodSpec, method_label
+from benchmark.method.load import load_object
+
+HERE = pathlib.Path(__file__).parent
+
+
+def test_a_class_is_instantiated_and_a_function_used_as_it_is():
+    assert type(load_object("external_stages:FrozenTracker", "--tracker")).__name__ == "FrozenTracker"
+    assert load_object("external_stages:half_the_frames", "--differentiator").__name__ == "half_the_frames"
+    assert type(load_object(f"{HERE / 'external_stages.py'}:FrozenTracker", "--tracker")).__name__ == "FrozenTracker"
+
+
+@pytest.mark.parametrize("spec, needle", [
+    ("external_stages", "--tracker 'external_stages': expected module:attribute"),
+    ("no_such_module_x:Thing", "cannot import no_such_module_x: ModuleNotFoundError"),
+    ("external_stages:Missing", "external_stages has no attribute 'Missing'"),
+    ("external_stages:NOT_CALLABLE", "int is not callable"),
+    ("missing/file.py:X", "no file missing/file.py"),
+])
+def test_bad_specs_fail_with_one_line(spec, needle):
+    with pytest.raises(ValueError) as e:
+        load_object(spec, "--tracker")
+    assert needle in str(e.value) and "\n" not in str(e.value)
+
+
+def test_labels_name_replaced_stages_and_oracles():
+    spec = MethodSpec(tracker="external_stages:FrozenTracker", differentiator="central", oracle=("contacts",))
+    label = method_label(spec)
+    assert "tracker: frozen tracker (a broken example)" in label and "differentiator: central differentiation" in label
+    assert "contacts: oracle" in label
+    user = MethodSpec(differentiator="external_stages:half_the_frames")
+    assert "differentiator: external_stages:half_the_frames" in method_label(user)
+
+
+@pytest.mark.parametrize("kw, needle", [
+    (dict(oracle=("forces",)), "--oracle 'forces': accepted: contacts, kinematics"),
+    (dict(method="a:b", tracker="c:d"), "--method replaces every stage"),
+])
+def test_inconsistent_specs_are_refused(kw, needle):
+    with pytest.raises(ValueError, match=needle):
+        MethodSpec(**kw)
