@@ -116,7 +116,8 @@ from benchmark import learning as _learning  # noqa: E402
 STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_learning.run_stage))
 SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2",
                "reproduce": "benchmark.reproduce", "eval": "benchmark.evaluate",
-               "compare": "benchmark.compare"}
+               "compare": "benchmark.compare", "export": "benchmark.exchange.export",
+               "score": "benchmark.exchange.score"}
 
 
 def _subcommand(argv: list) -> int:

@@ -61,20 +61,9 @@ def depth_arrays(episode: Episode) -> dict[str, np.ndarray]:
     """
     if episode.depth is None:
         return {}
-    from benchmark.sensor import dequantise
-
-    depth = episode.depth.depth_m
-    top = float(depth.max(initial=0.0))
-    for i, q in enumerate(DEPTH_QUANTA_M):
-        counts = np.rint(depth.astype(np.float64) / q)
-        if counts.max(initial=0) > np.iinfo(np.uint16).max:
-            continue
-        if i > 0 or np.array_equal(dequantise(counts, q), depth):
-            break
-    else:
-        raise EpisodeFileError(f"depth up to {top:.2f} m does not fit uint16 at a quantum of {DEPTH_QUANTA_M[-1]} m")
+    counts, q = quantise_depth(episode.depth.depth_m)
     out = {
-        "depth_counts": counts.astype(np.uint16),
+        "depth_counts": counts,
         "depth_quantum_m": np.float64(q),
         "depth_fps": np.float64(episode.depth.fps),
         "calib_K": episode.calib.K,
@@ -84,6 +73,32 @@ def depth_arrays(episode: Episode) -> dict[str, np.ndarray]:
     if episode.labels is not None:
         out["labels"] = np.asarray(episode.labels, dtype=np.uint8)
     return out
+
+
+def quantise_depth(depth: np.ndarray) -> tuple:
+    """Depth as uint16 counts of the first quantum of :data:`DEPTH_QUANTA_M` that represents it.
+
+    Args:
+        depth: Depth images, any shape, [m]; 0 = no measurement.
+
+    Returns:
+        ``(counts, quantum_m)``: depth = counts * quantum_m (exactly for depth on the 1 mm grid).
+
+    Raises:
+        EpisodeFileError: If the depth does not fit uint16 even at the coarsest quantum.
+    """
+    from benchmark.sensor import dequantise
+
+    top = float(depth.max(initial=0.0))
+    for i, q in enumerate(DEPTH_QUANTA_M):
+        counts = np.rint(depth.astype(np.float64) / q)
+        if counts.max(initial=0) > np.iinfo(np.uint16).max:
+            continue
+        if i > 0 or np.array_equal(dequantise(counts, q), depth):
+            break
+    else:
+        raise EpisodeFileError(f"depth up to {top:.2f} m does not fit uint16 at a quantum of {DEPTH_QUANTA_M[-1]} m")
+    return counts.astype(np.uint16), q
 
 
 def depth_from_arrays(arrays) -> tuple[DepthVideo | None, Calibration | None, np.ndarray | None]:
@@ -156,15 +171,27 @@ _OBJECT_ARRAYS = ("size_m", "inertia")
 _HAND_NAMES = ("segment_names", "joint_names", "finger_names")
 
 
+def model_sections(om: ObjectModel, hm: HandModel) -> dict:
+    """The ``object`` and ``hand`` sections of a file: section name -> (arrays, json scalars)."""
+    return {
+        "object": ({k: np.asarray(getattr(om, k)) for k in _OBJECT_ARRAYS},
+                   {"mass_kg": om.mass_kg, "friction": om.friction, "table_friction": om.table_friction}),
+        "hand": ({f.name: np.asarray(getattr(hm, f.name)) for f in fields(hm) if f.name not in _HAND_NAMES},
+                 {k: list(getattr(hm, k)) for k in _HAND_NAMES}),
+    }
+
+
+def models_from_sections(meta: dict, arrays: dict) -> tuple:
+    """Inverse of :func:`model_sections`: ``(ObjectModel, HandModel)`` (raises FsvError/KeyError/TypeError)."""
+    o = meta["object"]
+    om = ObjectModel(mass_kg=o["mass_kg"], friction=o["friction"], table_friction=o["table_friction"],
+                     **arrays["object"])
+    return om, HandModel(**arrays["hand"], **meta["hand"])
+
+
 def _sections(ep: Episode) -> dict:
     """Section name -> (arrays, json scalars) of an episode."""
-    out = {"truth": _truth_arrays(ep.truth)}
-    om = ep.object_model
-    out["object"] = ({k: np.asarray(getattr(om, k)) for k in _OBJECT_ARRAYS},
-                     {"mass_kg": om.mass_kg, "friction": om.friction, "table_friction": om.table_friction})
-    hm = ep.hand_model
-    out["hand"] = ({f.name: np.asarray(getattr(hm, f.name)) for f in fields(hm) if f.name not in _HAND_NAMES},
-                   {k: list(getattr(hm, k)) for k in _HAND_NAMES})
+    out = {"truth": _truth_arrays(ep.truth), **model_sections(ep.object_model, ep.hand_model)}
     rendered = depth_arrays(ep)
     if rendered:
         out["render"] = (rendered, {})
@@ -206,10 +233,7 @@ def load_episode(path) -> Episode:
     try:
         scenario = Scenario(**meta["scenario"])
         truth = _truth_from(arrays["truth"], meta["truth"])
-        o = meta["object"]
-        om = ObjectModel(mass_kg=o["mass_kg"], friction=o["friction"], table_friction=o["table_friction"],
-                         **arrays["object"])
-        hm = HandModel(**arrays["hand"], **meta["hand"])
+        om, hm = models_from_sections(meta, arrays)
         ep = Episode(scenario=scenario, truth=truth, object_model=om, hand_model=hm)
         if "render" in meta["sections"]:
             depth, calib, labels = depth_from_arrays(arrays["render"])

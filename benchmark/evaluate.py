@@ -129,10 +129,6 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
         One ``scores.json`` content per method, in the order of ``specs``.
     """
     from benchmark.method import method_label
-    from benchmark.scores.aggregate import aggregate_all
-    from benchmark.scores.episode import METRICS
-    from benchmark.scores.verdict import check_gates
-    from fsv.provenance import provenance
 
     specs = list(specs)
     for spec in specs:
@@ -165,21 +161,39 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
     if bar is not None:
         bar.close()
     seconds = time.perf_counter() - t0
-    out = []
-    for m, spec in enumerate(specs):
-        rows = [ep_rows[m] for ep_rows in per_episode]
-        aggregates = aggregate_all(rows, METRICS)
-        results = check_gates(gates, aggregates)
-        out.append({
-            "suite": {"name": suite.name, "version": suite.version, "description": suite.description},
-            "method": method_label(spec), "method_spec": asdict(spec),
-            "stages": dict(getattr(spec.build(), "labels", None) or {}),
-            "metrics": list(METRICS), "episodes": rows, "aggregate": aggregates,
-            "per_task": aggregate_all(rows, METRICS, by="task"),
-            "gates": [asdict(r) for r in results], "verdict": "pass" if all(r.passed for r in results) else "fail",
-            "rendered": sum(r["rendered"] for r in rows), "seconds": seconds, "provenance": provenance(),
-        })
-    return out
+    return [scores_document(suite, [ep_rows[m] for ep_rows in per_episode], gates, method=method_label(spec),
+                            stages=dict(getattr(spec.build(), "labels", None) or {}), method_spec=asdict(spec),
+                            seconds=seconds)
+            for m, spec in enumerate(specs)]
+
+
+def scores_document(suite: Suite, rows: list, gates, *, method: str, stages: dict, method_spec, seconds: float) -> dict:
+    """The content of ``scores.json`` for one method's per-episode rows: aggregates, gates, verdict.
+
+    Args:
+        suite: The suite scored.
+        rows: One dict per episode (``episode``, ``task``, ``scenario``, every metric, ``seconds``, ``rendered``).
+        gates: The gates that decide the verdict.
+        method: One line naming the method.
+        stages: The name of each stage.
+        method_spec: How the method was named (a ``MethodSpec`` as a dict), or None for estimates from files.
+        seconds: Wall time of the whole evaluation.
+    """
+    from benchmark.scores.aggregate import aggregate_all
+    from benchmark.scores.episode import METRICS
+    from benchmark.scores.verdict import check_gates
+    from fsv.provenance import provenance
+
+    aggregates = aggregate_all(rows, METRICS)
+    results = check_gates(gates, aggregates)
+    return {
+        "suite": {"name": suite.name, "version": suite.version, "description": suite.description},
+        "method": method, "method_spec": method_spec, "stages": stages,
+        "metrics": list(METRICS), "episodes": rows, "aggregate": aggregates,
+        "per_task": aggregate_all(rows, METRICS, by="task"),
+        "gates": [asdict(r) for r in results], "verdict": "pass" if all(r.passed for r in results) else "fail",
+        "rendered": sum(r["rendered"] for r in rows), "seconds": seconds, "provenance": provenance(),
+    }
 
 
 def strict(obj):
@@ -229,7 +243,8 @@ def load_gates(path) -> tuple:
     return gates
 
 
-def _check_out(out: pathlib.Path) -> None:
+def check_out(out: pathlib.Path) -> None:
+    """Refuses an output folder that is a file or cannot be created (ValueError, one line)."""
     if out.exists() and not out.is_dir():
         raise ValueError(f"--out {out}: exists and is not a folder")
     parent = out.parent if out.parent != pathlib.Path("") else pathlib.Path(".")
@@ -287,7 +302,7 @@ def run(args: argparse.Namespace) -> dict:
     gates = load_gates(args.gates) if args.gates else None
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
-    _check_out(args.out)
+    check_out(args.out)
     spec = spec_from_args(args)
     scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers)
     write_outputs(scores, suite, args.out)

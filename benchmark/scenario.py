@@ -51,5 +51,8 @@ class Scenario:
         Each stream is derived from the seed and the stream name, so adding draws in one stage
         never shifts the draws of another.
         """
-        key = [int(b) for b in stream.encode()]
-        return np.random.default_rng(np.random.SeedSequence([int(self.seed), *key]))
+        return np.random.default_rng(np.random.SeedSequence(self.rng_entropy(stream)))
+
+    def rng_entropy(self, stream: str) -> list:
+        """The entropy of :meth:`rng`'s generator for ``stream``: the seed, then the name's bytes."""
+        return [int(self.seed), *[int(b) for b in stream.encode()]]

@@ -1,0 +1,145 @@
+"""The estimates file: one episode's per-frame estimates of a method, written in any language.
+
+FORMAT_DOC is the specification (also in docs/formats.md).
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from benchmark.archive import read_archive, write_archive
+from benchmark.errors import BenchmarkError
+
+FORMAT = "fsv-bench-estimates"
+VERSION = 1
+FORMAT_DOC = """\
+An estimates file is a NumPy ``.npz`` archive of arrays named ``<section>/<field>`` plus a
+``meta.json`` entry: a uint8 array of UTF-8 JSON. T frames (the camera-input file's), K fingers
+(its hand's ``finger_names``, thumb first). Object frame: the box's centre of mass, axes along its
+edges. Digests (``array_sha256``, ``meta_sha256``, as in :mod:`benchmark.archive`) are optional for
+files written by other programs; when present they are checked.
+
+    box/pos            (T, 3)     float  box centre in the world, [m]                    required
+    box/rot            (T, 3, 3)  float  world_R_box                                     required
+    contacts/active    (T, K)     bool   finger k touches the box at frame i             required
+    contacts/sliding   (T, K)     bool   that contact slides (subset of active)          required
+    contacts/point     (T, K, 3)  float  contact point, object frame, [m]                required
+    contacts/normal    (T, K, 3)  float  unit normal into the box, object frame          required
+    kinematics/vel, acc, omega, alpha  (T, 3)  world frame, [m/s, m/s^2, rad/s, rad/s^2] required
+    kinematics/valid   (T,)       bool   frames whose derivatives are defined            required
+    kinematics/pos     (T, 3), kinematics/rot (T, 3, 3)  the filtered pose; default box/*  optional
+    nominal/force      (T, K, 3)  float  nominal finger forces on the box, object frame, [N]  optional
+    nominal/env_wrench (T, 6)     float  table force and torque about the COM, object frame   optional
+    nominal/status     (T,)       int8   0 solved, 1 least violation, 2 no contacts,
+                                         3 no kinematics, 4 failed (fsv.forces.FrameStatus)  optional
+    forces/force, forces/env_wrench, forces/status   the method's final forces, as nominal/*  optional
+    hand/fingertips    (T, K, 3)  float  fingertip pad centres in the world, [m]          optional
+
+``meta.json``: ``{"format": "fsv-bench-estimates", "version": 1, "episode": NAME, "finger_names":
+[K names], "method": "one line naming the method", "stages": {"tracker": ..., ...}}``. Metrics of a
+missing optional group are not scored (NaN); a gate on them fails.
+"""
+
+
+class EstimatesFileError(BenchmarkError, ValueError):
+    """An estimates file is missing, damaged, of another format, or does not fit its episode."""
+
+
+def save_estimate(estimate, path, *, episode: str, method: str) -> pathlib.Path:
+    """Writes an ``fsv.method.Estimate`` as an estimates file (with digests).
+
+    Args:
+        estimate: The estimate.
+        path: Destination ``.npz``.
+        episode: The episode's name in its suite.
+        method: One line naming the method.
+    """
+    c, k = estimate.contacts, estimate.kinematics
+    arrays = {"box/pos": estimate.box.pos, "box/rot": estimate.box.rot,
+              "contacts/active": c.active, "contacts/sliding": c.sliding, "contacts/point": c.point,
+              "contacts/normal": c.normal, "contacts/slide_dir": c.slide_dir}
+    arrays.update({f"kinematics/{f}": getattr(k, f) for f in ("pos", "rot", "vel", "acc", "omega", "alpha", "valid")})
+    for group, sol in (("nominal", estimate.nominal), ("forces", estimate.forces)):
+        if sol is not None:
+            arrays.update({f"{group}/force": sol.force, f"{group}/env_wrench": sol.env_wrench,
+                           f"{group}/status": sol.status})
+    if estimate.fingertips is not None:
+        arrays["hand/fingertips"] = np.asarray(estimate.fingertips, float)
+    meta = {"episode": episode, "finger_names": list(c.finger_names), "method": method,
+            "stages": dict(estimate.labels), "oracle": list(estimate.oracle)}
+    return write_archive(path, FORMAT, VERSION, meta, arrays)
+
+
+def load_estimate(path, *, t: np.ndarray, finger_names: tuple):
+    """Reads an estimates file as an ``fsv.method.Estimate`` for an episode of frame times ``t``.
+
+    Forces come back as ``fsv.forces.ForceSolution`` with what the file holds (force, table
+    wrench, status); fields a file does not carry (required wrench, residual, objective) are NaN.
+
+    Raises:
+        EstimatesFileError: If the file is missing or damaged, of another format, or its frames or
+            fingers do not match the episode's (the message names the array).
+    """
+    from fsv import Contacts, FsvError, Kinematics, Poses
+    from fsv.method import Estimate, TrackOutput
+
+    meta, s = read_archive(path, FORMAT, VERSION, kind="estimates", error=EstimatesFileError, digests_required=False)
+    names = tuple(meta.get("finger_names") or ())
+    if names != tuple(finger_names):
+        raise EstimatesFileError(f"{path}: finger_names {list(names)} do not match the episode's {list(finger_names)}")
+    T, K = len(t), len(names)
+
+    def get(section, name, shape, dtype=float, default=None):
+        value = s.get(section, {}).get(name)
+        if value is None:
+            if default is not None:
+                return default
+            raise EstimatesFileError(f"{path}: required array {section}/{name} is missing")
+        value = np.asarray(value)
+        if value.shape != shape:
+            raise EstimatesFileError(f"{path}: {section}/{name} has shape {value.shape}, expected {shape}")
+        if dtype is bool and not np.isin(value, (0, 1)).all():
+            raise EstimatesFileError(f"{path}: {section}/{name} must hold booleans (0/1)")
+        return value.astype(dtype)
+
+    try:
+        box = Poses(t=t, pos=get("box", "pos", (T, 3)), rot=get("box", "rot", (T, 3, 3)))
+        zeros = np.zeros((T, K, 3))
+        contacts = Contacts(finger_names=names, active=get("contacts", "active", (T, K), bool),
+                            sliding=get("contacts", "sliding", (T, K), bool),
+                            point=get("contacts", "point", (T, K, 3)), normal=get("contacts", "normal", (T, K, 3)),
+                            slide_dir=get("contacts", "slide_dir", (T, K, 3), default=zeros))
+        kin = Kinematics(t=t, pos=get("kinematics", "pos", (T, 3), default=box.pos),
+                         rot=get("kinematics", "rot", (T, 3, 3), default=box.rot),
+                         **{f: get("kinematics", f, (T, 3)) for f in ("vel", "acc", "omega", "alpha")},
+                         valid=get("kinematics", "valid", (T,), bool), method=str(meta.get("stages", {}).get(
+                             "differentiator", "")))
+        solutions = {}
+        for group, kind in (("nominal", "nominal"), ("forces", "reconstruction")):
+            if group in s:
+                solutions[group] = _solution(kind, contacts, get(group, "force", (T, K, 3)),
+                                             get(group, "env_wrench", (T, 6)), get(group, "status", (T,), np.int8))
+        tips = s.get("hand", {}).get("fingertips")
+        tracking = TrackOutput(box=box, contacts=contacts,
+                               fingertips=None if tips is None else get("hand", "fingertips", (T, K, 3)))
+    except FsvError as e:
+        raise EstimatesFileError(f"{path}: {e}") from e
+    return Estimate(tracking=tracking, contacts=contacts, kinematics=kin, nominal=solutions.get("nominal"),
+                    forces=solutions.get("forces"), internal_pred=None, oracle=tuple(meta.get("oracle", ())),
+                    timing_s={}, labels=dict(meta.get("stages", {})))
+
+
+def _solution(kind: str, contacts, force: np.ndarray, env_wrench: np.ndarray, status: np.ndarray):
+    from fsv.forces import ForceSolution
+
+    T, K = contacts.active.shape
+    nan6 = np.full((T, 6), np.nan)
+    return ForceSolution(kind=kind, finger_names=contacts.finger_names, active=contacts.active,
+                         sliding=contacts.sliding, point=contacts.point, normal=contacts.normal, force=force,
+                         nominal=force, internal=np.zeros((T, K, 3)),
+                         env_active=(np.abs(env_wrench[:, :3]).sum(axis=1) > 0).astype(np.int64),
+                         env_wrench=env_wrench, env_internal_wrench=np.zeros((T, 6)), required=nan6,
+                         residual=nan6, status=status, objective=np.full(T, np.nan), iterations=np.zeros(T, np.int64),
+                         solve_time_s=np.zeros(T))

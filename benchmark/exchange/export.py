@@ -1,0 +1,82 @@
+"""``fsv-bench export``: a suite's camera inputs as files, for a method in any language.
+
+    fsv-bench export --suite smoke --out DIR [--cache DIR] [--quiet]
+
+Writes ``DIR/suite.json`` (the suite, its episodes, the formats' versions, provenance) and one
+camera-input file per episode, ``DIR/<episode>.npz`` (:mod:`benchmark.exchange.camera_file`): depth,
+calibration, object and hand models, the coarse first-frame initialisation, and no truth. Episodes
+come from the same cache as ``fsv-bench eval``. The folder is written into a temporary one and moved
+into place when complete. Score the method's estimates with ``fsv-bench score``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import shutil
+import tempfile
+
+from benchmark.atomic import swap_folder
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from benchmark.suites import SUITES
+
+    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (suite.json, <episode>.npz)")
+    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True) -> dict:
+    """Writes the camera inputs of every episode of ``suite`` into ``out``; returns ``suite.json``'s content."""
+    from benchmark.evaluate import cached_episode, default_cache, episode_name
+    from benchmark.exchange import camera_file, estimates_file
+    from benchmark.method import camera_input
+    from fsv.provenance import provenance
+
+    cache = pathlib.Path(cache or default_cache())
+    out = pathlib.Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        episodes = []
+        scenarios = suite.scenarios
+        if progress:
+            from tqdm import tqdm
+
+            scenarios = tqdm(scenarios, desc=f"export {suite.name}", unit="episode", leave=False)
+        for sc in scenarios:
+            episode, _ = cached_episode(suite, sc, cache)
+            name = episode_name(sc)
+            inputs = camera_input(episode)
+            camera_file.save_camera_input(inputs, tmp / f"{name}.npz", episode=name, suite=suite,
+                                          rng_seed=sc.rng_entropy("tracker"))
+            episodes.append({"episode": name, "file": f"{name}.npz", "frames": inputs.num_frames,
+                             "task": sc.task})
+        index = {"suite": {"name": suite.name, "version": suite.version, "description": suite.description},
+                 "episodes": episodes,
+                 "formats": {"camera": [camera_file.FORMAT, camera_file.VERSION],
+                             "estimates": [estimates_file.FORMAT, estimates_file.VERSION]},
+                 "estimates": "write <episode>.npz per episode into one folder; fsv-bench score --suite "
+                              f"{suite.name} --estimates FOLDER --out OUT",
+                 "provenance": provenance()}
+        (tmp / "suite.json").write_text(json.dumps(index, indent=1) + "\n")
+        swap_folder(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return index
+
+
+def run(args: argparse.Namespace) -> dict:
+    from benchmark.evaluate import check_out
+    from benchmark.suites import get_suite
+
+    suite = get_suite(args.suite)
+    check_out(args.out)
+    index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet)
+    print(f"fsv-bench export: suite {suite.name} v{suite.version}, {len(index['episodes'])} camera-input files "
+          f"in {args.out}/ (format {index['formats']['camera'][0]} v{index['formats']['camera'][1]})")
+    return index

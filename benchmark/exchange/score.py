@@ -1,0 +1,91 @@
+"""``fsv-bench score``: score per-frame estimates read from files, with the suite's gates.
+
+    fsv-bench score --suite smoke --estimates DIR --out OUT [--gates FILE] [--cache DIR] [--quiet]
+
+``DIR`` holds one estimates file per episode of the suite, ``DIR/<episode>.npz``
+(:mod:`benchmark.exchange.estimates_file`), made by any program from the camera-input files of
+``fsv-bench export``. Every file must be present and its header (format, version) readable before
+any episode is scored; a missing or malformed file exits 2, naming it. Scores, report, JUnit and exit status are those of
+``fsv-bench eval``: the same scorers on the same episodes, so a method scored in-process and from its
+files gets the same numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import time
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from benchmark.suites import SUITES
+
+    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
+    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (scores.json, report.md, junit.xml)")
+    p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
+    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def estimate_paths(suite, folder: pathlib.Path) -> dict:
+    """``{scenario: path}`` of every episode's estimates file; ValueError naming the missing ones."""
+    from benchmark.evaluate import episode_name
+
+    folder = pathlib.Path(folder)
+    if not folder.is_dir():
+        raise ValueError(f"--estimates {folder}: no such folder")
+    paths = {sc: folder / f"{episode_name(sc)}.npz" for sc in suite.scenarios}
+    missing = [p.name for p in paths.values() if not p.is_file()]
+    if missing:
+        raise ValueError(f"--estimates {folder}: {len(missing)} of {len(paths)} episodes have no estimates file "
+                         f"(first: {missing[0]}); expected one <episode>.npz per episode of suite {suite.name}")
+    return paths
+
+
+def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress: bool = True) -> dict:
+    """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``."""
+    from dataclasses import asdict
+
+    from benchmark.evaluate import cached_episode, default_cache, episode_name, scores_document
+    from benchmark.exchange.estimates_file import load_estimate
+    from benchmark.scores.episode import score_episode
+    from benchmark.archive import read_archive
+    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError
+
+    paths = estimate_paths(suite, folder)
+    metas = {sc: read_archive(p, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
+                              digests_required=False)[0] for sc, p in paths.items()}  # every header before any work
+    cache = pathlib.Path(cache or default_cache())
+    t0 = time.perf_counter()
+    rows = []
+    scenarios = suite.scenarios
+    if progress:
+        from tqdm import tqdm
+
+        scenarios = tqdm(scenarios, desc=f"score {suite.name}", unit="episode", leave=False)
+    for sc in scenarios:
+        t1 = time.perf_counter()
+        episode, made = cached_episode(suite, sc, cache)
+        estimate = load_estimate(paths[sc], t=episode.truth.t, finger_names=tuple(episode.hand_model.finger_names))
+        rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
+                     **score_episode(episode, estimate), "seconds": time.perf_counter() - t1, "rendered": made})
+    first = metas[suite.scenarios[0]]
+    return scores_document(suite, rows, suite.gates if gates is None else gates,
+                           method=str(first.get("method") or f"estimates from {folder}"),
+                           stages=dict(first.get("stages") or {}), method_spec=None,
+                           seconds=time.perf_counter() - t0)
+
+
+def run(args: argparse.Namespace) -> dict:
+    from benchmark.evaluate import check_out, load_gates, print_verdict, write_outputs
+    from benchmark.suites import get_suite
+
+    suite = get_suite(args.suite)
+    gates = load_gates(args.gates) if args.gates else None
+    check_out(args.out)
+    estimate_paths(suite, args.estimates)
+    scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet)
+    write_outputs(scores, suite, args.out)
+    print_verdict(scores, args.out, "score")
+    return scores

@@ -1,0 +1,91 @@
+"""fsv-bench export / score: camera inputs out, estimates in; the file round trip equals in-process scores."""
+
+import json
+import zipfile
+
+import numpy as np
+import pytest
+
+from benchmark.cli import main
+from benchmark.exchange import load_camera_input
+from benchmark.suites import SUITES
+from test_evaluate import TINY
+
+
+@pytest.fixture
+def tiny(monkeypatch):
+    monkeypatch.setitem(SUITES, "tiny", TINY)
+    return TINY
+
+
+def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys):
+    from benchmark.evaluate import evaluate
+    from benchmark.method import MethodSpec, method_label
+    from examples.estimates_from_files import write_estimates
+
+    cache, inputs, estimates = tmp_path / "cache", tmp_path / "inputs", tmp_path / "estimates"
+    spec = MethodSpec(differentiator="central")
+    in_process = evaluate(TINY, spec=spec, cache=cache, progress=False)
+    assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(cache), "--quiet"]) == 0
+    index = json.loads((inputs / "suite.json").read_text())
+    assert [e["episode"] for e in index["episodes"]] == ["lift-u0-g0-m0-s21"]
+    with zipfile.ZipFile(inputs / "lift-u0-g0-m0-s21.npz") as z:  # camera inputs only, no truth
+        sections = {n.split("/")[0] for n in z.namelist() if n != "meta.json.npy"}
+    assert sections == {"camera", "init", "object", "hand"}
+    write_estimates(inputs, estimates, spec.build(), method_label(spec))
+    capsys.readouterr()
+    code = main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "scores"),
+                 "--cache", str(cache), "--quiet"])
+    assert in_process["verdict"] == "fail" and code == 1  # central differences: learned error 94.6 % > 60 %
+    from_files = json.loads((tmp_path / "scores" / "scores.json").read_text())
+    drop = ("seconds", "rendered")
+    assert [{k: v for k, v in r.items() if k not in drop} for r in from_files["episodes"]] == \
+           [{k: v for k, v in r.items() if k not in drop} for r in in_process["episodes"]]
+    assert from_files["aggregate"] == in_process["aggregate"] and from_files["rendered"] == 0
+    assert from_files["stages"]["differentiator"].startswith("central differentiation")
+
+
+def test_camera_file_round_trips_the_inputs(tiny, tmp_path):
+    from benchmark.evaluate import cached_episode
+    from benchmark.exchange import save_camera_input
+    from benchmark.method import camera_input
+
+    ep, _ = cached_episode(TINY, TINY.scenarios[0], tmp_path / "cache")
+    a = camera_input(ep)
+    path = save_camera_input(a, tmp_path / "x.npz", episode="x", suite=TINY, rng_seed=[1, 2])
+    b, meta = load_camera_input(path)
+    assert np.array_equal(a.depth.depth_m, b.depth.depth_m) and np.array_equal(a.calib.K, b.calib.K)
+    assert np.array_equal(a.init.joints, b.init.joints) and a.object_model.mass_kg == b.object_model.mass_kg
+    assert b.hand_model.finger_names == a.hand_model.finger_names and meta["rng_seed"] == [1, 2]
+
+
+def _write(path, arrays, meta):
+    entries = {**arrays, "meta.json": np.frombuffer(json.dumps(meta).encode(), np.uint8)}
+    np.savez(path, **entries)
+
+
+@pytest.mark.parametrize("case, needle", [
+    ("missing", "1 of 1 episodes have no estimates file (first: lift-u0-g0-m0-s21.npz)"),
+    ("format", "is not an fsv-bench estimates file (format 'other'"),
+])
+def test_missing_or_foreign_estimates_exit_2_naming_the_file(tiny, tmp_path, capsys, case, needle):
+    est = tmp_path / "est"
+    est.mkdir()
+    if case == "format":
+        _write(est / "lift-u0-g0-m0-s21.npz", {}, {"format": "other", "version": 1})
+    code = main(["score", "--suite", "tiny", "--estimates", str(est), "--out", str(tmp_path / "o"),
+                 "--cache", str(tmp_path / "cache")])
+    err = capsys.readouterr().err
+    assert code == 2 and needle in err and err.count("\n") == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_an_estimates_file_of_the_wrong_shape_names_the_array(tiny, tmp_path):
+    from benchmark.exchange import EstimatesFileError, load_estimate
+
+    t = np.arange(5) / 30.0
+    names = ["thumb", "index"]
+    _write(tmp_path / "e.npz", {"box/pos": np.zeros((4, 3))},
+           {"format": "fsv-bench-estimates", "version": 1, "finger_names": names})
+    with pytest.raises(EstimatesFileError, match=r"box/pos has shape \(4, 3\), expected \(5, 3\)"):
+        load_estimate(tmp_path / "e.npz", t=t, finger_names=tuple(names))
