@@ -117,7 +117,7 @@ STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_le
 SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2",
                "reproduce": "benchmark.reproduce", "eval": "benchmark.evaluate",
                "compare": "benchmark.compare", "export": "benchmark.exchange.export",
-               "score": "benchmark.exchange.score"}
+               "score": "benchmark.exchange.score", "leaderboard": "benchmark.leaderboard"}
 
 
 def _subcommand(argv: list) -> int:
