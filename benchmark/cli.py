@@ -42,6 +42,8 @@ class Run:
         timing_s: Seconds spent per stage.
         lines: Human-readable lines printed at the end.
         tracking: The tracker's output (box poses, hand, contacts), once tracked.
+        method_spec: The method the command runs (its options, checked before any work).
+        estimate: The method's estimate on the episode (tracking, kinematics, forces).
     """
 
     args: argparse.Namespace
@@ -52,6 +54,8 @@ class Run:
     timing_s: dict = field(default_factory=dict)
     lines: list = field(default_factory=list)
     tracking: object = None  # fsv.track.tracker.Tracking, once the tracking stage ran
+    method_spec: object = None  # benchmark.method.MethodSpec: which method the tracking stage runs
+    estimate: object = None  # fsv.method.Estimate, once the tracking stage ran the method
 
 
 @dataclass(frozen=True)
@@ -114,6 +118,11 @@ STAGES.append(Stage(name="forces", add_arguments=_score_forces.add_arguments, ru
 from benchmark import learning as _learning  # noqa: E402
 
 STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_learning.run_stage))
+
+# the verdict: the episode's metrics against the smoke suite's gates (a suite of one).
+from benchmark import verdict as _verdict  # noqa: E402
+
+STAGES.append(Stage(name="verdict", add_arguments=_verdict.add_arguments, run=_verdict.run_stage))
 SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2",
                "reproduce": "benchmark.reproduce", "eval": "benchmark.evaluate",
                "compare": "benchmark.compare", "export": "benchmark.exchange.export",
@@ -170,6 +179,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     for stage in STAGES:
         stage.add_arguments(p)
+    from benchmark.evaluate import add_method_arguments
+
+    add_method_arguments(p, oracle=False)
     return p
 
 
@@ -183,6 +195,22 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
     return sc
 
 
+def method_spec_from_args(args: argparse.Namespace):
+    """The method of the command line (``--kinematics``/``--contacts`` ablations, replaced stages,
+    ``--internal-model``), loaded and checked; raises ValueError naming a bad option."""
+    from benchmark.method import MethodSpec
+
+    if args.differentiator and args.kinematics != "algebraic":
+        raise ValueError(f"--kinematics {args.kinematics} and --differentiator {args.differentiator}: give one of them")
+    differentiator = args.differentiator or (args.kinematics if args.kinematics in ("central", "gaussian") else None)
+    oracle = tuple(name for name, on in (("kinematics", args.kinematics == "oracle"),
+                                         ("contacts", args.contacts == "oracle")) if on)
+    spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=differentiator, forces=args.forces,
+                      internal=args.internal, internal_model=args.internal_model, oracle=oracle)
+    spec.check()
+    return spec
+
+
 def main(argv: list | None = None) -> int:
     """Entry point of ``fsv-bench``; returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -192,13 +220,18 @@ def main(argv: list | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         scenario = scenario_from_args(args)
-    except (ScenarioError, InputError) as e:
+        spec = method_spec_from_args(args)
+        if args.gates:
+            from benchmark.evaluate import load_gates
+
+            load_gates(args.gates)
+    except (ScenarioError, InputError, ValueError) as e:
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
     from benchmark.evaluate import episode_name
 
     out = args.out or pathlib.Path("runs") / episode_name(scenario)
-    run = Run(args=args, scenario=scenario, out=out)
+    run = Run(args=args, scenario=scenario, out=out, method_spec=spec)
     start = time.perf_counter()
     try:
         for stage in STAGES:
@@ -225,6 +258,10 @@ def main(argv: list | None = None) -> int:
     for line in run.lines:
         print(line)
     print(f"episode: {path}\nsummary: {out / 'summary.json'} ({run.timing_s['total']:.1f} s)")
+    failed = [g["name"] for g in run.summary["verdict"]["gates"] if not g["passed"]]
+    if failed:
+        print(f"fsv-bench: {len(failed)} gate(s) failed: {'; '.join(failed)}", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -267,8 +267,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_method_arguments(p)
 
 
-def add_method_arguments(p: argparse.ArgumentParser) -> None:
-    """``--method``, ``--tracker``, ``--differentiator``, ``--forces``, ``--internal``, ``--oracle``."""
+def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True) -> None:
+    """``--method``, ``--tracker``, ``--differentiator``, ``--forces``, ``--internal`` [, ``--oracle``]."""
     from benchmark.method import DIFFERENTIATORS, ORACLE_STAGES
 
     g = p.add_argument_group("the method (default: the reference; replace a stage by module:attribute)")
@@ -281,8 +281,9 @@ def add_method_arguments(p: argparse.ArgumentParser) -> None:
                    help="(kinematics, contacts, object_model, gravity) -> ForceSolution")
     g.add_argument("--internal", default=None, metavar="none|MODULE:ATTR",
                    help="(kinematics, contacts, object_model, gravity) -> (ForceSolution, predicted); none: nominal forces only")
-    g.add_argument("--oracle", default="", metavar="LIST",
-                   help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
+    if oracle:
+        g.add_argument("--oracle", default="", metavar="LIST",
+                       help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
 
 
 def spec_from_args(args: argparse.Namespace):

@@ -101,19 +101,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_stage(run) -> None:
-    """The ``learning`` block of summary.json and one printed line for a ``benchmark.cli.Run``."""
+    """The ``learning`` block of summary.json and one printed line for a ``benchmark.cli.Run``:
+    the method's final forces (``run.estimate.forces``) scored against the truth."""
     from benchmark.score_forces import stage_inputs
-    from fsv.learn import default_model, load
-
-    path = getattr(run.args, "internal_model", None)
-    model = default_model() if path is None else load(path)
-    from fsv.learn import learned_forces
 
     kin, contacts, labels = stage_inputs(run)
-    sol, _ = learned_forces(model, kin, contacts, run.episode.object_model, gravity=run.episode.truth.gravity)
-    block = score_episode(run.episode, sol, kin, contacts)
-    block = {**labels, "program": "ANN_L2 + ANN_decomp -> reconstruction (eq. 14)",
-             "internal_model": path or "fsv/data/internal_forces.pt", "model": model_block(model), **block}
+    est = run.estimate
+    if est.forces is None:
+        run.summary["learning"] = {**labels, "program": None}
+        run.lines.append(f"learning: the method has no internal-force stage ({est.labels['internal']})")
+        return
+    block = score_episode(run.episode, est.forces, kin, contacts)
+    path = getattr(run.args, "internal_model", None)
+    model_info = {}
+    if est.labels["internal"].startswith("learned internal forces"):
+        from fsv.learn import default_model, load
+
+        model_info = {"internal_model": path or "fsv/data/internal_forces.pt",
+                      "model": model_block(default_model() if path is None else load(path))}
+    block = {**labels, "program": est.labels["internal"], **model_info, **block}
     run.summary["learning"] = block
     tag = f"ORACLE {', '.join(labels['oracle'])}" if labels["oracle"] else "no oracle input"
     run.lines.append(

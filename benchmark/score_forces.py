@@ -186,37 +186,21 @@ def add_arguments(parser) -> None:
 
 
 def stage_inputs(run) -> tuple:
-    """The kinematics and contacts the force stage uses for a ``benchmark.cli.Run``, with labels.
+    """The kinematics and contacts the method's force stages used in a ``benchmark.cli.Run``, with labels.
 
-    Kinematics: ``benchmark.motion.episode_kinematics`` with ``--kinematics`` where the command has
-    that option (else the truth's, an oracle), on the tracked box poses where the tracking stage
-    ran (else on the benchmark's tracker-like poses). Contacts: see :func:`add_arguments`.
+    Both come from the method's estimate (``run.estimate``, made by the tracking stage through
+    :func:`benchmark.method.run_method`): the differentiated tracked poses and the tracked contacts,
+    or the truth's where ``--kinematics oracle`` / ``--contacts oracle`` asked for an ablation.
 
     Returns:
         ``(kinematics, contacts, labels)`` with labels ``kinematics``, ``contacts`` and ``oracle``
         (the list of inputs taken from the truth).
     """
-    from benchmark.contact_error import contacts_from_truth, vision_like_contacts
-    from benchmark.motion import episode_kinematics
-
-    ep = run.episode
-    choice = getattr(run.args, "kinematics", None) or "oracle"
-    tracking = getattr(run, "tracking", None)
-    kin = episode_kinematics(ep, choice, poses=None if tracking is None else tracking.box)
-    if kin.method == "oracle":
-        kin_label = "oracle (truth)"
-    else:
-        kin_label = f"{kin.method or choice} on {'tracked' if tracking is not None else 'tracker-like'} poses"
-    if run.args.contacts == "oracle":
-        contacts, source = contacts_from_truth(ep.truth), "oracle (truth)"
-    elif tracking is not None and getattr(tracking, "contacts", None) is not None:
-        contacts, source = tracking.contacts, "vision (tracker)"
-    else:
-        contacts = vision_like_contacts(contacts_from_truth(ep.truth), ep.object_model, ep.scenario.rng("contact-error"))
-        source = "vision model (truth contacts + paper's contact error, tracker not run)"
-    oracle = [name for name, is_oracle in (("kinematics", kin.method == "oracle"),
-                                           ("contacts", run.args.contacts == "oracle")) if is_oracle]
-    return kin, contacts, {"kinematics": kin_label, "contacts": source, "oracle": oracle}
+    est = run.estimate
+    oracle = list(est.oracle)
+    kin_label = "oracle (truth)" if "kinematics" in oracle else f"{est.labels['differentiator']} on tracked poses"
+    source = "oracle (truth)" if "contacts" in oracle else f"vision ({est.labels['tracker']})"
+    return est.kinematics, est.contacts, {"kinematics": kin_label, "contacts": source, "oracle": sorted(oracle)}
 
 
 def run_stage(run) -> None:
@@ -225,8 +209,12 @@ def run_stage(run) -> None:
 
     ep = run.episode
     kin, contacts, labels = stage_inputs(run)
-    sol = nominal_forces(kin, contacts, ep.object_model, gravity=ep.truth.gravity)
-    block = {**labels, "program": "nominal (eq. 4-6)", **score_forces(sol, ep.truth, kin.rot)}
+    sol = run.estimate.nominal
+    if sol is None:
+        run.summary["forces"] = {**labels, "program": None}
+        run.lines.append(f"forces: the method has no force stage ({run.estimate.labels['forces']})")
+        return
+    block = {**labels, "program": run.estimate.labels["forces"], **score_forces(sol, ep.truth, kin.rot)}
     truth_contacts = contacts_from_truth(ep.truth)
     vision = vision_like_contacts(truth_contacts, ep.object_model, ep.scenario.rng("contact-error"))
     block["sensitivity"] = {
@@ -234,8 +222,8 @@ def run_stage(run) -> None:
         "vision_contacts": "truth contacts + paper's contact error (mean -1.55 mm, std 6.13 mm per axis)",
         "paper": PAPER_SENSITIVITY_N,
     }
-    tracking = getattr(run, "tracking", None)
-    if tracking is not None and getattr(tracking, "contacts", None) is not None:
+    tracking = run.estimate.tracking
+    if "contacts" not in run.estimate.oracle:
         block["sensitivity_tracker"] = {
             **sensitivity(kin, truth_contacts, tracking.contacts, ep.object_model, gravity=ep.truth.gravity),
             "vision_contacts": "the tracker's (fingers and frames where both it and the truth have the contact)",

@@ -142,11 +142,14 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
     half = object_model.half_extents
     signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
     # One crop for the whole strip: the tracked box and hand over the shown frames, plus a margin.
+    hand_qpos = getattr(tracking, "hand_qpos", None)  # a tracker other than the reference may have no hand
+    tips_all = getattr(tracking, "fingertips", None)
     pts = []
     for i in idx:
         pts.append(_project(calib, tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T))
-        ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, tracking.hand_qpos[i]))
-        pts.append(_project(calib, ends.reshape(-1, 3)))
+        if hand_qpos is not None:
+            ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, hand_qpos[i]))
+            pts.append(_project(calib, ends.reshape(-1, 3)))
     uv = np.concatenate(pts)
     uv = uv[np.all(np.isfinite(uv), axis=1)]
     lo = np.maximum(np.floor(uv.min(0)) - 25, 0) if uv.size else np.zeros(2)
@@ -161,15 +164,17 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         uv = _project(calib, corners)
         for a, b in _BOX_EDGES:
             ax.plot(uv[[a, b], 0], uv[[a, b], 1], color="lime", lw=1.2)
-        ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, tracking.hand_qpos[i]))
-        for (a, b), r in zip(ends, hand_model.geom_radius):
-            uv = _project(calib, np.stack([a, b]))
-            px = r * calib.K[0, 0] / max(1e-3, float(((a + b) / 2 - calib.T_world_cam[:3, 3]) @ calib.T_world_cam[:3, 2]))
-            ax.plot(uv[:, 0], uv[:, 1], color="orange", lw=max(1.0, 1.4 * px), alpha=0.55, solid_capstyle="round")
-        tips = _project(calib, tracking.fingertips[i])
-        seen = tracking.observed[i]
-        ax.scatter(tips[seen, 0], tips[seen, 1], s=12, c="red", zorder=3)
-        ax.scatter(tips[~seen, 0], tips[~seen, 1], s=12, c="white", edgecolors="red", zorder=3)
+        if hand_qpos is not None:
+            ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, hand_qpos[i]))
+            for (a, b), r in zip(ends, hand_model.geom_radius):
+                uv = _project(calib, np.stack([a, b]))
+                px = r * calib.K[0, 0] / max(1e-3, float(((a + b) / 2 - calib.T_world_cam[:3, 3]) @ calib.T_world_cam[:3, 2]))
+                ax.plot(uv[:, 0], uv[:, 1], color="orange", lw=max(1.0, 1.4 * px), alpha=0.55, solid_capstyle="round")
+        if tips_all is not None:
+            tips = _project(calib, tips_all[i])
+            seen = getattr(tracking, "observed", np.ones(tips_all.shape[:2], bool))[i]
+            ax.scatter(tips[seen, 0], tips[seen, 1], s=12, c="red", zorder=3)
+            ax.scatter(tips[~seen, 0], tips[~seen, 1], s=12, c="white", edgecolors="red", zorder=3)
         act = tracking.contacts.active[i]
         if act.any():
             pts = tracking.box.pos[i] + tracking.contacts.point[i, act] @ tracking.box.rot[i].T
@@ -220,14 +225,13 @@ def add_arguments(parser) -> None:
 
 
 def run_stage(run) -> None:
-    """Tracks the rendered episode from depth alone; adds the ``tracking`` block and the overlay.
+    """Runs the method on the rendered episode's camera inputs (the one entry,
+    :func:`benchmark.method.run_method`); adds the ``tracking`` block and the overlay.
 
-    The tracked box poses and contacts become the inputs of the later stages (kinematics, forces)
-    unless those run an oracle ablation.
+    The estimate (tracking, kinematics, forces) is what the later stages (kinematics, forces,
+    learning, verdict) score.
     """
-    import time
-
-    from fsv.track.tracker import track
+    from benchmark.method import camera_input, run_method
 
     ep = run.episode
     scale = float(run.args.init_perturbation)
@@ -235,11 +239,9 @@ def run_stage(run) -> None:
         from benchmark.errors import ScenarioError
 
         raise ScenarioError(f"--init-perturbation must be a scale >= 0, got {scale!r}")
-    init = tracker_init(ep.truth, ep.scenario, ep.hand_model, scale)
-    t0 = time.perf_counter()
-    tracking = track(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, rng=ep.scenario.rng("tracker"))
-    elapsed = time.perf_counter() - t0
-    run.tracking = tracking
+    run.estimate = run_method(run.method_spec, ep, inputs=camera_input(ep, scale))
+    tracking = run.tracking = run.estimate.tracking
+    elapsed = run.estimate.timing_s["track"]
     scores = score_tracking(tracking, ep.truth)
     run.out.mkdir(parents=True, exist_ok=True)
     overlay = plot_overlay(ep.depth, ep.calib, tracking, ep.object_model, ep.hand_model, run.out / "tracking_overlay.png")
@@ -249,14 +251,15 @@ def run_stage(run) -> None:
         "paper_contact_err_mm": PAPER_CONTACT_ERROR_MM,
         "gates": gate_report(scores),
         "frames_per_s": T / elapsed,
-        "stage_ms_per_frame": {k: 1e3 * v / T for k, v in tracking.timing_s.items()},
+        "stage_ms_per_frame": {k: 1e3 * v / T for k, v in (getattr(tracking, "timing_s", None) or {}).items()},
+        "tracker": run.estimate.labels.get("tracker"),
         "init_perturbation": {k: float(v) * scale for k, v in INIT_PERTURBATION.items()},
         "overlay": overlay.name,
     }
     run.summary["tracking"] = block
     failed = [k for k, g in block["gates"].items() if not g["pass"]]
     run.lines.append(
-        f"tracking ({T / elapsed:.1f} frames/s): box {scores['box_pos_err_mm_median']:.2f} mm / "
+        f"tracking [{run.estimate.labels.get('tracker')}] ({T / elapsed:.1f} frames/s): box {scores['box_pos_err_mm_median']:.2f} mm / "
         f"{scores['box_rot_err_deg_median']:.2f} deg (median), fingertips {scores['fingertip_err_mm_median']:.1f} mm, "
         f"contact point {scores['contact_err_mm_mean']:+.2f} ± {scores['contact_err_mm_std']:.2f} mm per axis "
         f"(paper -1.55 ± 6.13), median {scores['contact_err_mm_median_euclid']:.1f} mm, recall "

@@ -11,10 +11,14 @@ from benchmark.episode import load_episode
 
 def test_run_writes_episode_and_summary(tmp_path, capsys):
     out = tmp_path / "run"
-    assert main(["--task", "lift", "--noise", "0.01", "--duration", "1.5", "--seed", "2", "--quiet", "--out", str(out)]) == 0
+    code = main(["--task", "lift", "--noise", "0.01", "--duration", "1.5", "--seed", "2", "--quiet", "--out", str(out)])
     text = capsys.readouterr().out
     assert "Newton-Euler residual" in text and "grip while held" in text
     summary = json.loads((out / "summary.json").read_text())
+    verdict = summary["verdict"]  # the smoke suite's gates on this episode; the exit status follows them
+    assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)
+    assert verdict["method"]["tracker"] == "reference tracker" and f"verdict: {verdict['verdict'].upper()}" in \
+        text.replace("verdict: pass", "verdict: PASS")
     assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "noise_m": 0.01, "seed": 2,
                                    "frames": 46, "fps": 30.0}
     assert summary["world"]["ne_force_residual_n"] < 0.01
@@ -32,7 +36,21 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert np.isfinite(ep.truth.contact_force).all()
 
 
+def test_a_broken_tracker_fails_the_verdict_with_exit_1_naming_the_gates(tmp_path, capsys):
+    out = tmp_path / "run"
+    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out),
+                 "--tracker", "external_stages:FrozenTracker"])
+    err = capsys.readouterr().err
+    assert code == 1 and "median box_pos_err_mm <= 1.5" in err and "median contact_recall >= 0.85" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["verdict"]["verdict"] == "fail" and summary["tracking"]["tracker"] == "frozen tracker (a broken example)"
+    assert summary["tracking"]["contact_recall"] == 0.0
+
+
 @pytest.mark.parametrize("argv, needle", [
+    (["--tracker", "external_stages:Nope"], "external_stages has no attribute 'Nope'"),
+    (["--kinematics", "central", "--differentiator", "gaussian"], "--kinematics central and --differentiator gaussian"),
+    (["--internal-model", "missing.pt"], "--internal-model missing.pt: no internal-force model"),
     (["--task", "juggle"], "'juggle'; accepted: lift"),
     (["--user", "9"], "user 9 does not exist; accepted: 0 ("),
     (["--grasp", "-1"], "grasp must be a non-negative integer, got -1"),
@@ -57,7 +75,7 @@ def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, c
     from PIL import Image
 
     out = tmp_path / "run"
-    assert main(["--duration", "1", "--noise", "0.005", "--quiet", "--no-gif", "--out", str(out)]) == 0
+    assert main(["--duration", "1", "--noise", "0.005", "--quiet", "--no-gif", "--out", str(out)]) in (0, 1)  # verdict
     assert "render: 31 depth frames 320x240 at 30 Hz, noise 0.005 m" in capsys.readouterr().out
     block = json.loads((out / "summary.json").read_text())["render"]
     assert block["frames"] == 31 and block["preview"] == ["depth_preview.png"]

@@ -24,6 +24,8 @@ class MethodSpec:
         differentiator: Replaces the algebraic differentiator; or one of :data:`DIFFERENTIATORS`.
         forces: Replaces the nominal-force programs.
         internal: Replaces the learned internal forces; "none" for nominal forces only.
+        internal_model: A model file of ``fsv-bench train`` for the reference internal-force stage
+            (default: the shipped model).
         oracle: Inputs replaced by the truth, a subset of :data:`ORACLE_STAGES`.
     """
 
@@ -32,6 +34,7 @@ class MethodSpec:
     differentiator: str | None = None
     forces: str | None = None
     internal: str | None = None
+    internal_model: str | None = None
     oracle: tuple = field(default_factory=tuple)
 
     def __post_init__(self):
@@ -39,7 +42,10 @@ class MethodSpec:
         bad = [o for o in self.oracle if o not in ORACLE_STAGES]
         if bad:
             raise ValueError(f"--oracle {bad[0]!r}: accepted: {', '.join(ORACLE_STAGES)} (comma-separated)")
-        if self.method and any((self.tracker, self.differentiator, self.forces, self.internal)):
+        if self.internal and self.internal_model:
+            raise ValueError("--internal-model is a model for the reference internal-force stage; --internal replaces "
+                             "that stage: give one of them")
+        if self.method and any((self.tracker, self.differentiator, self.forces, self.internal, self.internal_model)):
             raise ValueError("--method replaces every stage; give it alone, or replace single stages with "
                              "--tracker/--differentiator/--forces/--internal")
 
@@ -73,6 +79,15 @@ def _build(spec: MethodSpec):
             raise ValueError(f"--oracle needs a method built by fsv.method.make_method; --method {spec.method} is not")
         return method
     stages = {}
+    if spec.internal_model:
+        from fsv.errors import FsvError
+        from fsv.learn import load
+        from fsv.method import LearnedInternalForces
+
+        try:
+            stages["internal"] = LearnedInternalForces(load(spec.internal_model), source=f"model {spec.internal_model}")
+        except (FsvError, OSError) as e:
+            raise ValueError(f"--internal-model {spec.internal_model}: {e}") from e
     for name, text in spec.stage_specs.items():
         if text is None:
             continue

@@ -60,16 +60,16 @@ class LearnedInternalForces:
     Attributes:
         model: A trained ``fsv.learn.InternalForceModel``; None loads the shipped one on first use.
         settings: Settings of the cone program.
+        source: Where the model came from, for the label (e.g. its file).
     """
 
     model: object = None
     settings: ForceSettings | None = None
+    source: str = ""
 
     @property
     def name(self) -> str:
-        meta = getattr(self.model, "metadata", None) or {}
-        return "learned internal forces (" + (meta.get("name") or ("shipped model" if self.model is None
-                                                                     else "user model")) + ")"
+        return f"learned internal forces ({self.source or ('shipped model' if self.model is None else 'user model')})"
 
     def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model, gravity) -> tuple:
         from fsv.learn import default_model, learned_forces  # torch is loaded only when this stage runs
