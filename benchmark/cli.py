@@ -126,7 +126,8 @@ STAGES.append(Stage(name="verdict", add_arguments=_verdict.add_arguments, run=_v
 SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2",
                "reproduce": "benchmark.reproduce", "eval": "benchmark.evaluate",
                "compare": "benchmark.compare", "export": "benchmark.exchange.export",
-               "score": "benchmark.exchange.score", "leaderboard": "benchmark.leaderboard"}
+               "score": "benchmark.exchange.score", "leaderboard": "benchmark.leaderboard",
+               "sweep": "benchmark.sweep"}
 
 
 def _subcommand(argv: list) -> int:

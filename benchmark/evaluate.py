@@ -87,10 +87,10 @@ def _episode_rows(job) -> list:
     from benchmark.method import camera_input, run_method
     from benchmark.scores.episode import score_episode
 
-    suite, sc, cache, specs = job
+    suite, sc, cache, specs, init_scale = job
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
-    inputs = camera_input(episode)
+    inputs = camera_input(episode, init_scale)
     rows, tracked = [], {}
     for spec in specs:
         t1 = time.perf_counter()
@@ -106,7 +106,7 @@ def _episode_rows(job) -> list:
 
 
 def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-             workers: int = 1) -> dict:
+             workers: int = 1, init_scale: float = 1.0) -> dict:
     """Scores one method (default: the reference) on every episode of ``suite``.
 
     Episodes run in ``workers`` local processes (1: in this process); the scores do not depend on it.
@@ -118,12 +118,15 @@ def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None 
     from benchmark.method import MethodSpec
 
     return evaluate_many(suite, [spec or MethodSpec()], gates=gates, cache=cache, progress=progress,
-                         workers=workers)[0]
+                         workers=workers, init_scale=init_scale)[0]
 
 
 def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-                  workers: int = 1) -> list:
+                  workers: int = 1, init_scale: float = 1.0) -> list:
     """Scores several methods on every episode of ``suite``, each episode rendered (or read) once.
+
+    ``init_scale`` scales the seeded first-frame perturbation handed to the methods
+    (``benchmark.tracking.INIT_PERTURBATION``; 1 = the suites' protocol).
 
     Returns:
         One ``scores.json`` content per method, in the order of ``specs``.
@@ -142,7 +145,7 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
         from tqdm import tqdm
 
         bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
-    jobs = [(suite, sc, cache, specs) for sc in suite.scenarios]
+    jobs = [(suite, sc, cache, specs, init_scale) for sc in suite.scenarios]
     if workers == 1:
         for job in jobs:
             per_episode.append(_episode_rows(job))

@@ -31,7 +31,7 @@ from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses
 
 METHODS = ("central", "gaussian", "algebraic")
-SIX_AXIS_TASKS = tuple(f"excite-{a}" for a in ("tx", "ty", "tz", "rx", "ry", "rz"))
+from benchmark.suites.registry import TABLE1_TASKS as SIX_AXIS_TASKS  # noqa: E402  (one source: the table1 suite)
 """The paper's §4.1 protocol: motions emphasizing each translational and rotational axis."""
 POSES_LABEL = "true poses with tracker-like correlated errors (benchmark.pose_error)"
 PAPER = {

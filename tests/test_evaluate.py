@@ -141,3 +141,18 @@ def test_a_bad_method_exits_2_before_any_work(tiny, tmp_path, capsys, argv, need
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and needle in err
     assert not (tmp_path / "cache").exists() and not out.exists()
+
+
+def test_the_paper_suites_hold_the_paper_protocols_episodes():
+    """table1 and table2 are the episodes of the table1 and table2 commands' protocols (one source each)."""
+    from benchmark.reproduce import DATASETS, RESULTS
+    from benchmark.table1 import SIX_AXIS_TASKS
+
+    t1 = SUITES["table1"].scenarios
+    assert {(sc.task, sc.seed) for sc in t1} == {(t, s) for t in SIX_AXIS_TASKS for s in (0, 1, 2)} and len(t1) == 18
+    table1_command = next(r for r in RESULTS if r.name == "table1").commands[0]
+    assert table1_command[table1_command.index("--seeds") + 1] == "0,1,2"
+    grid = dict(zip(DATASETS["table2"][::2], DATASETS["table2"][1::2]))
+    assert grid == {"--tasks": "lift", "--grasps": "0,1", "--masses": "1,4", "--seeds": "0-5", "--users": "0,4"}
+    assert {(sc.user, sc.grasp, sc.mass, sc.seed) for sc in SUITES["table2"].scenarios} == \
+           {(u, g, m, s) for u in (0, 4) for g in (0, 1) for m in (1, 4) for s in range(6)}

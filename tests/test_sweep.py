@@ -1,0 +1,39 @@
+"""fsv-bench sweep: a suite along one axis, each error against it; bad axes and values exit 2."""
+
+import json
+
+import pytest
+
+from benchmark.cli import main
+from benchmark.suites import SUITES
+from test_evaluate import TINY
+
+
+@pytest.fixture
+def tiny(monkeypatch):
+    monkeypatch.setitem(SUITES, "tiny", TINY)
+    return TINY
+
+
+def test_a_sweep_of_the_initialisation_error_moves_the_tracking_error(tiny, tmp_path):
+    out = tmp_path / "sweep"
+    assert main(["sweep", "--suite", "tiny", "--axis", "init", "--values", "0,3", "--out", str(out),
+                 "--cache", str(tmp_path / "c"), "--quiet", "--internal", "none"]) == 0
+    doc = json.loads((out / "sweep.json").read_text())
+    assert doc["values"] == [0.0, 3.0] and (out / "sweep.png").stat().st_size > 10_000
+    exact, far = (a["box_pos_err_mm"]["median"]["value"] for a in doc["aggregate"])
+    assert exact != far and 0 < exact < 1.5  # measured 0.60 mm from the exact start
+    assert doc["aggregate"][0]["learned_rel_err_pct"]["median"]["value"] is None  # --internal none: not scored
+    assert "| 3.0 |" in (out / "sweep.md").read_text()
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--axis", "friction", "--values", "0.5,1"], "--axis 'friction': accepted: noise, mass, fps, init"),
+    (["--axis", "mass", "--values", "0,x"], "--values '0,x': 'x' is not an integer"),
+    (["--axis", "mass", "--values", "0,42"], "mass 42 does not exist"),
+    (["--axis", "noise", "--values", "0.01"], "need at least two distinct values"),
+])
+def test_bad_sweeps_exit_2_before_any_work(tiny, tmp_path, capsys, argv, needle):
+    assert main(["sweep", "--suite", "tiny", *argv, "--out", str(tmp_path / "o"), "--cache", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and err.count("\n") == 1 and not (tmp_path / "c").exists()
