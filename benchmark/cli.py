@@ -169,12 +169,12 @@ def build_parser() -> argparse.ArgumentParser:
         + " (training data, internal-force networks, the paper's Table 2)",
     )
     p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
-    p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres")
+    p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres, 0 to 0.1")
     p.add_argument("--user", type=int, default=0, help="index into sim_assets/users.yaml")
     p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
     p.add_argument("--seed", type=int, default=0, help="random seed")
-    p.add_argument("--duration", type=float, default=None, help="episode length in seconds (default: the task's)")
+    p.add_argument("--duration", type=float, default=None, help="episode length in seconds, up to 120 (default: the task's)")
     p.add_argument("--out", type=pathlib.Path, default=None,
                    help="output directory (default: runs/<task>-u<user>-g<grasp>-m<mass>-s<seed>)")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
@@ -226,38 +226,56 @@ def main(argv: list | None = None) -> int:
             from benchmark.evaluate import load_gates
 
             load_gates(args.gates)
+        from benchmark.evaluate import check_out, episode_name
+
+        out = args.out or pathlib.Path("runs") / episode_name(scenario)
+        check_out(out)
     except (ScenarioError, InputError, ValueError) as e:
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
-    from benchmark.evaluate import episode_name
+    import shutil
+    import tempfile
 
-    out = args.out or pathlib.Path("runs") / episode_name(scenario)
-    run = Run(args=args, scenario=scenario, out=out, method_spec=spec)
+    from benchmark.atomic import swap_folder
+
+    # Every file goes into a temporary sibling folder, moved into place only when the run is complete:
+    # an interrupted or failed run leaves the previous output folder as it was.
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    run = Run(args=args, scenario=scenario, out=tmp, method_spec=spec)
     start = time.perf_counter()
     try:
         for stage in STAGES:
             t0 = time.perf_counter()
             stage.run(run)
             run.timing_s[stage.name] = time.perf_counter() - t0
-        path = save_episode(run.episode, out / "episode.npz")
+        save_episode(run.episode, tmp / "episode.npz")
         run.timing_s["total"] = time.perf_counter() - start
         run.summary["timing_s"] = run.timing_s
         run.summary["provenance"] = provenance()
-        write_json(out / "summary.json", run.summary)
+        write_json(tmp / "summary.json", run.summary)
+        swap_folder(tmp, out)
     except (ScenarioError, InputError) as e:
+        shutil.rmtree(tmp, ignore_errors=True)
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
     except BenchmarkError as e:
+        shutil.rmtree(tmp, ignore_errors=True)
         print(f"fsv-bench: failed: {e}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print("fsv-bench: interrupted; files already in the output folder are complete, the run is not", file=sys.stderr)
+        shutil.rmtree(tmp, ignore_errors=True)
+        print(f"fsv-bench: interrupted; {out} is as it was before the run", file=sys.stderr)
         return 130
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    path = out / "episode.npz"
     sc = scenario
     print(f"fsv-bench: task {sc.task}, user {sc.user}, grasp {sc.grasp}, mass {sc.mass}, seed {sc.seed}, "
           f"noise {sc.noise_m} m, {len(run.episode.truth.t)} frames")
     for line in run.lines:
-        print(line)
+        print(line.replace(str(tmp), str(out)))
     print(f"episode: {path}\nsummary: {out / 'summary.json'} ({run.timing_s['total']:.1f} s)")
     failed = [g["name"] for g in run.summary["verdict"]["gates"] if not g["passed"]]
     if failed:

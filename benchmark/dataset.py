@@ -65,10 +65,11 @@ import glob
 import io
 import json
 import os
+import pathlib
 import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 import multiprocessing
 
 import numpy as np
@@ -77,7 +78,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from benchmark.atomic import write_bytes, write_text
-from benchmark.errors import BenchmarkError, DatasetError, DatasetFileError
+from benchmark.errors import ScenarioError, BenchmarkError, DatasetError, DatasetFileError
 from benchmark.scenario import Scenario
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from fsv import Contacts, Kinematics
@@ -148,6 +149,21 @@ class DatasetSpec:
             raise DatasetError(f"max_gap_n must be > 0 N, got {self.max_gap_n!r}")
         if int(self.min_fingers) < 2:
             raise DatasetError(f"min_fingers must be >= 2 (internal forces need two fingers), got {self.min_fingers!r}")
+        self._check_grid()
+
+    def _check_grid(self) -> None:
+        """Every task, user, grasp and mass exists and the duration suits every task (before any work)."""
+        from benchmark.world import validate
+
+        try:
+            base = Scenario(noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)
+            for t in self.tasks:
+                validate(replace(base, task=t))
+            for name in ("user", "grasp", "mass"):
+                for v in getattr(self, name + "s"):
+                    validate(replace(base, task=self.tasks[0], **{name: v}))
+        except ScenarioError as e:
+            raise DatasetError(str(e)) from None
 
     def scenarios(self) -> list[Scenario]:
         """Every scenario of the grid, in a fixed order."""
@@ -791,6 +807,9 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         grasps=_ints(args.grasps), masses=_ints(args.masses), seeds=_ints(args.seeds), duration_s=args.duration,
         noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
     )
+    from benchmark.evaluate import check_out
+
+    check_out(pathlib.Path(args.out))
     t0 = time.perf_counter()
     man = generate(spec, args.out, workers=args.workers, ray_address=args.ray_address, progress=not args.no_progress)
     failed = int((man["status"] != "ok").sum())

@@ -246,16 +246,24 @@ def load_gates(path) -> tuple:
     return gates
 
 
-def check_out(out: pathlib.Path) -> None:
-    """Refuses an output folder that is a file or cannot be created (ValueError, one line)."""
+def check_out(out: pathlib.Path, option: str = "--out") -> None:
+    """Refuses an output folder that is a file or cannot be created (ValueError, one line); writes nothing.
+
+    Writability is tested by creating (and removing) a temporary folder in the nearest existing
+    ancestor, which is where the output's temporary folder will be made.
+    """
+    out = pathlib.Path(out)
     if out.exists() and not out.is_dir():
-        raise ValueError(f"--out {out}: exists and is not a folder")
-    parent = out.parent if out.parent != pathlib.Path("") else pathlib.Path(".")
-    probe = parent
+        raise ValueError(f"{option} {out}: exists and is not a folder")
+    probe = out.parent if str(out.parent) else pathlib.Path(".")
     while not probe.exists():
         probe = probe.parent
-    if not os.access(probe, os.W_OK):
-        raise ValueError(f"--out {out}: {probe} is not writable")
+    if not probe.is_dir():
+        raise ValueError(f"{option} {out}: {probe} is not a folder")
+    try:
+        pathlib.Path(tempfile.mkdtemp(prefix=".fsv-bench-probe.", dir=probe)).rmdir()
+    except OSError as e:
+        raise ValueError(f"{option} {out}: cannot write in {probe} ({e.strerror or e})") from None
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -87,6 +87,11 @@ def format_world(block: dict) -> str:
 
 
 def write_json(path, data: dict) -> pathlib.Path:
-    """Writes JSON atomically (temp file in the same directory, then os.replace)."""
-    path = write_text(path, json.dumps(data, indent=2, sort_keys=False) + "\n")
+    """Writes strict JSON atomically (temp file in the same directory, then os.replace).
+
+    NaN and infinities (a metric with nothing to score) become null, so strict readers accept the file.
+    """
+    from benchmark.evaluate import strict
+
+    path = write_text(path, json.dumps(strict(data), indent=2, sort_keys=False, allow_nan=False) + "\n")
     return path

@@ -9,6 +9,14 @@ import numpy as np
 from benchmark.errors import ScenarioError
 
 
+MAX_NOISE_M = 0.1
+"""Upper bound of the depth noise standard deviation [m] (10 cm: beyond it the box is not visible)."""
+MAX_DURATION_S = 120.0
+"""Upper bound of an episode's length [s] (the truth and the depth of 120 s at 30 fps fit in memory)."""
+MAX_FPS = 240.0
+"""Upper bound of the camera frame rate [Hz]."""
+
+
 @dataclass(frozen=True)
 class Scenario:
     """Everything that determines an episode; the same scenario gives bit-identical results.
@@ -38,12 +46,12 @@ class Scenario:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
                 raise ScenarioError(f"{name} must be a non-negative integer, got {v!r}")
-        if not (np.isfinite(self.noise_m) and self.noise_m >= 0):
-            raise ScenarioError(f"noise must be a standard deviation in metres >= 0, got {self.noise_m!r}")
-        if self.duration_s is not None and not (np.isfinite(self.duration_s) and self.duration_s > 0):
-            raise ScenarioError(f"duration must be > 0 seconds, got {self.duration_s!r}")
-        if not (np.isfinite(self.fps) and self.fps > 0):
-            raise ScenarioError(f"fps must be > 0, got {self.fps!r}")
+        if not (np.isfinite(self.noise_m) and 0 <= self.noise_m <= MAX_NOISE_M):
+            raise ScenarioError(f"noise must be a standard deviation in metres in [0, {MAX_NOISE_M}], got {self.noise_m!r}")
+        if self.duration_s is not None and not (np.isfinite(self.duration_s) and 0 < self.duration_s <= MAX_DURATION_S):
+            raise ScenarioError(f"duration must be > 0 and <= {MAX_DURATION_S:g} seconds, got {self.duration_s!r}")
+        if not (np.isfinite(self.fps) and 0 < self.fps <= MAX_FPS):
+            raise ScenarioError(f"fps must be > 0 and <= {MAX_FPS:g}, got {self.fps!r}")
 
     def rng(self, stream: str) -> np.random.Generator:
         """An independent generator for one named use (e.g. "tracker-init", "depth-noise").

@@ -334,7 +334,7 @@ def write(result: dict, out) -> None:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The arguments of ``fsv-bench table2``."""
     p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
-    p.add_argument("--out", default="results/table2", help="output folder (default: results/table2)")
+    p.add_argument("--out", default="runs/table2", help="output folder (default: runs/table2; the committed results/table2 is made by fsv-bench reproduce)")
     p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
     p.add_argument("--seed", type=int, default=0, help="seed of the networks' initial weights")
     p.add_argument("--train-seeds", default="0-3", help="episode seeds to train on (default 0-3)")

@@ -56,7 +56,7 @@ def test_a_broken_tracker_fails_the_verdict_with_exit_1_naming_the_gates(tmp_pat
     (["--grasp", "-1"], "grasp must be a non-negative integer, got -1"),
     (["--mass", "42"], "mass 42 does not exist; accepted: 0 (light)"),
     (["--noise", "-0.5"], "got -0.5"),
-    (["--duration", "-3"], "duration must be > 0 seconds, got -3.0"),
+    (["--duration", "-3"], "duration must be > 0 and <= 120 seconds, got -3.0"),
     (["--duration", "ten"], "invalid float value: 'ten'"),
 ])
 def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, argv, needle):
@@ -111,12 +111,52 @@ def test_a_failing_stage_exits_1_with_one_line(tmp_path, capsys, monkeypatch):
     assert not (tmp_path / "run" / "summary.json").exists()
 
 
-def test_ctrl_c_exits_130_and_writes_no_summary(tmp_path, capsys, monkeypatch):
+def test_ctrl_c_exits_130_and_leaves_the_previous_output_as_it_was(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "summary.json").write_text('{"previous": true}')
     _with_render_stage(monkeypatch, KeyboardInterrupt())
-    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--out", str(tmp_path / "run")])
+    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--out", str(out)])
     assert code == 130
     assert "interrupted" in capsys.readouterr().err
-    assert not (tmp_path / "run" / "summary.json").exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["run"] and [p.name for p in out.iterdir()] == ["summary.json"]
+    assert (out / "summary.json").read_text() == '{"previous": true}'
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--noise", "5"], "noise must be a standard deviation in metres in [0, 0.1], got 5.0"),
+    (["--duration", "1e9"], "duration must be > 0 and <= 120 seconds, got 1000000000.0"),
+    (["--internal-model", "FILE"], "--internal-model FILE"),
+    (["--out", "FILE"], "exists and is not a folder"),
+    (["--out", "FILE/sub"], "is not a folder"),
+])
+def test_bad_input_exits_2_in_seconds_with_one_line_and_touches_nothing(tmp_path, capsys, argv, needle):
+    import time
+
+    existing = tmp_path / "file.txt"
+    existing.write_text("keep")
+    argv = [a.replace("FILE", str(existing)) for a in argv]
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").write_text("old")
+    if "--out" not in argv:
+        argv += ["--out", str(out)]
+    t0 = time.perf_counter()
+    assert main(["--task", "lift", "--quiet", *argv]) == 2
+    assert time.perf_counter() - t0 < 5
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle.replace("FILE", str(existing)) in err
+    assert existing.read_text() == "keep" and (out / "summary.json").read_text() == "old"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file.txt", "out"]
+
+
+def test_summary_json_is_strict_even_where_a_metric_has_nothing_to_score(tmp_path):
+    out = tmp_path / "run"
+    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out),
+          "--tracker", "external_stages:FrozenTracker"])  # no contacts: contact errors are undefined
+    summary = json.loads((out / "summary.json").read_text(),
+                         parse_constant=lambda c: pytest.fail(f"non-strict JSON token {c}"))
+    assert summary["tracking"]["contact_err_mm_std"] is None
 
 
 @pytest.mark.parametrize("exc, code, needle", [(KeyboardInterrupt(), 130, "interrupted; complete files are kept"),

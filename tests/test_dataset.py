@@ -357,3 +357,17 @@ def test_a_bad_ray_address_fails_within_seconds(tmp_path):
     assert not (tmp_path / "d").exists()  # refused before any work
     with pytest.raises(DatasetError, match="expected 'auto', 'host:port'"):
         generate(spec, tmp_path / "d", ray_address="nowhere", progress=False)
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--tasks", "nope"], "unknown task 'nope'; accepted: lift"),
+    (["--users", "9"], "user 9 does not exist; accepted: 0"),
+    (["--duration", "0.1"], "duration 0.1 s is too short for task 'lift'; accepted: >= 1.0 s"),
+])
+def test_generate_refuses_a_bad_grid_before_any_work_and_writes_nothing(tmp_path, capsys, argv, needle):
+    from benchmark.cli import main
+
+    out = tmp_path / "data"
+    assert main(["generate", "--out", str(out), *argv]) == 2
+    err = capsys.readouterr().err
+    assert needle in err and err.count("\n") == 1 and not out.exists()
