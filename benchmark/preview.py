@@ -1,7 +1,7 @@
 """Pictures of a depth video a person can look at: a PNG strip of frames and an animated GIF.
 
 Depth is shown with matplotlib's "turbo" colour map over the sensor's range (near = blue,
-far = red); pixels without a measurement are black.
+far = red); pixels without a measurement are black. The PNG strip carries a colour bar in metres.
 """
 
 from __future__ import annotations
@@ -86,7 +86,8 @@ def write_preview(
     out_dir.mkdir(parents=True, exist_ok=True)
     t = np.arange(len(depth_m)) / fps
     paths = [out_dir / "depth_preview.png"]
-    png = _palette(strip(depth_m, t, num))
+    frames = strip(depth_m, t, num)
+    png = _palette(np.concatenate([frames, colour_bar(frames.shape[1])], axis=0))
     _atomic(paths[0], lambda p: png.save(p, format="PNG", optimize=True))
     if gif:
         step = max(1, int(np.ceil(fps / gif_fps)))
@@ -99,6 +100,35 @@ def write_preview(
             ),
         )
     return paths
+
+
+COLOUR_BAR_HEIGHT = 40
+"""Height in pixels of the colour bar under the PNG strip."""
+
+
+def colour_bar(width: int, near_m: float = 0.15, far_m: float = 1.0) -> np.ndarray:
+    """A labelled colour bar of the depth colour map, shape (COLOUR_BAR_HEIGHT, width, 3), uint8.
+
+    The gradient spans the middle of the strip from ``near_m`` to ``far_m`` with ticks every 0.1 m,
+    and a black swatch labels "no measurement".
+    """
+    from PIL import Image, ImageDraw
+
+    img = np.full((COLOUR_BAR_HEIGHT, width, 3), 255, np.uint8)
+    x0, x1 = width // 4, 3 * width // 4
+    ramp = np.linspace(near_m, far_m, x1 - x0)
+    img[4:18, x0:x1] = colorize(np.broadcast_to(ramp, (14, x1 - x0)), near_m, far_m)
+    pil = Image.fromarray(img)
+    draw = ImageDraw.Draw(pil)
+    if x0 >= 110:  # room for the "no measurement" swatch on the left
+        draw.rectangle([x0 - 110, 4, x0 - 97, 17], fill=(0, 0, 0))
+        draw.text((x0 - 92, 5), "no measurement", fill=(0, 0, 0))
+    for d in np.arange(np.ceil(near_m * 10) / 10, far_m + 1e-9, 0.1):
+        x = x0 + int(round((d - near_m) / (far_m - near_m) * (x1 - x0 - 1)))
+        draw.line([(x, 18), (x, 21)], fill=(0, 0, 0))
+        draw.text((x - 8, 23), f"{d:.1f}", fill=(0, 0, 0))
+    draw.text((x1 + 8, 5), "depth along the optical axis [m]" if width - x1 > 200 else "[m]", fill=(0, 0, 0))
+    return np.asarray(pil)
 
 
 def _indexed(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0):

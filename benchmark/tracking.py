@@ -115,9 +115,11 @@ _BOX_EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0
 
 
 def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, object_model: ObjectModel,
-                 hand_model: HandModel, path: str | os.PathLike, frames: int = 6) -> Path:
-    """A PNG strip: depth frames with the tracked box (green), hand capsules (orange), fingertips
-    (red: seen, white: hidden) and active contact points (cyan crosses) drawn over them.
+                 hand_model: HandModel, path: str | os.PathLike, frames: int = 6, truth: Truth | None = None) -> Path:
+    """A PNG strip: depth frames (grey: near dark, far light) with the tracked box (green), hand
+    capsules (orange), fingertips (red: seen, white: hidden) and active contact points (cyan crosses)
+    drawn over them; with ``truth``, the true box (white dashed), hand (faint white) and contact
+    points (magenta plus signs) beneath. A legend under the strip names every mark.
 
     Args:
         depth: The depth video.
@@ -127,6 +129,7 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         hand_model: The hand (its capsules).
         path: Where to write the PNG (atomically).
         frames: How many evenly spaced frames to show.
+        truth: The episode's truth, drawn faintly for comparison (None: the estimate only).
 
     Returns:
         The path written.
@@ -138,7 +141,7 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
 
     T = depth.num_frames
     idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
-    fig, axes = plt.subplots(1, len(idx), figsize=(3.2 * len(idx), 3.0), squeeze=False)
+    fig, axes = plt.subplots(1, len(idx), figsize=(3.2 * len(idx), 3.4), squeeze=False)
     half = object_model.half_extents
     signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
     # One crop for the whole strip: the tracked box and hand over the shown frames, plus a margin.
@@ -160,6 +163,19 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         crop = d[int(lo[1]) : int(hi[1]) + 1, int(lo[0]) : int(hi[0]) + 1]
         vmin, vmax = (np.nanpercentile(crop, 1), np.nanpercentile(crop, 99)) if np.isfinite(crop).any() else (0, 1)
         ax.imshow(d, cmap="Greys_r", vmin=vmin, vmax=vmax)
+        if truth is not None:
+            corners = truth.box_pos[i] + (signs * half) @ truth.box_rot[i].T
+            uv = _project(calib, corners)
+            for a, b in _BOX_EDGES:
+                ax.plot(uv[[a, b], 0], uv[[a, b], 1], color="white", lw=1.0, ls="--", alpha=0.8)
+            ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, truth.hand_qpos[i]))
+            for a, b in ends:
+                uv = _project(calib, np.stack([a, b]))
+                ax.plot(uv[:, 0], uv[:, 1], color="white", lw=2.5, alpha=0.3, solid_capstyle="round")
+            act_t = np.asarray(truth.contact_active[i], bool)
+            if act_t.any():
+                uv = _project(calib, truth.box_pos[i] + truth.contact_point[i, act_t] @ truth.box_rot[i].T)
+                ax.scatter(uv[:, 0], uv[:, 1], marker="+", s=40, c="magenta", zorder=3, linewidths=1.0)
         corners = tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T
         uv = _project(calib, corners)
         for a, b in _BOX_EDGES:
@@ -184,7 +200,19 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         ax.set_xlim(lo[0], hi[0])
         ax.set_ylim(hi[1], lo[1])
         ax.axis("off")
-    fig.tight_layout()
+    from matplotlib.lines import Line2D
+
+    marks = [Line2D([], [], color="lime", lw=1.2, label="tracked box"),
+             Line2D([], [], color="orange", lw=3, alpha=0.55, label="tracked hand"),
+             Line2D([], [], color="red", marker="o", ls="", ms=4, label="fingertip (seen)"),
+             Line2D([], [], color="white", markeredgecolor="red", marker="o", ls="", ms=4, label="fingertip (hidden)"),
+             Line2D([], [], color="cyan", marker="x", ls="", ms=6, label="tracked contact")]
+    if truth is not None:
+        marks += [Line2D([], [], color="grey", lw=1.0, ls="--", label="true box"),
+                  Line2D([], [], color="grey", lw=2.5, alpha=0.4, label="true hand"),
+                  Line2D([], [], color="magenta", marker="+", ls="", ms=7, label="true contact")]
+    fig.legend(handles=marks, loc="lower center", ncol=len(marks), fontsize=7, frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
@@ -244,7 +272,8 @@ def run_stage(run) -> None:
     elapsed = run.estimate.timing_s["track"]
     scores = score_tracking(tracking, ep.truth)
     run.out.mkdir(parents=True, exist_ok=True)
-    overlay = plot_overlay(ep.depth, ep.calib, tracking, ep.object_model, ep.hand_model, run.out / "tracking_overlay.png")
+    overlay = plot_overlay(ep.depth, ep.calib, tracking, ep.object_model, ep.hand_model, run.out / "tracking_overlay.png",
+                           truth=ep.truth)
     T = len(ep.truth.t)
     block = {
         **scores,

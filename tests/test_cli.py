@@ -72,6 +72,7 @@ def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, arg
 
 
 def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, capsys):
+    from benchmark.preview import COLOUR_BAR_HEIGHT
     from PIL import Image
 
     out = tmp_path / "run"
@@ -81,7 +82,7 @@ def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, c
     assert block["frames"] == 31 and block["preview"] == ["depth_preview.png"]
     assert 0.5 < block["valid_fraction"] < 1 and block["box_pixels_median"] > 1000
     with Image.open(out / "depth_preview.png") as png:
-        assert png.size == (6 * 320 + 5 * 4, 240)
+        assert png.size == (6 * 320 + 5 * 4, 240 + COLOUR_BAR_HEIGHT)  # frames above a colour bar in metres
     assert not (out / "depth.gif").exists()
     ep = load_episode(out / "episode.npz")
     assert ep.depth.depth_m.shape == (31, 240, 320) and ep.labels.shape == (31, 240, 320)

@@ -6,7 +6,7 @@ from matplotlib import colormaps
 from PIL import Image
 
 from benchmark.errors import BenchmarkError
-from benchmark.preview import colorize, strip, write_preview
+from benchmark.preview import COLOUR_BAR_HEIGHT, colorize, strip, write_preview
 
 
 def video(T=12, H=40, W=32):
@@ -40,7 +40,7 @@ def test_write_preview_writes_a_png_strip_and_a_gif(tmp_path):
     paths = write_preview(d, fps=30.0, out_dir=tmp_path / "new", num=3, gif_fps=15.0)
     assert [p.name for p in paths] == ["depth_preview.png", "depth.gif"]
     with Image.open(paths[0]) as png:
-        assert png.size == (3 * 32 + 2 * 4, 40)
+        assert png.size == (3 * 32 + 2 * 4, 40 + COLOUR_BAR_HEIGHT)  # frames above the colour bar
     with Image.open(paths[1]) as gif:
         assert gif.n_frames == 15  # every second frame of 30
         assert gif.info["duration"] == pytest.approx(1000 * 2 / 30, abs=10)  # GIF stores centiseconds

@@ -59,3 +59,15 @@ def test_frames_without_estimate_are_not_scored():
     s = score_forces(sol, truth, kin.rot)
     assert s["frames_scored"] == 7 and s["status"]["no_kinematics"] == 3
     assert sol.count(FrameStatus.NO_KINEMATICS) == 3 and np.isfinite(s["net_force_err_n_rms"])
+
+
+def test_robust_limits_show_the_bulk_and_leave_an_outlier_to_the_edge():
+    from benchmark.score_forces import robust_limits
+
+    truth = np.linspace(0.0, 10.0, 200)
+    estimate = truth + 0.5
+    estimate[17] = 1000.0  # one absurd frame (as a least-violation solve can give)
+    lo, hi = robust_limits(truth, estimate)
+    assert lo < 0 < 10.5 < hi < 12.5  # 99th percentile of the values, 10 % margin: not 1000
+    lo2, hi2 = robust_limits(np.array([np.nan]), np.array([np.nan]))
+    assert (lo2, hi2) == (0.0, 1.0)
