@@ -159,8 +159,8 @@ class DatasetSpec:
             base = Scenario(noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)
             for t in self.tasks:
                 validate(replace(base, task=t))
-            for name in ("user", "grasp", "mass"):
-                for v in getattr(self, name + "s"):
+            for name, values in (("user", self.users), ("grasp", self.grasps), ("mass", self.masses)):
+                for v in values:
                     validate(replace(base, task=self.tasks[0], **{name: v}))
         except ScenarioError as e:
             raise DatasetError(str(e)) from None

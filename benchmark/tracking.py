@@ -267,7 +267,7 @@ def run_stage(run) -> None:
         from benchmark.errors import ScenarioError
 
         raise ScenarioError(f"--init-perturbation must be a scale >= 0, got {scale!r}")
-    run.estimate = run_method(run.method_spec, ep, inputs=camera_input(ep, scale))
+    run.estimate = run_method(run.method_spec, ep, inputs=camera_input(ep, scale), progress=not run.args.quiet)
     tracking = run.tracking = run.estimate.tracking
     elapsed = run.estimate.timing_s["track"]
     scores = score_tracking(tracking, ep.truth)

@@ -32,6 +32,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
     p.add_argument("--folds", type=int, default=LearnConfig.folds, help="cross-validation folds (0: skip)")
     p.add_argument("--seed", type=int, default=0, help="seed of the initial weights")
+    p.add_argument("--quiet", action="store_true", help="no progress bar (it is also hidden when stderr is not a terminal)")
     p.add_argument("--members", type=int, default=TABLE2_MEMBERS,
                    help=f"networks per ANN, averaged (default {TABLE2_MEMBERS}; 1 = the paper's single pair)")
     p.add_argument("--max-excess", type=float, default=MAX_EXCESS_N,
@@ -48,16 +49,24 @@ def run(args: argparse.Namespace):
         raise InputError(f"--folds {args.folds} needs between 2 and the dataset's {episodes} episodes; "
                          f"pass --folds {min(max(episodes, 2), 5)} or --folds 0 to skip cross-validation")
     config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed, members=args.members)
+    from tqdm import tqdm
+
     t0 = time.perf_counter()
-    cv = cross_validate(data, config).summary() if args.folds else None
-    with open(os.path.join(args.data, "dataset.json")) as fh:
-        header = json.load(fh)
-    meta = dict(
-        command="fsv-bench train " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train"] else "fsv.learn.train",
-        dataset=header["spec"], selection=where, max_excess_n=rule, episodes=int(df["episode"].nunique()),
-        cross_validation=cv,
-    )
-    model = train(data, config, finger_names=finger_names_of(df), metadata=meta)
+    per_model = 2 * config.members * config.epochs  # epochs of every network of one model
+    bar = tqdm(total=per_model * ((args.folds if args.folds else 0) + 1), desc="train", unit="epoch", leave=False,
+               disable=True if args.quiet else None, mininterval=0.5)  # None: hidden when stderr is not a terminal
+    try:
+        cv = cross_validate(data, config, on_epoch=bar.update).summary() if args.folds else None
+        with open(os.path.join(args.data, "dataset.json")) as fh:
+            header = json.load(fh)
+        meta = dict(
+            command="fsv-bench train " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train"] else "fsv.learn.train",
+            dataset=header["spec"], selection=where, max_excess_n=rule, episodes=int(df["episode"].nunique()),
+            cross_validation=cv,
+        )
+        model = train(data, config, finger_names=finger_names_of(df), metadata=meta, on_epoch=bar.update)
+    finally:
+        bar.close()
     model.save(args.out)
     msg = f"trained on {len(data)} samples from {meta['episodes']} episodes in {time.perf_counter() - t0:.1f} s"
     if cv:

@@ -180,7 +180,7 @@ def _mlp(n_in: int, hidden: tuple, n_out: int, gen: torch.Generator) -> torch.nn
     return torch.nn.Sequential(*layers)
 
 
-def _rprop(net: torch.nn.Module, x: torch.Tensor, loss_fn, config: LearnConfig) -> float:
+def _rprop(net: torch.nn.Module, x: torch.Tensor, loss_fn, config: LearnConfig, on_epoch=None) -> float:
     opt = torch.optim.Rprop(net.parameters(), lr=config.lr, etas=config.etas, step_sizes=config.step_sizes, foreach=False)
     loss = None
     for _ in range(config.epochs):
@@ -188,6 +188,8 @@ def _rprop(net: torch.nn.Module, x: torch.Tensor, loss_fn, config: LearnConfig) 
         loss = loss_fn(net(x))
         loss.backward()
         opt.step()
+        if on_epoch is not None:
+            on_epoch(1)
     with torch.no_grad():
         return float(loss_fn(net(x)))
 
@@ -367,7 +369,8 @@ def load(path) -> InternalForceModel:
         raise InputError(f"{path!r} has inconsistent internal-force model data: {one_line(e)}") from e
 
 
-def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_names=None, metadata=None) -> InternalForceModel:
+def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_names=None, metadata=None,
+          on_epoch=None) -> InternalForceModel:
     """Trains ANN_L2 and ANN_decomp on all samples of ``data``.
 
     Args:
@@ -375,6 +378,8 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
         config: Architecture and Rprop settings; ``config.seed`` fixes the initial weights.
         finger_names: Names of the K finger slots (default ``finger0..``).
         metadata: JSON-like description stored with the model.
+        on_epoch: Called with 1 after every epoch of every network (``2 * members * epochs`` calls),
+            e.g. a progress bar's ``update``.
 
     Returns:
         The trained :class:`InternalForceModel`; its metadata gains the final training losses.
@@ -403,8 +408,8 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
         for _ in range(config.members):
             net_l2.append(_mlp(z.shape[1], config.hidden_l2, 1, gen))
             net_decomp.append(_mlp(z.shape[1], config.hidden_decomp, K, gen))
-            loss_l2.append(_rprop(net_l2[-1], z, lambda out: torch.mean((out[:, 0] - y) ** 2), config))
-            loss_dec.append(_rprop(net_decomp[-1], z, lambda out: torch.sum(w * (out - s) ** 2) / n_w, config))
+            loss_l2.append(_rprop(net_l2[-1], z, lambda out: torch.mean((out[:, 0] - y) ** 2), config, on_epoch))
+            loss_dec.append(_rprop(net_decomp[-1], z, lambda out: torch.sum(w * (out - s) ** 2) / n_w, config, on_epoch))
     finally:
         torch.set_num_threads(threads)
     meta = dict(metadata or {})
@@ -455,11 +460,12 @@ class CrossValidation:
         }
 
 
-def cross_validate(data: TrainingSet, config: LearnConfig = LearnConfig()) -> CrossValidation:
+def cross_validate(data: TrainingSet, config: LearnConfig = LearnConfig(), *, on_epoch=None) -> CrossValidation:
     """k-fold cross-validation (``config.folds``) with folds made of whole groups.
 
     Groups are assigned to folds in a seeded random order (``config.seed``), so no group (episode)
-    contributes to both the training and the validation side of a fold.
+    contributes to both the training and the validation side of a fold. ``on_epoch`` is passed to
+    every fold's :func:`train`.
     """
     groups = np.unique(data.groups)
     if len(groups) < config.folds:
@@ -469,7 +475,7 @@ def cross_validate(data: TrainingSet, config: LearnConfig = LearnConfig()) -> Cr
     fold = np.array([fold_of_group[g] for g in data.groups])
     rel, l2e, srm = [], [], []
     for k in range(config.folds):
-        model = train(data.subset(fold != k), config)
+        model = train(data.subset(fold != k), config, on_epoch=on_epoch)
         val = data.subset(fold == k)
         l2, s, f = model.predict(val.x, val.active)
         l2_true, s_true = _targets(val.internal, val.active)

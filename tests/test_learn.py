@@ -294,3 +294,16 @@ def test_a_torch_error_is_reported_on_one_line(small_file, tmp_path):
     with pytest.raises(InputError) as e:
         load(bad)
     assert "\n" not in str(e.value) and "cut.pt' is not a readable internal-force model" in str(e.value)
+
+
+def test_progress_is_reported_once_per_epoch_of_every_network():
+    calls = []
+    cfg = LearnConfig(epochs=7, seed=5, members=3, folds=2)
+    a = train(synthetic(200, 1), cfg, on_epoch=calls.append)
+    assert len(calls) == 2 * 3 * 7 and set(calls) == {1}  # ANN_L2 and ANN_decomp, every member, every epoch
+    b = train(synthetic(200, 1), cfg)
+    x = synthetic(200, 1)
+    assert np.array_equal(a.predict(x.x, x.active)[2], b.predict(x.x, x.active)[2])  # the callback changes nothing
+    calls.clear()
+    cross_validate(synthetic(200, 1), cfg, on_epoch=calls.append)
+    assert len(calls) == 2 * 2 * 3 * 7

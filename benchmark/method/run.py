@@ -37,7 +37,7 @@ def oracle_inputs(episode, oracle: tuple) -> dict:
     return out
 
 
-def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None):
+def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None, progress: bool = False):
     """Runs the method ``spec`` names on ``episode``'s camera inputs.
 
     Args:
@@ -46,6 +46,7 @@ def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None):
         inputs: Its camera inputs, if already made (:func:`camera_input`).
         tracking: The output of this method's tracker on this episode, if already computed by a
             method with the same tracker (methods differing only after tracking share it).
+        progress: Show a per-frame progress bar while the reference tracker runs.
 
     Returns:
         The ``fsv.method.Estimate``; the tracker's searches draw from ``episode.scenario.rng("tracker")``.
@@ -55,6 +56,16 @@ def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None):
     oracle = oracle_inputs(episode, spec.oracle)
     if tracking is not None:
         return method.after_tracking(inputs, tracking, **oracle)
+    from fsv.method import Method, ReferenceTracker
+
+    if progress and isinstance(method, Method) and isinstance(method.tracker, ReferenceTracker):
+        import dataclasses
+
+        from tqdm import tqdm
+
+        with tqdm(total=inputs.num_frames, desc="track", unit="frame", leave=False, disable=None) as bar:
+            method = dataclasses.replace(method, tracker=dataclasses.replace(method.tracker, on_frame=bar.update))
+            return method(inputs, episode.scenario.rng("tracker"), **oracle)
     return method(inputs, episode.scenario.rng("tracker"), **oracle)
 
 

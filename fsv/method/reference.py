@@ -21,10 +21,11 @@ class ReferenceTracker:
 
     config: TrackerConfig = field(default_factory=TrackerConfig)
     name: str = "reference tracker"
+    on_frame: object = field(default=None, compare=False)  # called with 1 after every frame (progress)
 
     def __call__(self, inputs, rng: np.random.Generator) -> Tracking:
         return track(inputs.depth, inputs.calib, inputs.object_model, inputs.hand_model, inputs.init,
-                     config=self.config, rng=rng)
+                     config=self.config, rng=rng, on_frame=self.on_frame)
 
 
 @dataclass(frozen=True)

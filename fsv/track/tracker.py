@@ -98,7 +98,7 @@ class Tracking:
 
 def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand_model: HandModel,
           init: TrackInit, *, config: TrackerConfig | None = None,
-          rng: np.random.Generator | None = None) -> Tracking:
+          rng: np.random.Generator | None = None, on_frame=None) -> Tracking:
     """Tracks the box and the hand through a depth video and detects their contacts.
 
     Args:
@@ -109,6 +109,7 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
         init: First-frame initialisation.
         config: Parameters of every stage.
         rng: Generator of the trackers' re-initialisation searches.
+        on_frame: Called with 1 after every frame (e.g. a progress bar's ``update``).
 
     Returns:
         The tracking result.
@@ -144,6 +145,8 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
         tips[i], observed[i], explained[i] = hf.fingertips, hf.observed, hf.explained
         t_box += t1 - t0
         t_hand += time.perf_counter() - t1
+        if on_frame is not None:
+            on_frame(1)
     poses = Poses(t=depth.t, pos=box_pos, rot=box_rot)
     t2 = time.perf_counter()
     contacts = detect_contacts(tips, hand_model.fingertip_radius, observed, poses, object_model,
