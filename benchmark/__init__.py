@@ -10,11 +10,11 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 # isort: off
 
 from benchmark.errors import BenchmarkError, EpisodeFileError, RenderError, ScenarioError, SimulationError
-from benchmark.scenario import Scenario
+from benchmark.world.scenario import Scenario
 from benchmark.episode import Episode, load_episode, save_episode
-from benchmark.simulate import simulate
-from benchmark.tasks import TASKS
+from benchmark.world.simulate import simulate
+from benchmark.world.tasks import TASKS
 
 # Depth rendering (issue 3)
-from benchmark.render import render  # noqa: E402
-from benchmark.sensor import SensorModel  # noqa: E402
+from benchmark.camera.render import render  # noqa: E402
+from benchmark.camera.sensor import SensorModel  # noqa: E402

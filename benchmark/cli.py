@@ -24,7 +24,7 @@ from typing import Callable
 from benchmark.episode import Episode, save_episode
 from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.report import format_world, scenario_block, world_block, write_json
-from benchmark.scenario import Scenario
+from benchmark.world.scenario import Scenario
 from fsv.errors import InputError
 from fsv.provenance import provenance
 
@@ -78,7 +78,7 @@ def _no_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _simulate(run: Run) -> None:
-    from benchmark.simulate import run as simulate_run
+    from benchmark.world.simulate import run as simulate_run
 
     episode, stats = simulate_run(run.scenario, progress=not run.args.quiet)
     run.episode = episode
@@ -94,28 +94,28 @@ SIMULATE = Stage(name="simulate", add_arguments=_no_arguments, run=_simulate)
 STAGES: list = [SIMULATE]
 
 # Render (issue 3): noisy depth video, calibration and labels; depth preview PNG/GIF in DIR.
-from benchmark.render import add_cli_arguments as _render_arguments, run_cli_stage as _render  # noqa: E402
+from benchmark.camera.render import add_cli_arguments as _render_arguments, run_cli_stage as _render  # noqa: E402
 
 STAGES.append(Stage(name="render", add_arguments=_render_arguments, run=_render))
 
-# tracking (issue 6): box and hand from depth alone, contacts; scores and overlay (benchmark/tracking.py).
-from benchmark import tracking as _tracking  # noqa: E402
+# tracking (issue 6): box and hand from depth alone, contacts; scores and overlay (benchmark/scores/tracking.py).
+from benchmark.scores import tracking as _tracking  # noqa: E402
 
 STAGES.append(Stage(name="track", add_arguments=_tracking.add_arguments, run=_tracking.run_stage))
 
-# kinematics (issue 4): Table 1, Fig. 4, and --kinematics for the later stages (benchmark/table1.py).
-from benchmark import table1 as _table1  # noqa: E402
+# kinematics (issue 4): Table 1, Fig. 4, and --kinematics for the later stages (benchmark/paper/table1.py).
+from benchmark.paper import table1 as _table1  # noqa: E402
 
 STAGES.append(Stage(name="kinematics", add_arguments=_table1.add_arguments, run=_table1.run_stage))
 
-# forces (issue 5): nominal contact forces, scored against the truth (benchmark/score_forces.py).
-from benchmark import score_forces as _score_forces  # noqa: E402
+# forces (issue 5): nominal contact forces, scored against the truth (benchmark/scores/forces.py).
+from benchmark.scores import forces as _score_forces  # noqa: E402
 
 STAGES.append(Stage(name="forces", add_arguments=_score_forces.add_arguments, run=_score_forces.run_stage))
 
-# learning (issue 7): learned internal forces with the shipped model (benchmark/learning.py), and the
-# subcommands `fsv-bench generate | train | table2` (benchmark/dataset.py, training.py, table2.py).
-from benchmark import learning as _learning  # noqa: E402
+# learning (issue 7): learned internal forces with the shipped model (benchmark/scores/learned.py), and the
+# subcommands `fsv-bench generate | train | table2` (benchmark/paper/dataset.py, training.py, table2.py).
+from benchmark.scores import learned as _learning  # noqa: E402
 
 STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_learning.run_stage))
 
@@ -123,11 +123,11 @@ STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_le
 from benchmark import verdict as _verdict  # noqa: E402
 
 STAGES.append(Stage(name="verdict", add_arguments=_verdict.add_arguments, run=_verdict.run_stage))
-SUBCOMMANDS = {"generate": "benchmark.dataset", "train": "benchmark.training", "table2": "benchmark.table2",
-               "reproduce": "benchmark.reproduce", "eval": "benchmark.evaluate",
-               "compare": "benchmark.compare", "export": "benchmark.exchange.export",
-               "score": "benchmark.exchange.score", "leaderboard": "benchmark.leaderboard",
-               "sweep": "benchmark.sweep"}
+SUBCOMMANDS = {"generate": "benchmark.paper.dataset", "train": "benchmark.paper.training", "table2": "benchmark.paper.table2",
+               "reproduce": "benchmark.reproduce", "eval": "benchmark.suites.evaluate",
+               "compare": "benchmark.suites.compare", "export": "benchmark.exchange.export",
+               "score": "benchmark.exchange.score", "leaderboard": "benchmark.suites.leaderboard",
+               "sweep": "benchmark.suites.sweep"}
 
 
 def _subcommand(argv: list) -> int:
@@ -180,7 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     for stage in STAGES:
         stage.add_arguments(p)
-    from benchmark.evaluate import add_method_arguments
+    from benchmark.suites.evaluate import add_method_arguments
 
     add_method_arguments(p, oracle=False)
     return p
@@ -188,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def scenario_from_args(args: argparse.Namespace) -> Scenario:
     """The scenario of the command line, fully validated (raises ScenarioError)."""
-    from benchmark.world import validate
+    from benchmark.world.assets import validate
 
     sc = Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
                   seed=args.seed, duration_s=args.duration)
@@ -223,10 +223,10 @@ def main(argv: list | None = None) -> int:
         scenario = scenario_from_args(args)
         spec = method_spec_from_args(args)
         if args.gates:
-            from benchmark.evaluate import load_gates
+            from benchmark.suites.evaluate import load_gates
 
             load_gates(args.gates)
-        from benchmark.evaluate import check_out, episode_name
+        from benchmark.suites.evaluate import check_out, episode_name
 
         out = args.out or pathlib.Path("runs") / episode_name(scenario)
         check_out(out)

@@ -10,8 +10,8 @@ import numpy as np
 
 from benchmark.archive import read_archive, write_archive
 from benchmark.errors import BenchmarkError, EpisodeFileError
-from benchmark.scenario import Scenario
-from benchmark.truth import Truth
+from benchmark.world.scenario import Scenario
+from benchmark.world.truth import Truth
 from fsv import Calibration, DepthVideo, FsvError, HandModel, ObjectModel
 
 
@@ -87,7 +87,7 @@ def quantise_depth(depth: np.ndarray) -> tuple:
     Raises:
         EpisodeFileError: If the depth does not fit uint16 even at the coarsest quantum.
     """
-    from benchmark.sensor import dequantise
+    from benchmark.camera.sensor import dequantise
 
     top = float(depth.max(initial=0.0))
     for i, q in enumerate(DEPTH_QUANTA_M):
@@ -108,7 +108,7 @@ def depth_from_arrays(arrays) -> tuple[DepthVideo | None, Calibration | None, np
     """
     if "depth_counts" not in arrays:
         return None, None, None
-    from benchmark.sensor import dequantise
+    from benchmark.camera.sensor import dequantise
 
     depth = DepthVideo(
         depth_m=dequantise(arrays["depth_counts"], float(arrays["depth_quantum_m"])), fps=float(arrays["depth_fps"])
@@ -133,7 +133,7 @@ An episode file is a NumPy ``.npz`` archive (zip, deflate-compressed) holding on
 
 Array entries are named ``<section>/<field>``. Sections of version 2:
 
-    truth/*    every array field of benchmark.truth.Truth (scalars ``mass`` in the JSON)
+    truth/*    every array field of benchmark.world.truth.Truth (scalars ``mass`` in the JSON)
     object/*   fsv.ObjectModel arrays (size_m, inertia); mass_kg and frictions in the JSON
     hand/*     fsv.HandModel arrays; segment, joint and finger names in the JSON
     render/*   after rendering only: the arrays of :func:`depth_arrays` (uint16 depth counts and

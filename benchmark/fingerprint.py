@@ -13,15 +13,17 @@ import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
-WORLD_MODULES = ("episode", "grip", "hand", "render", "scenario", "sensor", "simulate", "truth", "world")
-"""``benchmark`` modules that decide an episode's truth and depth (with ``benchmark/tasks/``)."""
+WORLD_MODULES = ("episode", "world/grip", "world/hand", "camera/render", "world/scenario", "camera/sensor",
+                 "world/simulate", "world/truth", "world/assets")
+"""``benchmark`` modules (paths without ``.py``) that decide an episode's truth and depth (with
+``benchmark/world/tasks/``)."""
 
-RESULTS_MODULES = WORLD_MODULES + ("contact_error", "dataset", "evaluate", "learning", "motion", "pose_error",
-                                   "score_forces", "table1", "table2", "tactile", "tracking", "training")
+RESULTS_MODULES = WORLD_MODULES + ("paper/dataset", "world/motion", "paper/table1", "paper/table2", "world/tactile",
+                                   "paper/training", "method/spec", "method/run", "method/load", "method/init")
 """``benchmark`` modules that decide the committed results (with ``fsv/`` and the packages of
 :data:`RESULTS_PACKAGES`)."""
 
-RESULTS_PACKAGES = ("tasks", "scores", "suites")
+RESULTS_PACKAGES = ("world/tasks", "scores", "suites")
 """``benchmark`` sub-packages that decide the committed results."""
 
 
@@ -43,8 +45,9 @@ def _data_files(root: pathlib.Path, folders) -> list:
 
 
 def world_fingerprint(root: pathlib.Path = ROOT) -> str:
-    """Fingerprint of the world: ``sim_assets/``, ``benchmark/tasks/`` and :data:`WORLD_MODULES`."""
-    files = sorted((root / "benchmark" / "tasks").glob("*.py")) + [root / "benchmark" / f"{m}.py" for m in sorted(WORLD_MODULES)]
+    """Fingerprint of the world: ``sim_assets/``, ``benchmark/world/tasks/`` and :data:`WORLD_MODULES`."""
+    files = sorted((root / "benchmark" / "world" / "tasks").glob("*.py")) + \
+        [root / "benchmark" / f"{m}.py" for m in sorted(WORLD_MODULES)]
     return source_fingerprint(root, files, _data_files(root, ("sim_assets",)))
 
 

@@ -91,7 +91,7 @@ def write_json(path, data: dict) -> pathlib.Path:
 
     NaN and infinities (a metric with nothing to score) become null, so strict readers accept the file.
     """
-    from benchmark.evaluate import strict
+    from benchmark.suites.evaluate import strict
 
     path = write_text(path, json.dumps(strict(data), indent=2, sort_keys=False, allow_nan=False) + "\n")
     return path

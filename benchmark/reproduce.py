@@ -173,7 +173,7 @@ RESULTS = (
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
            compare=lambda new, old: _compare_json("summary.json")(new, old) + _compare_csv("table1.csv")(new, old)),
     Result(name="table1", path="results/table1", datasets=(),
-           commands=(("python", "-m", "benchmark.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
+           commands=(("python", "-m", "benchmark.paper.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
            compare=_compare_csv("table1.csv")),
     Result(name="standard", path="results/standard", datasets=(),
            commands=(("fsv-bench", "leaderboard", "--suite", "standard", "--quiet", "--workers", "2", "--out",

@@ -1,6 +1,6 @@
 """Parquet tables that carry the SHA-256 of their own content ("sealed" tables).
 
-A dataset's tables (:mod:`benchmark.dataset`) hold their description as JSON under the schema
+A dataset's tables (:mod:`benchmark.paper.dataset`) hold their description as JSON under the schema
 metadata key ``fsv``. :func:`seal` adds ``"sha256"`` to that JSON: the digest of every column (name,
 Arrow type, nulls and values, :func:`table_sha256`) and of all the schema metadata (the ``fsv``
 JSON without the digest itself). :func:`read_sealed` parses a file's bytes, recomputes the digest

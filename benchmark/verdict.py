@@ -19,7 +19,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run_stage(run) -> None:
     from dataclasses import asdict
 
-    from benchmark.evaluate import load_gates
+    from benchmark.suites.evaluate import load_gates
     from benchmark.scores.aggregate import aggregate_all
     from benchmark.scores.episode import METRICS, score_episode
     from benchmark.scores.verdict import check_gates

@@ -521,7 +521,7 @@ def learned_forces(
 
 
 def default_model() -> InternalForceModel:
-    """The small model shipped with the package (``fsv/data/internal_forces.pt``); see the README
+    """The small model shipped with the package (``fsv/data/internal_forces.pt``); see docs/data.md
     for the command that trained it and the data it was trained on."""
     from importlib.resources import files
 

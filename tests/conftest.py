@@ -31,7 +31,7 @@ def make_analytic_truth(duration_s=4.0, fps=30.0, K=4):
     Orientation R(t) = Rz(a(t)) Rx(b(t)), so the body rate is (b', a' sin b, a' cos b). Contact
     fields are zero (no fingers touch).
     """
-    from benchmark.truth import Truth
+    from benchmark.world.truth import Truth
     from fsv.kinematics import so3
     from fsv.rotation import quat_to_rot
 
@@ -77,8 +77,8 @@ def analytic_truth_factory():
 @pytest.fixture(scope="session")
 def lift_episode():
     """A 2.5 s lift (user 0, grasp 0, mass 0, seed 0) with its simulation statistics."""
-    from benchmark.simulate import run
-    from benchmark.scenario import Scenario
+    from benchmark.world.simulate import run
+    from benchmark.world.scenario import Scenario
 
     return run(Scenario(task="lift", duration_s=2.5))
 
@@ -86,8 +86,8 @@ def lift_episode():
 @pytest.fixture(scope="session")
 def episode_factory():
     """simulate(Scenario(**kw)), cached per keyword set for the session."""
-    from benchmark.simulate import simulate
-    from benchmark.scenario import Scenario
+    from benchmark.world.simulate import simulate
+    from benchmark.world.scenario import Scenario
 
     cache = {}
 
@@ -106,7 +106,7 @@ def episode_factory():
 @pytest.fixture(scope="session")
 def rendered_lift_episode(lift_episode):
     """``lift_episode`` with its noisy depth (σ = 0.01 m), calibration and labels."""
-    from benchmark.render import render
+    from benchmark.camera.render import render
 
     return render(lift_episode[0])
 
@@ -118,7 +118,7 @@ def rendered_lift_episode(lift_episode):
 def learn_oracle_dataset(tmp_path_factory):
     """Two 3 s lift episodes (seeds 0, 1) with oracle kinematics, oracle contacts and noise-free
     tactile sensors: ``(spec, folder, manifest)``."""
-    from benchmark.dataset import DatasetSpec, generate
+    from benchmark.paper.dataset import DatasetSpec, generate
 
     out = tmp_path_factory.mktemp("learn-oracle")
     spec = DatasetSpec(tasks=("lift",), seeds=(0, 1), duration_s=3.0, kinematics="oracle", contacts="oracle",
@@ -133,7 +133,7 @@ def learn_oracle_dataset(tmp_path_factory):
 def tracked_lift(rendered_lift_episode):
     """``(episode, estimate)``: ``fsv.run_pipeline`` (tracking, kinematics, nominal forces) on
     ``rendered_lift_episode`` from the benchmark's seeded first-frame initialisation."""
-    from benchmark.tracking import tracker_init
+    from benchmark.method.init import tracker_init
     from fsv import run_pipeline
 
     ep = rendered_lift_episode
@@ -154,12 +154,13 @@ def tracked_lifts():
     """``[(episode, estimate, tracking scores, force scores, learned-force block)]`` for
     ``fsv-bench --task lift --noise 0.01 --seed S`` with S in :data:`GATE_SEEDS`: the whole method
     from depth (tracker, algebraic kinematics, nominal forces, the shipped internal-force model)."""
-    from benchmark.learning import score_episode
-    from benchmark.render import render
-    from benchmark.scenario import Scenario
-    from benchmark.score_forces import score_forces
-    from benchmark.simulate import simulate
-    from benchmark.tracking import score_tracking, tracker_init
+    from benchmark.scores.learned import score_episode
+    from benchmark.camera.render import render
+    from benchmark.world.scenario import Scenario
+    from benchmark.scores.forces import score_forces
+    from benchmark.world.simulate import simulate
+    from benchmark.method.init import tracker_init
+    from benchmark.scores.tracking import score_tracking
     from fsv import run_pipeline
     from fsv.learn import default_model
 

@@ -200,7 +200,7 @@ def grasp_truth(seed: int, T: int = 20, K: int = 4, model: ObjectModel | None = 
     Contact forces are random inside their cones; the box's acceleration and angular acceleration
     are those Newton–Euler gives for them (no table force). Returns ``(truth, model)``.
     """
-    from benchmark.truth import Truth
+    from benchmark.world.truth import Truth
 
     rng = np.random.default_rng(seed)
     model = box_model() if model is None else model

@@ -72,7 +72,7 @@ def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, arg
 
 
 def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, capsys):
-    from benchmark.preview import COLOUR_BAR_HEIGHT
+    from benchmark.camera.preview import COLOUR_BAR_HEIGHT
     from PIL import Image
 
     out = tmp_path / "run"
@@ -163,7 +163,7 @@ def test_summary_json_is_strict_even_where_a_metric_has_nothing_to_score(tmp_pat
 @pytest.mark.parametrize("exc, code, needle", [(KeyboardInterrupt(), 130, "interrupted; complete files are kept"),
                                                 ("benchmark", 1, "failed: the box fell")])
 def test_subcommands_exit_130_on_ctrl_c_and_1_on_failure(monkeypatch, capsys, exc, code, needle):
-    import benchmark.dataset as dataset
+    import benchmark.paper.dataset as dataset
     from benchmark.errors import SimulationError
 
     err = SimulationError("the box fell") if exc == "benchmark" else exc

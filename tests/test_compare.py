@@ -5,7 +5,7 @@ import json
 import pytest
 
 from benchmark.cli import main
-from benchmark.compare import compare
+from benchmark.suites.compare import compare
 
 
 def _scores(values, version=1, recall=0.9):

@@ -4,7 +4,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from benchmark.dataset import DatasetSpec, _with_meta, episode_id, generate, load_dataset, _ints
+from benchmark.paper.dataset import DatasetSpec, _with_meta, episode_id, generate, load_dataset, _ints
 from benchmark.errors import DatasetError
 
 CALLS = []
@@ -70,7 +70,7 @@ def test_bad_spec_and_ranges():
 # --- the real world: short episodes -------------------------------------------------------------
 
 def test_targets_split_the_tactile_forces_and_features_follow_the_truth(learn_oracle_dataset):
-    from benchmark.dataset import finger_names_of
+    from benchmark.paper.dataset import finger_names_of
 
     spec, out, man = learn_oracle_dataset
     assert list(man["status"]) == ["ok", "ok"] and man["rows"].min() > 20
@@ -89,7 +89,7 @@ def test_targets_split_the_tactile_forces_and_features_follow_the_truth(learn_or
     assert np.all(np.linalg.norm(internal[air], axis=1) > 1.0)  # humans over-grip: a real squeeze in the air
     assert np.all(df["net_gap_n"] <= spec.max_gap_n)
     assert np.all(act.sum(axis=1) >= 2)
-    from benchmark.table2 import object_models
+    from benchmark.paper.table2 import object_models
 
     acc = df[["acc_x", "acc_y", "acc_z"]].to_numpy()
     om, g = object_models(out)[df["episode"][0]]
@@ -111,7 +111,7 @@ def test_tracker_source_uses_the_pipelines_contacts_and_poses(tracked_lift):
     """contacts="tracker" renders and tracks each episode exactly as fsv-bench / run_pipeline do."""
     import json
 
-    from benchmark.dataset import build_episode, finger_names_of
+    from benchmark.paper.dataset import build_episode, finger_names_of
 
     ep, est = tracked_lift
     spec = DatasetSpec(duration_s=ep.scenario.duration_s, contacts="tracker")
@@ -129,7 +129,7 @@ def test_tracker_source_uses_the_pipelines_contacts_and_poses(tracked_lift):
         for a, ax in enumerate("xyz"):
             np.testing.assert_array_equal(df[f"point_{ax}_{n}"], tracked.point[rows, k, a])
             np.testing.assert_array_equal(df[f"true_point_{ax}_{n}"], ep.truth.contact_point[rows, k, a])
-    from benchmark.motion import episode_kinematics
+    from benchmark.world.motion import episode_kinematics
 
     kin = episode_kinematics(ep, "algebraic", poses=est.tracking.box)  # differentiated from the tracked poses
     np.testing.assert_array_equal(df[["acc_x", "acc_y", "acc_z"]].to_numpy(), kin.acc[rows])
@@ -137,7 +137,7 @@ def test_tracker_source_uses_the_pipelines_contacts_and_poses(tracked_lift):
 
 
 def test_plausibility_rule_on_a_constructed_frame(learn_oracle_dataset):
-    from benchmark.dataset import nominal_excess_n
+    from benchmark.paper.dataset import nominal_excess_n
 
     nominal = [[3.0, 2.0, 9.0, 0.0], [3.0, 2.0, 1.0, 0.0]]
     measured = [[10.0, 5.0, np.nan, np.nan], [10.0, 0.5, 4.0, np.nan]]
@@ -224,7 +224,7 @@ def oracle_copy(learn_oracle_dataset, tmp_path):
 def test_four_flipped_bytes_in_an_episode_file_are_refused_naming_it(oracle_copy):
     import pyarrow.parquet as pq
 
-    from benchmark.dataset import read_episode_file
+    from benchmark.paper.dataset import read_episode_file
     from benchmark.errors import DatasetFileError
 
     spec, out = oracle_copy
@@ -241,7 +241,7 @@ def test_four_flipped_bytes_in_an_episode_file_are_refused_naming_it(oracle_copy
 def test_a_flip_that_leaves_the_content_intact_is_seen_by_the_manifest(oracle_copy):
     """Some bytes (e.g. the magic number, column statistics) change nothing a reader gets: the
     content digest cannot see them there, the SHA-256 of the bytes in the manifest does."""
-    from benchmark.dataset import read_episode_file
+    from benchmark.paper.dataset import read_episode_file
     from benchmark.errors import DatasetFileError
 
     spec, out = oracle_copy
@@ -282,7 +282,7 @@ def test_resume_rebuilds_a_truncated_episode_file_and_says_so(tmp_path, capsys):
 def test_an_episode_file_copied_over_another_is_detected_and_rebuilt(tmp_path, capsys):
     import shutil
 
-    from benchmark.dataset import read_episode_file
+    from benchmark.paper.dataset import read_episode_file
     from benchmark.errors import DatasetFileError
 
     spec = _small(tmp_path)

@@ -5,9 +5,9 @@ import json
 import pytest
 
 from benchmark.cli import main
-from benchmark.scenario import Scenario
+from benchmark.world.scenario import Scenario
 from benchmark.suites import SUITES, Gate, Suite
-from benchmark.world import validate
+from benchmark.world.assets import validate
 
 TINY = Suite(name="tiny", version=1, scenarios=(Scenario(task="lift", seed=21, duration_s=1.5),),
              gates=(Gate("box_pos_err_mm", "<=", 1.5), Gate("learned_rel_err_pct", "<=", 60.0)),
@@ -89,7 +89,7 @@ def test_gates_file_with_an_unknown_metric_is_refused(tmp_path, capsys):
 
 
 def test_two_worker_processes_give_the_same_scores_as_one(tmp_path):
-    from benchmark.evaluate import evaluate
+    from benchmark.suites.evaluate import evaluate
 
     suite = Suite(name="pair", version=1, scenarios=(Scenario(task="lift", seed=22, duration_s=1.5),
                                                      Scenario(task="lift", user=1, seed=23, duration_s=1.5)),
@@ -104,7 +104,7 @@ def test_two_worker_processes_give_the_same_scores_as_one(tmp_path):
 
 def test_a_replaced_differentiator_changes_the_kinematics_scores_and_is_labelled(tiny, tmp_path):
     """The example Savitzky-Golay differentiator, loaded by module:attribute, on an episode from the cache."""
-    from benchmark.evaluate import evaluate_many
+    from benchmark.suites.evaluate import evaluate_many
     from benchmark.method import MethodSpec
 
     cache = tmp_path / "cache"
@@ -146,7 +146,7 @@ def test_a_bad_method_exits_2_before_any_work(tiny, tmp_path, capsys, argv, need
 def test_the_paper_suites_hold_the_paper_protocols_episodes():
     """table1 and table2 are the episodes of the table1 and table2 commands' protocols (one source each)."""
     from benchmark.reproduce import DATASETS, RESULTS
-    from benchmark.table1 import SIX_AXIS_TASKS
+    from benchmark.paper.table1 import SIX_AXIS_TASKS
 
     t1 = SUITES["table1"].scenarios
     assert {(sc.task, sc.seed) for sc in t1} == {(t, s) for t in SIX_AXIS_TASKS for s in (0, 1, 2)} and len(t1) == 18

@@ -19,7 +19,7 @@ def tiny(monkeypatch):
 
 
 def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys):
-    from benchmark.evaluate import evaluate
+    from benchmark.suites.evaluate import evaluate
     from benchmark.method import MethodSpec, method_label
     from examples.estimates_from_files import write_estimates
 
@@ -46,7 +46,7 @@ def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys):
 
 
 def test_camera_file_round_trips_the_inputs(tiny, tmp_path):
-    from benchmark.evaluate import cached_episode
+    from benchmark.suites.evaluate import cached_episode
     from benchmark.exchange import save_camera_input
     from benchmark.method import camera_input
 

@@ -4,8 +4,9 @@ from benchmark.fingerprint import RESULTS_MODULES, WORLD_MODULES, results_finger
 
 
 def test_results_fingerprint_ignores_docstrings_and_comments_not_code(tmp_path):
-    for d in ("fsv/data", "sim_assets", "benchmark/tasks", "benchmark/scores", "benchmark/suites"):
-        (tmp_path / d).mkdir(parents=True)
+    for d in ("fsv/data", "sim_assets", "benchmark/world/tasks", "benchmark/scores", "benchmark/suites",
+              "benchmark/world", "benchmark/camera", "benchmark/paper", "benchmark/method"):
+        (tmp_path / d).mkdir(parents=True, exist_ok=True)
     for m in RESULTS_MODULES:
         (tmp_path / "benchmark" / f"{m}.py").write_text("")
     mod = tmp_path / "fsv" / "track.py"
@@ -23,13 +24,13 @@ def test_results_fingerprint_ignores_docstrings_and_comments_not_code(tmp_path):
 
 
 def test_the_world_fingerprint_ignores_the_method_but_not_the_world(tmp_path):
-    for d in ("fsv", "sim_assets", "benchmark/tasks"):
-        (tmp_path / d).mkdir(parents=True)
+    for d in ("fsv", "sim_assets", "benchmark/world/tasks", "benchmark/camera", "benchmark/paper", "benchmark/method"):
+        (tmp_path / d).mkdir(parents=True, exist_ok=True)
     for m in RESULTS_MODULES:
         (tmp_path / "benchmark" / f"{m}.py").write_text("x = 1\n")
     base = world_fingerprint(tmp_path)
     (tmp_path / "fsv" / "track.py").write_text("y = 2\n")
-    (tmp_path / "benchmark" / "tracking.py").write_text("x = 2\n")
-    assert world_fingerprint(tmp_path) == base and "tracking" not in WORLD_MODULES
-    (tmp_path / "benchmark" / "simulate.py").write_text("x = 2\n")
+    (tmp_path / "benchmark" / "paper" / "table1.py").write_text("x = 2\n")
+    assert world_fingerprint(tmp_path) == base and "paper/table1" not in WORLD_MODULES
+    (tmp_path / "benchmark" / "world" / "simulate.py").write_text("x = 2\n")
     assert world_fingerprint(tmp_path) != base

@@ -6,9 +6,9 @@ import types
 import numpy as np
 import pytest
 
-from benchmark.contact_error import contacts_from_truth
-from benchmark.motion import oracle_kinematics
-from benchmark.score_forces import add_arguments, run_stage, score_forces, true_net_wrench
+from benchmark.scores.contact_error import contacts_from_truth
+from benchmark.world.motion import oracle_kinematics
+from benchmark.scores.forces import add_arguments, run_stage, score_forces, true_net_wrench
 from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
 from pictures import assert_figure
 
@@ -58,68 +58,68 @@ def test_the_decomposition_recovers_the_true_normal_forces(lift):
     assert np.abs((dec.normal_force - np.nan_to_num(measured))[contacts.active]).max() < 5e-3
 
 
-def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
-    episode = lift[0]
+def _estimate(episode, contacts, kinematics, oracle=()):
+    """The method's estimate as the tracking stage leaves it in the run (poses observed, no learned forces)."""
+    from benchmark.world.motion import observed_poses
+    from fsv.method import Estimate, TrackOutput
+
+    nominal = nominal_forces(kinematics, contacts, episode.object_model, gravity=episode.truth.gravity)
+    labels = {"tracker": "a tracker", "differentiator": "algebraic differentiation", "forces": "nominal forces (eq. 4-6)",
+              "internal": "none"}
+    labels.update({("differentiator" if o == "kinematics" else "contacts"): "oracle" for o in oracle})
+    return Estimate(tracking=TrackOutput(box=observed_poses(episode), contacts=contacts), contacts=contacts,
+                    kinematics=kinematics, nominal=nominal, forces=None, internal_pred=None, oracle=tuple(oracle),
+                    timing_s={}, labels=labels)
+
+
+def _run(episode, estimate, out=None):
     import argparse
 
     parser = argparse.ArgumentParser()
     add_arguments(parser)
-    run = types.SimpleNamespace(args=parser.parse_args(["--contacts", "oracle"]), episode=episode, out=tmp_path,
-                                summary={}, lines=[])
+    return types.SimpleNamespace(args=parser.parse_args([]), episode=episode, out=out, summary={}, lines=[],
+                                 estimate=estimate)
+
+
+def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
+    episode = lift[0]
+    est = _estimate(episode, contacts_from_truth(episode.truth), oracle_kinematics(episode.truth),
+                    oracle=("contacts", "kinematics"))
+    run = _run(episode, est, tmp_path)
     run_stage(run)
     block = run.summary["forces"]
     for key in ("net_force_err_n_rms", "net_torque_err_nm_rms", "nominal_normal_err_n_mean", "solver_failures"):
         assert key in block
     assert block["contacts"].startswith("oracle") and "contacts" in block["oracle"]
-    assert block["net_force_err_n_rms"] < 0.05
+    assert block["net_force_err_n_rms"] < 0.05 and "sensitivity_tracker" not in block
     assert_figure(tmp_path / "forces_fig5.png", min_height=800, colours={"thumb (C0)": (31, 119, 180), "index (C1)": (255, 127, 14)})
     assert "ORACLE" in run.lines[0]
     json.dumps(block)  # summary.json must be able to hold it
 
 
-def test_stage_inputs_follow_the_flags_and_label_oracles(lift):
-    import argparse
-
-    from benchmark.score_forces import stage_inputs
+def test_stage_inputs_are_the_estimates_with_its_labels(lift):
+    from benchmark.scores.forces import stage_inputs
 
     episode = lift[0]
-    parser = argparse.ArgumentParser()
-    add_arguments(parser)
-    parser.add_argument("--kinematics", default="algebraic")
-    run = types.SimpleNamespace(args=parser.parse_args([]), episode=episode, out=None, summary={}, lines=[])
-    kin, contacts, labels = stage_inputs(run)
-    assert labels["oracle"] == [] and kin.method == "algebraic" and labels["contacts"].startswith("vision model")
-    assert labels["kinematics"] == "algebraic on tracker-like poses"
-    moved = np.linalg.norm(contacts.point - episode.truth.contact_point, axis=-1)[contacts.active]
-    assert 1e-3 < np.median(moved) < 2e-2  # the paper's contact error, a few millimetres
-    run.args = parser.parse_args(["--contacts", "oracle", "--kinematics", "oracle"])
-    kin, contacts, labels = stage_inputs(run)
-    assert labels["oracle"] == ["kinematics", "contacts"]
-    assert np.array_equal(contacts.point[contacts.active], episode.truth.contact_point[contacts.active])
-    from benchmark.motion import observed_poses
-
-    run.tracking = types.SimpleNamespace(contacts=contacts_from_truth(episode.truth), box=observed_poses(episode))
-    run.args = parser.parse_args([])
-    labels = stage_inputs(run)[2]
-    assert labels["contacts"] == "vision (tracker)" and labels["kinematics"] == "algebraic on tracked poses"
+    est = _estimate(episode, contacts_from_truth(episode.truth), oracle_kinematics(episode.truth), oracle=("kinematics",))
+    kin, contacts, labels = stage_inputs(_run(episode, est))
+    assert kin is est.kinematics and contacts is est.contacts
+    assert labels == {"kinematics": "oracle (truth)", "contacts": "vision (a tracker)", "oracle": ["kinematics"]}
+    est = _estimate(episode, contacts_from_truth(episode.truth), oracle_kinematics(episode.truth), oracle=("contacts",))
+    labels = stage_inputs(_run(episode, est))[2]
+    assert labels["kinematics"] == "algebraic differentiation on tracked poses" and labels["contacts"] == "oracle (truth)"
 
 
 def test_with_the_tracker_the_stage_also_scores_its_contacts(lift, tmp_path):
-    import argparse
-
-    from benchmark.contact_error import vision_like_contacts
-    from benchmark.motion import observed_poses
+    from benchmark.scores.contact_error import vision_like_contacts
 
     episode = lift[0]
-    parser = argparse.ArgumentParser()
-    add_arguments(parser)
     tracked = vision_like_contacts(contacts_from_truth(episode.truth), episode.object_model,
                                    np.random.default_rng(1), mean_m=0.0, std_m=0.01)
-    run = types.SimpleNamespace(args=parser.parse_args([]), episode=episode, out=tmp_path, summary={}, lines=[],
-                                tracking=types.SimpleNamespace(contacts=tracked, box=observed_poses(episode)))
+    run = _run(episode, _estimate(episode, tracked, oracle_kinematics(episode.truth), oracle=("kinematics",)), tmp_path)
     run_stage(run)
     block = run.summary["forces"]
-    assert block["contacts"] == "vision (tracker)" and block["oracle"] == ["kinematics"]
+    assert block["contacts"] == "vision (a tracker)" and block["oracle"] == ["kinematics"]
     assert block["sensitivity_tracker"]["pairs"] > 0
     assert block["sensitivity_tracker"]["force_diff_n_rms"] > block["sensitivity"]["force_diff_n_rms"]  # 10 mm vs 6 mm
     assert "with the tracker's contacts" in run.lines[0]

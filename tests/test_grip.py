@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from benchmark.grip import GripPolicy, plan_grasp
-from benchmark.scenario import Scenario
-from benchmark.world import build_world, users
+from benchmark.world.grip import GripPolicy, plan_grasp
+from benchmark.world.scenario import Scenario
+from benchmark.world.assets import build_world, users
 
 
 def _policy(user=0, **kw):
@@ -128,8 +128,8 @@ def test_table2_pair_grips_alike_and_a_careful_user_harder(episode_factory):
 def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
     """Every (user, grasp) has a stored plan whose inputs still match (else the world would fall back
     to a kernel-dependent solve); solving u0/g0 again lands on the stored solution."""
-    from benchmark.grip import _PlanProblem, stored_plans
-    from benchmark.world import grasps, users
+    from benchmark.world.grip import _PlanProblem, stored_plans
+    from benchmark.world.assets import grasps, users
 
     stored = stored_plans()
     assert len(stored) == len(users()) * len(grasps())
@@ -137,7 +137,7 @@ def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
         for g in range(len(grasps())):
             problem = _PlanProblem(u, g)
             entry = stored[f"{problem.user_name}/{problem.grasp_name}"]
-            assert entry["fingerprint"] == problem.fingerprint, f"stale plan for user {u}, grasp {g}: run python -m benchmark.grip --write-plans"
+            assert entry["fingerprint"] == problem.fingerprint, f"stale plan for user {u}, grasp {g}: run python -m benchmark.world.grip --write-plans"
     problem = _PlanProblem(0, 0)
     x = np.array(stored[f"{problem.user_name}/{problem.grasp_name}"]["x"])
     # kernels move the solve by <= 3e-6 rad (measured: Haswell vs Sandybridge on the 20 plans)

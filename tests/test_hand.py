@@ -1,4 +1,4 @@
-"""The hand: `benchmark.hand` exports the simulated hand as `fsv.HandModel`; `fsv.hand` moves it.
+"""The hand: `benchmark.world.hand` exports the simulated hand as `fsv.HandModel`; `fsv.hand` moves it.
 
 Forward kinematics of the exported model must reproduce MuJoCo's own kinematics of the MJCF written
 from the same model (segment poses, capsule end points, fingertip sites) to 1e-9.
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
-from benchmark.hand import geom_name, hand_model
-from benchmark.scenario import Scenario
-from benchmark.world import build_world
+from benchmark.world.hand import geom_name, hand_model
+from benchmark.world.scenario import Scenario
+from benchmark.world.assets import build_world
 from fsv import InputError
 from fsv.hand import capsule_endpoints, fingertip_centres, forward_kinematics_qpos
 from fsv.rotation import axis_angle_to_rot, quat_to_rot

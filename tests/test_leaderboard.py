@@ -5,7 +5,7 @@ import json
 import pytest
 
 from benchmark.cli import main
-from benchmark.leaderboard import VARIANTS
+from benchmark.suites.leaderboard import VARIANTS
 from benchmark.suites import SUITES
 from test_evaluate import TINY
 

@@ -1,8 +1,8 @@
 import numpy as np
 
-from benchmark.contact_error import contacts_from_truth
-from benchmark.learning import score_episode
-from benchmark.motion import oracle_kinematics
+from benchmark.scores.contact_error import contacts_from_truth
+from benchmark.scores.learned import score_episode
+from benchmark.world.motion import oracle_kinematics
 from fsv.learn import default_model, learned_forces
 
 

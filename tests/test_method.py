@@ -10,7 +10,7 @@ from fsv.method import CameraInput, StencilDifferentiator, TrackOutput, make_met
 
 @pytest.fixture(scope="module")
 def inputs(rendered_lift_episode):
-    from benchmark.tracking import tracker_init
+    from benchmark.method.init import tracker_init
 
     ep = rendered_lift_episode
     return ep, CameraInput(depth=ep.depth, calib=ep.calib, object_model=ep.object_model, hand_model=ep.hand_model,
@@ -67,8 +67,8 @@ def test_a_method_with_a_replaced_stage_runs_every_other_stage_as_the_reference(
 
 def test_a_minimal_tracker_output_and_an_oracle_are_labelled(inputs):
     ep, camera = inputs
-    from benchmark.contact_error import contacts_from_truth
-    from benchmark.motion import oracle_kinematics
+    from benchmark.scores.contact_error import contacts_from_truth
+    from benchmark.world.motion import oracle_kinematics
 
     from fsv import Poses
 

@@ -1,4 +1,4 @@
-"""benchmark.motion: which kinematics the later stages get."""
+"""benchmark.world.motion: which kinematics the later stages get."""
 
 from types import SimpleNamespace
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
-from benchmark.motion import CHOICES, DECLARED, episode_kinematics, observed_poses, oracle_kinematics
-from benchmark.scenario import Scenario
+from benchmark.world.motion import CHOICES, DECLARED, episode_kinematics, observed_poses, oracle_kinematics
+from benchmark.world.scenario import Scenario
 from fsv.kinematics import CentralConfig, differentiate_poses
 
 

@@ -1,6 +1,6 @@
 """The renderer benchmark runs on the real world, and both renderers see the same scene."""
 
-from benchmark.perf_render import main
+from benchmark.perf.render import main
 
 
 def test_perf_render_runs_and_both_renderers_agree(capsys):

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from benchmark.hand import hand_model
+from benchmark.world.hand import hand_model
 from fsv import Contacts, DepthVideo, InputError, Kinematics, ObjectModel, TrackInit, run_pipeline
 from fsv.track.hand import HandKinematics, HandState
 from fsv.rotation import angle_between, exp_so3
@@ -126,7 +126,7 @@ def test_a_trained_model_adds_the_learned_forces(lift):
 _METHOD_RUN = """
 import sys, numpy as np
 from benchmark import Scenario, render, simulate
-from benchmark.tracking import tracker_init
+from benchmark.method.init import tracker_init
 from fsv import run_pipeline
 ep = render(simulate(Scenario(task="lift", seed=1, duration_s=1.5)))
 est = run_pipeline(ep.depth, ep.calib, ep.object_model, ep.hand_model, tracker_init(ep.truth, ep.scenario, ep.hand_model),

@@ -1,11 +1,11 @@
-"""benchmark.pose_error: correlated tracker-like pose errors."""
+"""benchmark.scores.pose_error: correlated tracker-like pose errors."""
 
 import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
-from benchmark.pose_error import PoseErrorModel, tracker_like_poses
-from benchmark.scenario import Scenario
+from benchmark.scores.pose_error import PoseErrorModel, tracker_like_poses
+from benchmark.world.scenario import Scenario
 from fsv.kinematics import so3
 
 

@@ -12,8 +12,8 @@ import pytest  # noqa: E402
 
 from benchmark.errors import RenderError  # noqa: E402
 
-# The module: the attribute `benchmark.render` is the function render() of the public API.
-R = importlib.import_module("benchmark.render")
+# The module: the attribute `benchmark.camera.render` is the function render() of the public API.
+R = importlib.import_module("benchmark.camera.render")
 
 FINGERS = ("thumb", "index")
 BOX_HALF = np.array([0.0855, 0.0555, 0.03])
@@ -218,8 +218,8 @@ def test_backprojected_box_pixels_lie_on_the_box_surface(world, pos, quat):
 
 
 def test_world_labels_mark_table_box_palm_and_each_finger():
-    from benchmark.scenario import Scenario
-    from benchmark.world import build_world
+    from benchmark.world.scenario import Scenario
+    from benchmark.world.assets import build_world
 
     w = build_world(Scenario())
     labels = R.world_labels(w)
@@ -250,7 +250,7 @@ def test_each_label_is_drawn_and_undrawn_geoms_are_invisible(world):
 
 def test_depth_agrees_with_mujocos_own_renderer_from_the_same_camera(world):
     """An independent peer: MuJoCo's renderer, given the calibration as a MuJoCo camera."""
-    from benchmark.perf_render import add_mujoco_camera
+    from benchmark.perf.render import add_mujoco_camera
 
     _, _, camera, _ = world
     spec = mujoco.MjSpec.from_string(scene_xml())
@@ -346,8 +346,8 @@ def synthetic_episode(noise_m=0.01, seed=0, duration_s=1.0):
     """An episode of the real world whose truth is an analytic box lift with a still hand above it."""
 
     from benchmark.episode import Episode
-    from benchmark.scenario import Scenario
-    from benchmark.world import build_world
+    from benchmark.world.scenario import Scenario
+    from benchmark.world.assets import build_world
     from conftest import make_analytic_truth
 
     sc = Scenario(noise_m=noise_m, seed=seed, duration_s=duration_s)
@@ -397,7 +397,7 @@ def test_render_noise_has_the_scenario_std_on_valid_pixels(rendered):
 
 def test_render_rejects_a_sensor_with_another_noise():
     from benchmark.errors import BenchmarkError
-    from benchmark.sensor import SensorModel
+    from benchmark.camera.sensor import SensorModel
 
     with pytest.raises(BenchmarkError, match="scenario's noise_m = 0.01"):
         R.render(synthetic_episode(0.01, 0), sensor=SensorModel(noise_m=0.02))

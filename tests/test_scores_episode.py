@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 
-from benchmark.motion import oracle_kinematics
+from benchmark.world.motion import oracle_kinematics
 from benchmark.scores.episode import kinematics_errors
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from benchmark.errors import BenchmarkError
-from benchmark.sensor import SensorModel, _incidence_cos, dequantise, quantise
+from benchmark.camera.sensor import SensorModel, _incidence_cos, dequantise, quantise
 
 H, W = 240, 320
 K = np.array([[212.0, 0.0, 159.5], [0.0, 216.0, 119.5], [0.0, 0.0, 1.0]])

@@ -8,8 +8,8 @@ accelerations; MuJoCo's free-joint and contact-force conventions are checked aga
 import numpy as np
 import pytest
 
-from benchmark.scenario import Scenario
-from benchmark.simulate import simulate, steps_per_frame
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate, steps_per_frame
 from fsv.hand import forward_kinematics_qpos, fingertip_centres
 
 
@@ -60,8 +60,8 @@ def test_free_joint_conventions_on_a_tumbling_box():
     """A box thrown in the air: recorded omega is world-frame, acc is g, alpha obeys Euler's equations."""
     import mujoco
 
-    from benchmark.simulate import _Recorder
-    from benchmark.world import build_world
+    from benchmark.world.simulate import _Recorder
+    from benchmark.world.assets import build_world
 
     w = build_world(Scenario(mass=2))
     m = w.model
@@ -150,7 +150,7 @@ def test_same_seed_same_bits(tmp_path):
 
 def test_a_dropped_box_or_a_palm_contact_is_an_error():
     from benchmark.errors import SimulationError
-    from benchmark.simulate import _check_outcome
+    from benchmark.world.simulate import _check_outcome
 
     T = 5
     t = np.arange(T) / 30

@@ -1,13 +1,13 @@
-"""benchmark.table1: the Table 1 scorer, the tuning protocol and the Fig. 4 plot."""
+"""benchmark.paper.table1: the Table 1 scorer, the tuning protocol and the Fig. 4 plot."""
 
 import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
-from benchmark.motion import DECLARED, oracle_kinematics
-from benchmark.pose_error import tracker_like_poses
-from benchmark.scenario import Scenario
-from benchmark.table1 import PAPER, Table1, error_stats, plot_fig4, score_table1, tune, write_outputs
+from benchmark.world.motion import DECLARED, oracle_kinematics
+from benchmark.scores.pose_error import tracker_like_poses
+from benchmark.world.scenario import Scenario
+from benchmark.paper.table1 import PAPER, Table1, error_stats, plot_fig4, score_table1, tune, write_outputs
 from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig
 from pictures import assert_figure
@@ -114,7 +114,7 @@ def test_cli_stage_prints_and_writes_table1_and_labels_the_oracle(lift_episode, 
     from argparse import Namespace
     from types import SimpleNamespace
 
-    from benchmark.table1 import run_stage
+    from benchmark.paper.table1 import run_stage
 
     run = SimpleNamespace(episode=lift_episode[0], args=Namespace(kinematics=choice), out=tmp_path, summary={}, lines=[])
     run_stage(run)
@@ -141,8 +141,8 @@ def test_cli_parser_offers_the_kinematics_choices():
 
 
 def test_pose_error_stats_recover_the_error_model(analytic_truth_factory):
-    from benchmark.pose_error import PoseErrorModel
-    from benchmark.table1 import pose_error_stats
+    from benchmark.scores.pose_error import PoseErrorModel
+    from benchmark.paper.table1 import pose_error_stats
 
     truth = analytic_truth_factory(duration_s=60.0)
     model = PoseErrorModel(pos_std_m=0.002, rot_std_rad=np.radians(2.0), corr_time_s=0.1)

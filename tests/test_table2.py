@@ -3,8 +3,8 @@ import json
 import numpy as np
 import pytest
 
-from benchmark.dataset import finger_names_of, load_dataset, training_set
-from benchmark.table2 import PAPER, Table2Protocol, evaluate, markdown, object_models, score, write
+from benchmark.paper.dataset import finger_names_of, load_dataset, training_set
+from benchmark.paper.table2 import PAPER, Table2Protocol, evaluate, markdown, object_models, score, write
 from fsv.learn import LearnConfig
 
 
@@ -61,7 +61,7 @@ def test_score_writes_the_table_and_the_figure(learn_oracle_dataset, tmp_path):
 def test_user_blind_prediction_averages_the_two_users_frame_by_frame():
     import pandas as pd
 
-    from benchmark.table2 import user_blind
+    from benchmark.paper.table2 import user_blind
 
     def rows(user, frames, thumb, index, index_active):
         n = len(frames)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from benchmark.errors import BenchmarkError
-from benchmark.tactile import tactile_normal_forces
+from benchmark.world.tactile import tactile_normal_forces
 from forces_oracle import grasp_truth
 
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from benchmark.tasks import TASKS
-from benchmark.tasks.motion import Motion, Phases, min_jerk, timed
+from benchmark.world.tasks import TASKS
+from benchmark.world.tasks.motion import Motion, Phases, min_jerk, timed
 from fsv.hand import axis_angle_to_rot
 
 

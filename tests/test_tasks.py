@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from benchmark.report import max_slip_m
-from benchmark.tasks import TASKS
+from benchmark.world.tasks import TASKS
 
 SHORT_S = 2.4
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from benchmark.hand import hand_model
+from benchmark.world.hand import hand_model
 from fsv import InputError, ObjectModel
 from fsv.hand import forward_kinematics
 from fsv.linalg import rows_mt

@@ -2,9 +2,10 @@
 
 import numpy as np
 import pytest
-from benchmark.contact_error import contacts_from_truth
-from benchmark.score_forces import score_forces
-from benchmark.tracking import GATES, INIT_PERTURBATION, gate_report, plot_overlay, score_tracking, tracker_init
+from benchmark.scores.contact_error import contacts_from_truth
+from benchmark.scores.forces import score_forces
+from benchmark.method.init import INIT_PERTURBATION, tracker_init
+from benchmark.scores.tracking import GATES, gate_report, plot_overlay, score_tracking
 from fsv import Poses
 from fsv.rotation import quat_to_rot
 from fsv.rotation import angle_between, log_so3
@@ -113,7 +114,7 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
 
 @pytest.mark.accuracy
 def test_tracking_gates_hold_as_statistics_over_four_default_lifts(tracked_lifts):
-    """The contact and box gates of ``benchmark.tracking.GATES`` as statistics over the 10 s lifts of
+    """The contact and box gates of ``benchmark.scores.tracking.GATES`` as statistics over the 10 s lifts of
     seeds 1-4 (never used for tuning). Measured (identical under the Haswell, Sandybridge, Nehalem and
     Prescott kernels): contact std 1.89 / 2.97 / 2.66 / 1.45 mm, median 2.28 mm (seeds 0-8 range
     1.3-3.0 mm); precision 0.998 / 0.944 / 0.993 / 0.998; box 0.55-0.63 mm, 0.5-0.6 deg."""

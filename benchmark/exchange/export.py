@@ -31,7 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True) -> dict:
     """Writes the camera inputs of every episode of ``suite`` into ``out``; returns ``suite.json``'s content."""
-    from benchmark.evaluate import cached_episode, default_cache, episode_name
+    from benchmark.suites.evaluate import cached_episode, default_cache, episode_name
     from benchmark.exchange import camera_file, estimates_file
     from benchmark.method import camera_input
     from fsv.provenance import provenance
@@ -71,7 +71,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True)
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.evaluate import check_out
+    from benchmark.suites.evaluate import check_out
     from benchmark.suites import get_suite
 
     suite = get_suite(args.suite)

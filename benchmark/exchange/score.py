@@ -30,7 +30,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def estimate_paths(suite, folder: pathlib.Path) -> dict:
     """``{scenario: path}`` of every episode's estimates file; ValueError naming the missing ones."""
-    from benchmark.evaluate import episode_name
+    from benchmark.suites.evaluate import episode_name
 
     folder = pathlib.Path(folder)
     if not folder.is_dir():
@@ -47,7 +47,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``."""
     from dataclasses import asdict
 
-    from benchmark.evaluate import cached_episode, default_cache, episode_name, scores_document
+    from benchmark.suites.evaluate import cached_episode, default_cache, episode_name, scores_document
     from benchmark.exchange.estimates_file import load_estimate
     from benchmark.scores.episode import score_episode
     from benchmark.archive import read_archive
@@ -78,7 +78,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.evaluate import check_out, load_gates, print_verdict, write_outputs
+    from benchmark.suites.evaluate import check_out, load_gates, print_verdict, write_outputs
     from benchmark.suites import get_suite
 
     suite = get_suite(args.suite)

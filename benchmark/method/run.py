@@ -10,12 +10,12 @@ def camera_input(episode, init_scale: float = 1.0):
 
     Args:
         episode: A rendered ``benchmark.Episode``.
-        init_scale: Scale of the seeded first-frame perturbation (``benchmark.tracking.INIT_PERTURBATION``).
+        init_scale: Scale of the seeded first-frame perturbation (``benchmark.method.init.INIT_PERTURBATION``).
 
     Returns:
         An ``fsv.method.CameraInput``.
     """
-    from benchmark.tracking import tracker_init
+    from benchmark.method.init import tracker_init
     from fsv.method import CameraInput
 
     init = tracker_init(episode.truth, episode.scenario, episode.hand_model, init_scale)
@@ -27,11 +27,11 @@ def oracle_inputs(episode, oracle: tuple) -> dict:
     """The truth's contacts and/or kinematics for a labelled oracle ablation (keyword arguments of a method call)."""
     out = {}
     if "contacts" in oracle:
-        from benchmark.contact_error import contacts_from_truth
+        from benchmark.scores.contact_error import contacts_from_truth
 
         out["contacts"] = contacts_from_truth(episode.truth)
     if "kinematics" in oracle:
-        from benchmark.motion import oracle_kinematics
+        from benchmark.world.motion import oracle_kinematics
 
         out["kinematics"] = oracle_kinematics(episode.truth)
     return out

@@ -10,7 +10,7 @@ ORACLE_STAGES = ("contacts", "kinematics")
 
 DIFFERENTIATORS = ("algebraic", "central", "gaussian")
 """Built-in names ``--differentiator`` accepts besides ``module:attribute``: the benchmark's
-calibrated stencil differentiators (``benchmark.motion.DECLARED``)."""
+calibrated stencil differentiators (``benchmark.world.motion.DECLARED``)."""
 
 
 @dataclass(frozen=True)
@@ -94,7 +94,7 @@ def _build(spec: MethodSpec):
         if name == "differentiator" and ":" not in text and text not in DIFFERENTIATORS:
             raise ValueError(f"--differentiator {text!r}: accepted: {', '.join(DIFFERENTIATORS)}, or module:attribute")
         if name == "differentiator" and text in DIFFERENTIATORS:
-            from benchmark.motion import DECLARED
+            from benchmark.world.motion import DECLARED
             from fsv.method import StencilDifferentiator
 
             stages[name] = StencilDifferentiator(DECLARED[text])

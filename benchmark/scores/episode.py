@@ -2,15 +2,15 @@
 
 Metrics (all floats; NaN where a stage has nothing to score):
 
-* tracking (:func:`benchmark.tracking.score_tracking`): ``box_pos_err_mm`` and ``box_rot_err_deg``
+* tracking (:func:`benchmark.scores.tracking.score_tracking`): ``box_pos_err_mm`` and ``box_rot_err_deg``
   (medians over frames), ``contact_err_mm_mean`` / ``contact_err_mm_std`` (per axis, pooled),
   ``contact_recall``, ``contact_precision``;
 * kinematics: ``acc_err_rms`` [m/s^2] and ``gyro_err_rms`` [rad/s], the AHRS-frame errors of the
   estimated kinematics against the truth's simulated AHRS over the valid frames (Table 1's signals);
-* nominal forces (:func:`benchmark.score_forces.score_forces`): ``net_force_err_n_rms`` [N],
+* nominal forces (:func:`benchmark.scores.forces.score_forces`): ``net_force_err_n_rms`` [N],
   ``net_torque_err_nm_rms`` [N m], ``least_violation_frac`` (fraction of the scored frames whose
   programs were infeasible);
-* learned forces (:func:`benchmark.learning.score_episode`): ``learned_rel_err_pct`` (Table 2's
+* learned forces (:func:`benchmark.scores.learned.score_episode`): ``learned_rel_err_pct`` (Table 2's
   relative error) and ``learned_mae_n``, the mean absolute error of the reconstructed normal force
   per finger-frame [N] over the frames where estimate and truth both have the contact and the
   reconstruction solved.
@@ -37,8 +37,8 @@ def score_episode(episode, estimate) -> dict:
     Returns:
         ``{metric: float}`` for every name in :data:`METRICS`.
     """
-    from benchmark.score_forces import score_forces
-    from benchmark.tracking import score_tracking
+    from benchmark.scores.forces import score_forces
+    from benchmark.scores.tracking import score_tracking
 
     tr = episode.truth
     t = score_tracking(estimate.tracking, tr, estimate.contacts)
@@ -72,8 +72,8 @@ def learned_errors(episode, estimate) -> dict:
     """Table 2's relative error and the per-finger mean absolute error of the final (learned) forces."""
     if estimate.forces is None:
         return {"learned_rel_err_pct": np.nan, "learned_mae_n": np.nan}
-    from benchmark.learning import score_episode as score_learned
-    from benchmark.score_forces import true_normal_forces
+    from benchmark.scores.learned import score_episode as score_learned
+    from benchmark.scores.forces import true_normal_forces
     from fsv.forces import FrameStatus
 
     sol = estimate.forces

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from benchmark.scenario import Scenario
+from benchmark.world.scenario import Scenario
 
 
 @dataclass(frozen=True)

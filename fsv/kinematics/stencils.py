@@ -171,7 +171,7 @@ class AlgebraicConfig:
     """Minimal (kappa, mu) algebraic numerical differentiator (Mboup, Join, Fliess 2009).
 
     The defaults are the parameters tuned on the benchmark's calibration episodes (30 fps six-axis
-    excitations with tracker-like pose errors; see ``benchmark.motion``).
+    excitations with tracker-like pose errors; see ``benchmark.world.motion``).
 
     Attributes:
         window_frames: Samples per window L >= 3 (T = L / fps).

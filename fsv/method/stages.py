@@ -33,22 +33,30 @@ ORACLE = "oracle"
 
 @runtime_checkable
 class Tracker(Protocol):
+    """``(inputs: CameraInput, rng) -> tracking`` with ``.box`` (Poses) and ``.contacts`` (Contacts), T frames."""
+
     def __call__(self, inputs, rng: np.random.Generator): ...
 
 
 @runtime_checkable
 class Differentiator(Protocol):
+    """``(poses: Poses) -> Kinematics``: world-frame velocities and accelerations, T frames."""
+
     def __call__(self, poses: Poses) -> Kinematics: ...
 
 
 @runtime_checkable
 class ForceEstimator(Protocol):
+    """``(kinematics, contacts, object_model, gravity) -> ForceSolution``: the nominal forces."""
+
     def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model: ObjectModel,
                  gravity: np.ndarray) -> ForceSolution: ...
 
 
 @runtime_checkable
 class InternalForces(Protocol):
+    """``(kinematics, contacts, object_model, gravity) -> (ForceSolution, predicted)``: the final forces."""
+
     def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model: ObjectModel,
                  gravity: np.ndarray) -> tuple: ...
 

@@ -1,0 +1,1 @@
+"""The depth camera: rendering, the sensor model, previews."""

@@ -1,0 +1,76 @@
+"""``fsv-bench train``: fit the internal-force networks on a generated dataset and save them.
+
+    fsv-bench train --data DIR --out model.pt [--seeds 0-2] [--epochs 1500] [--folds 5] [--members 5]
+
+Runs k-fold cross-validation (folds made of whole episodes) to report the expected error, then
+trains on every selected sample and saves the model with its normalisation and a description of
+the data and command (:meth:`fsv.learn.InternalForceModel.save`, atomic). Samples: those of the
+dataset (the paper's rule) that also pass the plausibility rule
+(:func:`benchmark.paper.dataset.nominal_excess_n`, ``--max-excess``; inf turns it off).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+from benchmark.paper.dataset import MAX_EXCESS_N, _ints, finger_names_of, load_dataset, training_set
+from benchmark.paper.table2 import TABLE2_MEMBERS
+from fsv.errors import InputError
+from fsv.learn import LearnConfig, cross_validate, train
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
+    p.add_argument("--out", required=True, help="model file to write (.pt)")
+    p.add_argument("--seeds", default=None, help="episode seeds to train on (default: all)")
+    p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
+    p.add_argument("--folds", type=int, default=LearnConfig.folds, help="cross-validation folds (0: skip)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the initial weights")
+    p.add_argument("--quiet", action="store_true", help="no progress bar (it is also hidden when stderr is not a terminal)")
+    p.add_argument("--members", type=int, default=TABLE2_MEMBERS,
+                   help=f"networks per ANN, averaged (default {TABLE2_MEMBERS}; 1 = the paper's single pair)")
+    p.add_argument("--max-excess", type=float, default=MAX_EXCESS_N,
+                   help=f"plausibility rule on the samples, [N] (default {MAX_EXCESS_N}; inf: the paper's rule only)")
+
+
+def run(args: argparse.Namespace):
+    where = {} if args.seeds is None else dict(seed=list(_ints(args.seeds)))
+    rule = None if not np.isfinite(args.max_excess) else args.max_excess
+    df = load_dataset(args.data, max_excess_n=rule, **where)
+    data = training_set(df)
+    episodes = int(df["episode"].nunique())
+    if args.folds and not 2 <= args.folds <= episodes:
+        raise InputError(f"--folds {args.folds} needs between 2 and the dataset's {episodes} episodes; "
+                         f"pass --folds {min(max(episodes, 2), 5)} or --folds 0 to skip cross-validation")
+    config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed, members=args.members)
+    from tqdm import tqdm
+
+    t0 = time.perf_counter()
+    per_model = 2 * config.members * config.epochs  # epochs of every network of one model
+    bar = tqdm(total=per_model * ((args.folds if args.folds else 0) + 1), desc="train", unit="epoch", leave=False,
+               disable=True if args.quiet else None, mininterval=0.5)  # None: hidden when stderr is not a terminal
+    try:
+        cv = cross_validate(data, config, on_epoch=bar.update).summary() if args.folds else None
+        with open(os.path.join(args.data, "dataset.json")) as fh:
+            header = json.load(fh)
+        meta = dict(
+            command="fsv-bench train " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train"] else "fsv.learn.train",
+            dataset=header["spec"], selection=where, max_excess_n=rule, episodes=int(df["episode"].nunique()),
+            cross_validation=cv,
+        )
+        model = train(data, config, finger_names=finger_names_of(df), metadata=meta, on_epoch=bar.update)
+    finally:
+        bar.close()
+    model.save(args.out)
+    msg = f"trained on {len(data)} samples from {meta['episodes']} episodes in {time.perf_counter() - t0:.1f} s"
+    if cv:
+        msg += (f"; {cv['folds']}-fold CV: internal-force rel. error {cv['rel_err_pct_mean']:.1f} %, "
+                f"L2 norm rel. error {cv['l2_rel_err_pct_mean']:.1f} %, share RMSE {cv['share_rmse_mean']:.3f}")
+    print(msg + f"; saved {args.out}")
+    return model

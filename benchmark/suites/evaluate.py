@@ -1,0 +1,337 @@
+"""``fsv-bench eval``: score the method on a suite and give a verdict for CI.
+
+    fsv-bench eval --suite smoke --out DIR [--gates FILE] [--cache DIR] [--workers N] [--quiet]
+                   [--method M | --tracker M --differentiator M --forces M --internal M] [--oracle LIST]
+
+Every episode of the suite is simulated and rendered once and cached (``--cache``, default
+``$XDG_CACHE_HOME/fsv-bench/episodes`` or ``~/.cache/fsv-bench/episodes``), keyed by the scenario,
+the suite's name and version and the fingerprint of the world's code
+(:func:`benchmark.fingerprint.world_fingerprint`); a second evaluation on the same suite renders
+nothing. The method (the reference, or the one ``--method``/``--tracker``/... name as
+``module:attribute``, see :class:`benchmark.method.MethodSpec`) runs on each episode's camera inputs
+through :func:`benchmark.method.run_method`, every stage is scored
+(:mod:`benchmark.scores.episode`), the medians and means get 95 % bootstrap intervals, and the
+suite's gates (or ``--gates FILE``, a JSON list of ``{"metric", "op", "limit", "statistic"}``) give
+the verdict. ``DIR`` receives ``scores.json`` (per episode and aggregate, strict JSON, with
+provenance), ``report.md`` and ``junit.xml`` (one test case per gate); it is written into a
+temporary folder and moved into place when complete. Exit status: 0 when every gate holds, 1 when
+one fails (named on the console), 2 on bad input (before any work).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import os
+import pathlib
+import shutil
+import sys
+import tempfile
+import time
+from dataclasses import asdict
+
+from benchmark.atomic import swap_folder
+from benchmark.errors import BenchmarkError, EpisodeFileError
+from benchmark.world.scenario import Scenario
+from benchmark.suites import Gate, Suite, get_suite
+
+class GateFailure(BenchmarkError):
+    """At least one gate of the evaluated suite does not hold."""
+
+
+def default_cache() -> pathlib.Path:
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return pathlib.Path(base) / "fsv-bench" / "episodes"
+
+
+def episode_name(scenario: Scenario) -> str:
+    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>``: how runs, cached episodes and score rows name a scenario."""
+    return f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
+
+
+def episode_key(suite: Suite, scenario: Scenario) -> str:
+    """Cache key of a rendered episode: scenario, suite name and version, world code."""
+    from benchmark.fingerprint import world_fingerprint
+
+    text = json.dumps({"scenario": asdict(scenario), "suite": suite.name, "version": suite.version,
+                       "world": world_fingerprint()}, sort_keys=True)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
+    """The rendered episode from the cache, simulated and rendered (and cached) if missing or damaged.
+
+    Returns:
+        ``(episode, rendered)``: ``rendered`` is True when it had to be made.
+    """
+    from benchmark import load_episode, render, save_episode, simulate
+
+    path = cache / suite.name / f"{episode_name(scenario)}-{episode_key(suite, scenario)}.npz"
+    if path.exists():
+        try:
+            return load_episode(path), False
+        except EpisodeFileError as e:
+            print(f"fsv-bench eval: rebuilding a damaged cached episode: {e}", file=sys.stderr)
+    episode = render(simulate(scenario))
+    save_episode(episode, path)
+    return episode, True
+
+
+def _episode_rows(job) -> list:
+    """One episode: cached or made, every method run on it, every metric (a worker's unit of work).
+
+    Methods whose stages differ only after the tracker share one tracking run of the episode.
+    """
+    from benchmark.method import camera_input, run_method
+    from benchmark.scores.episode import score_episode
+
+    suite, sc, cache, specs, init_scale = job
+    t0 = time.perf_counter()
+    episode, made = cached_episode(suite, sc, cache)
+    inputs = camera_input(episode, init_scale)
+    rows, tracked = [], {}
+    for spec in specs:
+        t1 = time.perf_counter()
+        shared = None if spec.method else tracked.get(spec.tracker)
+        estimate = run_method(spec, episode, inputs=inputs, tracking=shared)
+        if not spec.method:
+            tracked.setdefault(spec.tracker, estimate.tracking)
+        metrics = score_episode(episode, estimate)
+        seconds = time.perf_counter() - (t0 if not rows else t1)
+        rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc), **metrics,
+                     "seconds": seconds, "rendered": made and not rows})
+    return rows
+
+
+def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
+             workers: int = 1, init_scale: float = 1.0) -> dict:
+    """Scores one method (default: the reference) on every episode of ``suite``.
+
+    Episodes run in ``workers`` local processes (1: in this process); the scores do not depend on it.
+
+    Returns:
+        The content of ``scores.json`` (``episodes``, ``aggregate``, ``per_task``, ``gates``,
+        ``verdict``, ``rendered`` episodes, ``method`` and ``stages``, ``provenance``).
+    """
+    from benchmark.method import MethodSpec
+
+    return evaluate_many(suite, [spec or MethodSpec()], gates=gates, cache=cache, progress=progress,
+                         workers=workers, init_scale=init_scale)[0]
+
+
+def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
+                  workers: int = 1, init_scale: float = 1.0) -> list:
+    """Scores several methods on every episode of ``suite``, each episode rendered (or read) once.
+
+    ``init_scale`` scales the seeded first-frame perturbation handed to the methods
+    (``benchmark.method.init.INIT_PERTURBATION``; 1 = the suites' protocol).
+
+    Returns:
+        One ``scores.json`` content per method, in the order of ``specs``.
+    """
+    from benchmark.method import method_label
+
+    specs = list(specs)
+    for spec in specs:
+        spec.check()
+    cache = pathlib.Path(cache or default_cache())
+    gates = suite.gates if gates is None else gates
+    t0 = time.perf_counter()
+    per_episode = []
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
+    jobs = [(suite, sc, cache, specs, init_scale) for sc in suite.scenarios]
+    if workers == 1:
+        for job in jobs:
+            per_episode.append(_episode_rows(job))
+            if bar is not None:
+                bar.update(1)
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            for rows in pool.map(_episode_rows, jobs):
+                per_episode.append(rows)
+                if bar is not None:
+                    bar.update(1)
+    if bar is not None:
+        bar.close()
+    seconds = time.perf_counter() - t0
+    return [scores_document(suite, [ep_rows[m] for ep_rows in per_episode], gates, method=method_label(spec),
+                            stages=dict(getattr(spec.build(), "labels", None) or {}), method_spec=asdict(spec),
+                            seconds=seconds)
+            for m, spec in enumerate(specs)]
+
+
+def scores_document(suite: Suite, rows: list, gates, *, method: str, stages: dict, method_spec, seconds: float) -> dict:
+    """The content of ``scores.json`` for one method's per-episode rows: aggregates, gates, verdict.
+
+    Args:
+        suite: The suite scored.
+        rows: One dict per episode (``episode``, ``task``, ``scenario``, every metric, ``seconds``, ``rendered``).
+        gates: The gates that decide the verdict.
+        method: One line naming the method.
+        stages: The name of each stage.
+        method_spec: How the method was named (a ``MethodSpec`` as a dict), or None for estimates from files.
+        seconds: Wall time of the whole evaluation.
+    """
+    from benchmark.scores.aggregate import aggregate_all
+    from benchmark.scores.episode import METRICS
+    from benchmark.scores.verdict import check_gates
+    from fsv.provenance import provenance
+
+    aggregates = aggregate_all(rows, METRICS)
+    results = check_gates(gates, aggregates)
+    return {
+        "suite": {"name": suite.name, "version": suite.version, "description": suite.description},
+        "method": method, "method_spec": method_spec, "stages": stages,
+        "metrics": list(METRICS), "episodes": rows, "aggregate": aggregates,
+        "per_task": aggregate_all(rows, METRICS, by="task"),
+        "gates": [asdict(r) for r in results], "verdict": "pass" if all(r.passed for r in results) else "fail",
+        "rendered": sum(r["rendered"] for r in rows), "seconds": seconds, "provenance": provenance(),
+    }
+
+
+def strict(obj):
+    """``obj`` with NaN and infinities replaced by None (strict JSON)."""
+    if isinstance(obj, dict):
+        return {k: strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [strict(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def write_outputs(scores: dict, suite: Suite, out: pathlib.Path) -> None:
+    """Writes ``scores.json``, ``report.md`` and ``junit.xml`` into a temporary folder, then swaps it in."""
+    from benchmark.scores.verdict import GateResult, junit_xml, report_markdown
+    from benchmark.scores.episode import METRICS
+
+    results = [GateResult(**{**g, "ci": tuple(g["ci"]) if g["ci"] is not None else None}) for g in scores["gates"]]
+    out = pathlib.Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        (tmp / "scores.json").write_text(json.dumps(strict(scores), indent=1, allow_nan=False) + "\n")
+        (tmp / "report.md").write_text(report_markdown(suite, scores["method"], scores["episodes"], scores["aggregate"],
+                                                       scores["per_task"], results, METRICS))
+        (tmp / "junit.xml").write_bytes(junit_xml(suite.name, results, scores["seconds"]))
+        swap_folder(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def load_gates(path) -> tuple:
+    """Gates from a JSON file: a list of ``{"metric", "op", "limit"[, "statistic"]}``."""
+    from benchmark.scores.episode import METRICS
+
+    try:
+        data = json.loads(pathlib.Path(path).read_text())
+        gates = tuple(Gate(metric=g["metric"], op=g["op"], limit=float(g["limit"]),
+                           statistic=g.get("statistic", "median")) for g in data)
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise ValueError(f"--gates {path}: not a JSON list of {{\"metric\", \"op\", \"limit\"[, \"statistic\"]}}: {e}") from e
+    bad = [g.metric for g in gates if g.metric not in METRICS]
+    if bad:
+        raise ValueError(f"--gates {path}: unknown metric {bad[0]!r}; accepted: {', '.join(METRICS)}")
+    return gates
+
+
+def check_out(out: pathlib.Path, option: str = "--out") -> None:
+    """Refuses an output folder that is a file or cannot be created (ValueError, one line); writes nothing.
+
+    Writability is tested by creating (and removing) a temporary folder in the nearest existing
+    ancestor, which is where the output's temporary folder will be made.
+    """
+    out = pathlib.Path(out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"{option} {out}: exists and is not a folder")
+    probe = out.parent if str(out.parent) else pathlib.Path(".")
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir():
+        raise ValueError(f"{option} {out}: {probe} is not a folder")
+    try:
+        pathlib.Path(tempfile.mkdtemp(prefix=".fsv-bench-probe.", dir=probe)).rmdir()
+    except OSError as e:
+        raise ValueError(f"{option} {out}: cannot write in {probe} ({e.strerror or e})") from None
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from benchmark.suites import SUITES
+
+    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (scores.json, report.md, junit.xml)")
+    p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
+    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_method_arguments(p)
+
+
+def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True) -> None:
+    """``--method``, ``--tracker``, ``--differentiator``, ``--forces``, ``--internal`` [, ``--oracle``]."""
+    from benchmark.method import DIFFERENTIATORS, ORACLE_STAGES
+
+    g = p.add_argument_group("the method (default: the reference; replace a stage by module:attribute)")
+    g.add_argument("--method", default=None, metavar="MODULE:ATTR",
+                   help="a whole method: an fsv.method.Method (or a factory of one) or a callable (inputs, rng) -> Estimate")
+    g.add_argument("--tracker", default=None, metavar="MODULE:ATTR", help="(inputs, rng) -> tracking with .box and .contacts")
+    g.add_argument("--differentiator", default=None, metavar="NAME|MODULE:ATTR",
+                   help=f"(poses) -> Kinematics, or one of {', '.join(DIFFERENTIATORS)}")
+    g.add_argument("--forces", default=None, metavar="MODULE:ATTR",
+                   help="(kinematics, contacts, object_model, gravity) -> ForceSolution")
+    g.add_argument("--internal", default=None, metavar="none|MODULE:ATTR",
+                   help="(kinematics, contacts, object_model, gravity) -> (ForceSolution, predicted); none: nominal forces only")
+    if oracle:
+        g.add_argument("--oracle", default="", metavar="LIST",
+                       help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
+
+
+def spec_from_args(args: argparse.Namespace):
+    """The :class:`benchmark.method.MethodSpec` of the command line, loaded and checked (raises ValueError)."""
+    from benchmark.method import MethodSpec
+
+    spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=args.differentiator,
+                      forces=args.forces, internal=args.internal,
+                      oracle=tuple(o for o in args.oracle.split(",") if o))
+    spec.check()
+    return spec
+
+
+def run(args: argparse.Namespace) -> dict:
+    """Runs ``fsv-bench eval``: checks every input, evaluates, writes, prints; raises GateFailure on a failed gate."""
+    suite = get_suite(args.suite)
+    gates = load_gates(args.gates) if args.gates else None
+    if args.workers < 1:
+        raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
+    check_out(args.out)
+    spec = spec_from_args(args)
+    scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers)
+    write_outputs(scores, suite, args.out)
+    print_verdict(scores, args.out, "eval")
+    return scores
+
+
+def print_verdict(scores: dict, out, command: str) -> None:
+    """Prints the gates of ``scores`` and raises GateFailure naming the failed ones."""
+    suite = scores["suite"]
+    print(f"fsv-bench {command}: suite {suite['name']} v{suite['version']}, {len(scores['episodes'])} episodes "
+          f"({scores['rendered']} rendered, the rest from the cache), {scores['seconds']:.0f} s\n  method: {scores['method']}")
+    for g in scores["gates"]:
+        ci = "" if g["ci"] is None else f" [{g['ci'][0]:.4g}, {g['ci'][1]:.4g}]"
+        value = "nothing scored" if g["value"] is None else f"{g['value']:.4g}"
+        print(f"  {'pass' if g['passed'] else 'FAIL'}  {g['name']}: {value}{ci}")
+    print(f"written to {out}/ (scores.json, report.md, junit.xml)")
+    failed = [g["name"] for g in scores["gates"] if not g["passed"]]
+    if failed:
+        raise GateFailure(f"{len(failed)} gate(s) failed: {'; '.join(failed)}")

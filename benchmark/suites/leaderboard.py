@@ -1,0 +1,72 @@
+"""``fsv-bench leaderboard``: the reference method and its variants on one suite, in one pass.
+
+    fsv-bench leaderboard --suite standard --out DIR [--workers N] [--cache DIR] [--quiet]
+
+The variants (:data:`VARIANTS`) replace one stage of the reference (another differentiator) or feed
+it truth (oracle contacts, oracle kinematics: ablations that show what each stage costs). They share
+every episode's rendering and tracking. ``DIR/<variant>/`` gets the files of ``fsv-bench eval``
+(``scores.json``, ``report.md``, ``junit.xml``); ``DIR/leaderboard.md`` the table with intervals.
+The exit status is 0 when the reference passes the suite's gates, 1 when not.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import shutil
+import tempfile
+
+from benchmark.atomic import swap_folder
+from benchmark.method import MethodSpec
+
+VARIANTS = {
+    "reference": MethodSpec(),
+    "central": MethodSpec(differentiator="central"),
+    "gaussian": MethodSpec(differentiator="gaussian"),
+    "oracle-contacts": MethodSpec(oracle=("contacts",)),
+    "oracle-kinematics": MethodSpec(oracle=("kinematics",)),
+    "oracle-contacts-kinematics": MethodSpec(oracle=("contacts", "kinematics")),
+}
+"""The leaderboard's rows: the reference (algebraic differentiation) and its variants."""
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from benchmark.suites import SUITES
+
+    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (leaderboard.md, <variant>/)")
+    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def run(args: argparse.Namespace) -> list:
+    from benchmark.suites.evaluate import GateFailure, check_out, evaluate_many, write_outputs
+    from benchmark.scores.leaderboard import leaderboard_markdown
+    from benchmark.suites import get_suite
+
+    suite = get_suite(args.suite)
+    if args.workers < 1:
+        raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
+    check_out(args.out)
+    results = evaluate_many(suite, list(VARIANTS.values()), cache=args.cache, progress=not args.quiet,
+                            workers=args.workers)
+    entries = list(zip(VARIANTS, results))
+    out = pathlib.Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        for name, scores in entries:
+            write_outputs(scores, suite, tmp / name)
+        table = leaderboard_markdown(suite, entries)
+        (tmp / "leaderboard.md").write_text(table)
+        swap_folder(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    print(table)
+    print(f"written to {out}/ (leaderboard.md, {', '.join(VARIANTS)})")
+    if results[0]["verdict"] != "pass":
+        failed = [g["name"] for g in results[0]["gates"] if not g["passed"]]
+        raise GateFailure(f"the reference fails {len(failed)} gate(s) of {suite.name}: {'; '.join(failed)}")
+    return entries

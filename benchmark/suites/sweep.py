@@ -1,0 +1,162 @@
+"""``fsv-bench sweep``: one suite evaluated along one axis, each error plotted against it.
+
+    fsv-bench sweep --suite smoke --axis noise --values 0.005,0.01,0.02 --out DIR [--workers N]
+                    [--cache DIR] [--quiet] [--method/--tracker/--differentiator/... M]
+
+Axes (:data:`AXES`): ``noise`` (depth noise standard deviation, m), ``mass`` (index into
+sim_assets/masses.yaml), ``fps`` (camera frame rate, Hz), ``init`` (scale of the seeded first-frame
+perturbation handed to the method, ``benchmark.method.init.INIT_PERTURBATION``). Every scenario of the
+suite is run at every value (the rest of the scenario unchanged). ``DIR`` receives ``sweep.json``
+(aggregates with 95 % intervals per value, provenance), ``sweep.md`` and ``sweep.png`` (median and
+interval of each metric against the axis). The world has no friction or sensor-model axis yet.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import pathlib
+import shutil
+import tempfile
+
+AXES = {
+    "noise": ("noise_m", float, "depth noise std [m]"),
+    "mass": ("mass", int, "mass index (sim_assets/masses.yaml)"),
+    "fps": ("fps", float, "frame rate [Hz]"),
+    "init": (None, float, "first-frame perturbation scale"),
+}
+"""Axis name -> (Scenario field or None for the method's initialisation, type, label)."""
+
+PLOTTED = ("box_pos_err_mm", "contact_err_mm_std", "acc_err_rms", "net_force_err_n_rms", "least_violation_frac",
+           "learned_rel_err_pct")
+"""The metrics drawn in ``sweep.png`` (every metric is in ``sweep.json``)."""
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    from benchmark.suites.evaluate import add_method_arguments
+    from benchmark.suites import SUITES
+
+    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--axis", required=True, help=f"one of {', '.join(AXES)}")
+    p.add_argument("--values", required=True, help="comma-separated values along the axis")
+    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (sweep.json, sweep.md, sweep.png)")
+    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_method_arguments(p)
+
+
+def parse_values(axis: str, text: str) -> list:
+    """The axis values of ``--values`` (ValueError naming a bad one)."""
+    if axis not in AXES:
+        raise ValueError(f"--axis {axis!r}: accepted: {', '.join(AXES)}")
+    kind = AXES[axis][1]
+    values = []
+    for item in str(text).split(","):
+        try:
+            values.append(kind(item))
+        except ValueError:
+            raise ValueError(f"--values {text!r}: {item!r} is not a{'n integer' if kind is int else ' number'}") from None
+    if len(set(values)) != len(values) or len(values) < 2:
+        raise ValueError(f"--values {text!r}: need at least two distinct values")
+    return values
+
+
+def swept_suite(suite, axis: str, value):
+    """The suite with every scenario moved to ``value`` along ``axis`` (itself for the ``init`` axis)."""
+    from benchmark.suites import Suite
+    from benchmark.world.assets import validate
+
+    field = AXES[axis][0]
+    if field is None:
+        return suite
+    scenarios = tuple(dataclasses.replace(sc, **{field: value}) for sc in suite.scenarios)
+    for sc in scenarios:
+        validate(sc)
+    return Suite(name=f"{suite.name}-{axis}-{value}", version=suite.version, scenarios=scenarios, gates=suite.gates,
+                 description=f"{suite.name} with {AXES[axis][2]} = {value}")
+
+
+def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
+    """Median [95 % interval] of each metric of :data:`PLOTTED` against the axis, one panel each."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from benchmark.atomic import save_figure
+
+    fig, axes = plt.subplots(2, 3, figsize=(12, 6.5))
+    x = np.asarray(values, dtype=float)
+    for ax, metric in zip(axes.ravel(), PLOTTED):
+        stat = "mean" if metric == "least_violation_frac" else "median"
+        aggs = [r["aggregate"][metric][stat] for r in results]
+        v = np.array([a["value"] if a["value"] is not None else np.nan for a in aggs], float)
+        lo = np.array([a["ci_low"] if a["ci_low"] is not None else np.nan for a in aggs], float)
+        hi = np.array([a["ci_high"] if a["ci_high"] is not None else np.nan for a in aggs], float)
+        ax.errorbar(x, v, yerr=[v - lo, hi - v], marker="o", capsize=3, color="tab:blue", label=f"{stat} [95 % CI]")
+        ax.set_title(metric, fontsize=9)
+        ax.set_xlabel(AXES[axis][2], fontsize=8)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(f"{results[0]['suite']['name']}: errors against {AXES[axis][2]} ({len(results[0]['episodes'])} episodes per value)",
+                 fontsize=10)
+    fig.tight_layout()
+    out = save_figure(fig, path)
+    plt.close(fig)
+    return out
+
+
+def run(args: argparse.Namespace) -> dict:
+    from benchmark.suites.evaluate import check_out, evaluate, spec_from_args, strict
+    from benchmark.suites import get_suite
+    from fsv.provenance import provenance
+
+    suite = get_suite(args.suite)
+    values = parse_values(args.axis, args.values)
+    suites = [swept_suite(suite, args.axis, v) for v in values]  # every scenario validated before any work
+    if args.workers < 1:
+        raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
+    check_out(args.out)
+    spec = spec_from_args(args)
+    results = []
+    for value, s in zip(values, suites):
+        scale = value if args.axis == "init" else 1.0
+        results.append(evaluate(s, spec=spec, cache=args.cache, progress=not args.quiet, workers=args.workers,
+                                init_scale=scale))
+        print(f"  {args.axis} = {value}: done ({results[-1]['seconds']:.0f} s)")
+    doc = {"suite": results[0]["suite"], "axis": args.axis, "label": AXES[args.axis][2], "values": values,
+           "method": results[0]["method"], "stages": results[0]["stages"],
+           "aggregate": [r["aggregate"] for r in results], "episodes": [r["episodes"] for r in results],
+           "provenance": provenance()}
+    out = pathlib.Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        (tmp / "sweep.json").write_text(json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
+        (tmp / "sweep.md").write_text(sweep_markdown(doc))
+        plot_sweep(args.axis, values, results, tmp / "sweep.png")
+        from benchmark.atomic import swap_folder
+
+        swap_folder(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    print(sweep_markdown(doc))
+    print(f"written to {out}/ (sweep.json, sweep.md, sweep.png)")
+    return doc
+
+
+def sweep_markdown(doc: dict) -> str:
+    """A table: one row per axis value, the plotted metrics' medians (means for least violation) with intervals."""
+    lines = [f"# Sweep of {doc['suite']['name']} along {doc['label']}", "", f"Method: {doc['method']}", "",
+             f"| {doc['axis']} | " + " | ".join(PLOTTED) + " |", "|" + "---|" * (len(PLOTTED) + 1)]
+    for value, agg in zip(doc["values"], doc["aggregate"]):
+        cells = []
+        for m in PLOTTED:
+            a = agg[m]["mean" if m == "least_violation_frac" else "median"]
+            cells.append("—" if a["value"] is None else f"{a['value']:.3g} [{a['ci_low']:.3g}, {a['ci_high']:.3g}]")
+        lines.append(f"| {value} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

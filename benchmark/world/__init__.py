@@ -1,0 +1,1 @@
+"""The synthetic world: scenarios, the simulated hand and box, tasks, grip policy, truth."""

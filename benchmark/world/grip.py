@@ -1,0 +1,491 @@
+"""The synthetic human: where the hand goes for a grasp, and how hard each finger squeezes.
+
+Two parts:
+
+* :func:`plan_grasp` places the hand on the box for a grasp of ``sim_assets/grasps.yaml``: it
+  solves for the palm's pose (height, setback, pitch above the box) and the 20 joint angles so
+  that each active pad touches its spot on the box face, no other part of the hand comes closer
+  than a few millimetres to the box or the table, and the posture stays close to a relaxed human
+  one (a regularised least-squares inverse kinematics, with MuJoCo's kinematics and distances).
+* :class:`GripPolicy` turns the load the hand must carry into fingertip forces, following the
+  motor-control literature: the grip (normal) force tracks the load force in parallel with a
+  user-specific safety margin over the slip limit (Johansson & Westling 1984), from a baseline
+  grip, anticipating the planned load rather than reacting to it (Flanagan & Wing 1995), with a
+  per-finger share of the internal force (Radwin et al. 1992). The forces become joint torques
+  through the fingertip Jacobians, tau = J^T f; MuJoCo's contact solver then produces the true
+  contact forces.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.resources
+import json
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from scipy.optimize import least_squares
+
+from benchmark.errors import ScenarioError
+from benchmark.world.scenario import Scenario
+from benchmark.world.assets import World, build_world, grasp_of, user_of
+from fsv.linalg import dot, inv, mm, mv, rows_mt, vm
+
+# Relaxed postures (radians): [abduction, flexion, flexion, flexion] per digit.
+_PRIOR_ACTIVE = {"thumb": [0.0, 0.3, 0.4, 0.3], "finger": [0.0, 0.25, 1.4, 0.5]}
+_PRIOR_FREE = [0.0, 0.2, 0.3, 0.15]
+_CLEARANCE_M = 0.007  # keep every non-pad part of the hand this far from the box and the table
+_SHAFT_CLEARANCE_M = 0.0025  # ... except the distal shafts of the active digits, next to their pads
+
+
+def face_normal(face: str) -> np.ndarray:
+    """Outward unit normal of a box face named ``+x``, ``-x``, ``+y``, ``-y``, ``+z`` or ``-z``."""
+    if len(face) != 2 or face[0] not in "+-" or face[1] not in "xyz":
+        raise ScenarioError(f"face {face!r} is not one of +x, -x, +y, -y, +z, -z")
+    n = np.zeros(3)
+    n["xyz".index(face[1])] = 1.0 if face[0] == "+" else -1.0
+    return n
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """A grasp fitted to one hand, with the box lying at its start pose.
+
+    Attributes:
+        active: Whether each finger (thumb first) touches the box, (K,) bool.
+        spot: Pad contact point on the box surface, object frame, (K, 3), [m] (zero if inactive).
+        normal_in: Unit normal into the box at the spot, object frame, (K, 3).
+        palm_pos: Palm position in the object frame, (3,), [m].
+        palm_quat: Palm orientation in the object frame (w, x, y, z), (4,).
+        q_grasp: Joint angles with every active pad on its spot, (n,), [rad].
+        q_open: Pre-shape: the same posture opened so that the pads clear the box, (n,), [rad].
+        tip_error_m: Largest distance of an active pad centre from its target, [m].
+        clearance_m: Smallest margin of the other hand parts over their required gap to the box
+            and the table, expressed as a distance, [m]: ``min(distance - required gap) + 7 mm``,
+            where the gap is 7 mm, or 2.5 mm for the distal shafts next to the active pads.
+            Positive: no part other than the pads touches the box or the table.
+    """
+
+    active: np.ndarray
+    spot: np.ndarray
+    normal_in: np.ndarray
+    palm_pos: np.ndarray
+    palm_quat: np.ndarray
+    q_grasp: np.ndarray
+    q_open: np.ndarray
+    tip_error_m: float
+    clearance_m: float
+
+
+def _pitch_quat(pitch: float) -> np.ndarray:
+    return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
+
+
+PLANS_FILE = "grasp_plans.json"  # in sim_assets: the solved plans, so every machine builds the same world
+_PLANS_FORMAT = "fsv-bench grasp plans"
+
+
+class _PlanProblem:
+    """The least-squares problem that fits one grasp to one hand (palm y, z, pitch and 20 joints).
+
+    Attributes:
+        fingerprint: sha256 of everything the solution depends on (the compiled hand and box, the
+            grasp's spots, the priors and clearances): a stored solution is used only while it matches.
+    """
+
+    def __init__(self, user: int, grasp: int):
+        sc = Scenario(user=user, grasp=grasp)
+        world = build_world(sc)
+        spec = grasp_of(sc)
+        hand, m = world.hand, world.model
+        self.world, self.spec, self.d = world, spec, mujoco.MjData(m)
+        self.user_name, self.grasp_name = str(user_of(sc)["name"]), str(spec["name"])
+        K = len(hand.finger_names)
+        unknown = set(spec["spots"]) - set(hand.finger_names)
+        if unknown:
+            raise ScenarioError(f"grasp {spec['name']!r} names unknown digits {sorted(unknown)}; accepted: {hand.finger_names}")
+        active = np.array([f in spec["spots"] for f in hand.finger_names])
+        spot = np.zeros((K, 3))
+        normal_in = np.zeros((K, 3))
+        for k, f in enumerate(hand.finger_names):
+            if active[k]:
+                spot[k] = spec["spots"][f]["point"]
+                normal_in[k] = -face_normal(spec["spots"][f]["face"])
+        self.active, self.spot, self.normal_in = active, spot, normal_in
+        self.box_pos = self.d.qpos[world.box_qadr : world.box_qadr + 3].copy()
+        self.target = self.box_pos + spot - normal_in * hand.fingertip_radius[:, None]
+        prior = np.zeros(hand.num_joints)
+        for k, f in enumerate(hand.finger_names):
+            js = [j for j, n in enumerate(hand.joint_names) if n.startswith(f + "_")]
+            prior[js] = _PRIOR_ACTIVE["thumb" if k == 0 else "finger"] if active[k] else _PRIOR_FREE
+        self.lo, self.hi = hand.joint_range[:, 0], hand.joint_range[:, 1]
+        self.prior = np.clip(prior, self.lo, self.hi)
+        pad_geoms = {int(np.flatnonzero((world.geom_segment == hand.fingertip_segment[k])
+                                        & (m.geom_type == mujoco.mjtGeom.mjGEOM_SPHERE))[0]) for k in range(K) if active[k]}
+        self.body_geoms = [g for g in np.flatnonzero(world.geom_segment >= 0) if g not in pad_geoms]
+        distal = {int(hand.fingertip_segment[k]) for k in range(K) if active[k]}
+        self.clearance = np.repeat([_SHAFT_CLEARANCE_M if world.geom_segment[g] in distal else _CLEARANCE_M
+                                    for g in self.body_geoms], 2)
+        digest = hashlib.sha256()
+        for arr in (m.body_pos, m.body_quat, m.geom_size, m.geom_pos, m.geom_quat, m.geom_type, m.jnt_axis,
+                    m.jnt_pos, m.jnt_range, self.target, self.prior, self.clearance, world.obj.half_extents):
+            digest.update(np.ascontiguousarray(arr).tobytes())
+        digest.update(json.dumps([spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]).encode())
+        self.fingerprint = digest.hexdigest()
+
+    def pose(self, x: np.ndarray) -> None:
+        w, d = self.world, self.d
+        d.qpos[w.hand_qadr[:3]] = self.box_pos + [self.spec["palm_x"], x[0], x[1]]
+        d.qpos[w.hand_qadr[3:7]] = _pitch_quat(x[2])
+        d.qpos[w.joint_qadr] = x[3:]
+        mujoco.mj_kinematics(w.model, d)
+
+    def distances(self) -> np.ndarray:
+        w, d, m = self.world, self.d, self.world.model
+        out = []
+        for g in self.body_geoms:
+            out.append(mujoco.mj_geomDistance(m, d, int(g), w.box_geom, 0.05, None))
+            out.append(d.geom_xpos[g][2] - m.geom_rbound[g])
+        return np.array(out)
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        self.pose(x)
+        tips = self.d.site_xpos[self.world.tip_site]
+        r_tip = (tips - self.target)[self.active].ravel() / 0.001
+        r_post = (x[3:] - self.prior) / 0.5
+        r_pitch = [(x[2] - 0.3) / 0.5]
+        r_col = np.maximum(0.0, self.clearance - self.distances()) / 0.0005
+        return np.concatenate([r_tip, r_post, r_pitch, r_col])
+
+    def solve(self) -> np.ndarray:
+        """Fits the plan from scratch (scipy's least squares: its last digits depend on the BLAS kernel)."""
+        half = self.world.obj.half_extents
+        x0 = np.concatenate([[0.0, half[2] + 0.03, 0.3], self.prior])  # palm y, z (object frame), pitch; joints
+        bounds = (np.concatenate([[-0.1, half[2], -0.6], self.lo]), np.concatenate([[0.1, 0.15, 1.2], self.hi]))
+        x_scale = np.concatenate([[0.01, 0.01, 0.1], np.full(len(self.prior), 0.1)])
+        return least_squares(self.residual, x0, bounds=bounds, x_scale=x_scale, max_nfev=400).x
+
+    def plan(self, x: np.ndarray) -> GraspPlan:
+        hand = self.world.hand
+        self.pose(x)
+        tip_err = float(np.max(np.linalg.norm(self.d.site_xpos[self.world.tip_site] - self.target, axis=1)[self.active]))
+        gap = float(np.min(self.distances() - self.clearance + _CLEARANCE_M))
+        q_grasp = x[3:].copy()
+        # Pre-shape: open every flexion of the active digits by 0.5 rad (pads swing away from the faces).
+        q_open = q_grasp.copy()
+        for k, f in enumerate(hand.finger_names):
+            if self.active[k]:
+                for j, n in enumerate(hand.joint_names):
+                    if n.startswith(f + "_") and n.endswith("flex"):
+                        q_open[j] = np.clip(q_grasp[j] - 0.5, self.lo[j], self.hi[j])
+        return GraspPlan(active=self.active, spot=self.spot, normal_in=self.normal_in,
+                         palm_pos=np.array([self.spec["palm_x"], x[0], x[1]]), palm_quat=_pitch_quat(x[2]),
+                         q_grasp=q_grasp, q_open=q_open, tip_error_m=tip_err, clearance_m=gap)
+
+
+@functools.lru_cache(maxsize=1)
+def stored_plans() -> dict:
+    """The solved plans shipped in ``sim_assets/grasp_plans.json``: ``{"user/grasp": {fingerprint, x}}``."""
+    path = importlib.resources.files("sim_assets") / PLANS_FILE
+    if not path.is_file():
+        return {}
+    data = json.loads(path.read_text())
+    if data.get("format") != _PLANS_FORMAT:
+        raise ScenarioError(f"{path} is not a {_PLANS_FORMAT!r} file")
+    return data["plans"]
+
+
+@functools.lru_cache(maxsize=64)
+def _plan(user: int, grasp: int) -> GraspPlan:
+    problem = _PlanProblem(user, grasp)
+    entry = stored_plans().get(f"{problem.user_name}/{problem.grasp_name}")
+    if entry is not None and entry["fingerprint"] == problem.fingerprint:
+        x = np.array(entry["x"], dtype=float)
+    else:  # a user or grasp edited since the plans were stored: solved here, machine-dependent in the last digits
+        x = problem.solve()
+    return problem.plan(x)
+
+
+def solve_all_plans() -> dict:
+    """Solves every (user, grasp) plan from scratch: the content of ``sim_assets/grasp_plans.json``."""
+    from benchmark.world.assets import grasps, users
+
+    plans = {}
+    for u in range(len(users())):
+        for g in range(len(grasps())):
+            problem = _PlanProblem(u, g)
+            plans[f"{problem.user_name}/{problem.grasp_name}"] = {"fingerprint": problem.fingerprint,
+                                                                  "x": [float(v) for v in problem.solve()]}
+    return {"format": _PLANS_FORMAT, "version": 1,
+            "note": "Grasp plans solved by benchmark.world.grip (python -m benchmark.world.grip --write-plans); "
+                    "stored so that every machine and BLAS kernel builds bit-identical worlds.",
+            "plans": plans}
+
+
+def plan_grasp(scenario: Scenario) -> GraspPlan:
+    """Fits the scenario's grasp to its user's hand (cached per user and grasp).
+
+    Raises:
+        ScenarioError: If the user or grasp does not exist.
+    """
+    user_of(scenario)
+    grasp_of(scenario)
+    return _plan(scenario.user, scenario.grasp)
+
+
+@dataclass(frozen=True)
+class GripPolicy:
+    """How one user distributes and scales fingertip forces.
+
+    Attributes:
+        friction: Skin-box friction coefficient the user expects.
+        safety_margin: Grip exceeds the slip limit by this fraction of it.
+        baseline_grip_n: Internal force kept without load, [N] (thumb-side normal force).
+        anticipation_s: The grip follows the load planned this far ahead, [s].
+        response_s: Time constant of the grip force's first-order response, [s].
+        share: Per finger share of the internal force, thumb first, (K,); the thumb opposes the
+            fingers (its share is 1, the active fingers' shares are renormalised to sum to 1).
+        min_finger_force_n: Every digit in contact presses with at least this normal force, [N]
+            (people keep each digit of a grasp in firm contact).
+    """
+
+    friction: float
+    safety_margin: float
+    baseline_grip_n: float
+    anticipation_s: float
+    response_s: float
+    share: np.ndarray
+    min_finger_force_n: float = 1.0
+
+    @staticmethod
+    def for_scenario(scenario: Scenario, world: World) -> "GripPolicy":
+        user = user_of(scenario)
+        share = np.array([1.0] + [float(user["finger_share"][f]) for f in world.hand.finger_names[1:]])
+        return GripPolicy(friction=world.obj.friction, safety_margin=float(user["safety_margin"]),
+                          baseline_grip_n=float(user["baseline_grip_n"]), anticipation_s=float(user["anticipation_s"]),
+                          response_s=float(user["response_s"]), share=share)
+
+    def distribute(self, wrench: np.ndarray, points: np.ndarray, normals_in: np.ndarray,
+                   active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Nominal forces, the internal force pattern, and the grip needed to keep every pad from slipping.
+
+        All vectors in one frame (world or object), about the centre of mass.
+
+        Args:
+            wrench: Force and torque the hand must apply to the box, (6,) or (N, 6), [N], [N m].
+            points: Contact points relative to the centre of mass, (K, 3), [m].
+            normals_in: Unit normals into the box, (K, 3).
+            active: Digits in contact, (K,) bool.
+
+        Returns:
+            ``(f_nom, f_int (K, 3), grip_slip)``: the forces producing the wrench with the least
+            norm weighted by the inverse grip shares (a digit carries load in proportion to its
+            grip), (K, 3) or (N, K, 3); the internal (workless) forces per newton of grip (thumb
+            normal component 1); and the smallest grip that keeps every active pad inside its
+            friction cone shrunk by the safety margin and every digit at or above
+            ``min_finger_force_n``, a float or (N,), [N].
+        """
+        wrench = np.asarray(wrench, dtype=float)
+        single = wrench.ndim == 1
+        wrench = np.atleast_2d(wrench)
+        K = len(active)
+        idx = np.flatnonzero(active)
+        G = np.zeros((6, 3 * len(idx)))
+        for i, k in enumerate(idx):
+            r = points[k]
+            G[:3, 3 * i : 3 * i + 3] = np.eye(3)
+            G[3:, 3 * i : 3 * i + 3] = [[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]]
+        share = self.share[idx].copy()
+        share[1:] /= share[1:].sum()
+        # Weighted least norm: every pad works at a similar fraction of its friction cone.
+        W = np.repeat(share, 3)
+        Gp = mm(W[:, None] * G.T, inv(mm(G * W, G.T)))
+        f_nom = np.zeros((len(wrench), K, 3))
+        f_nom[:, idx] = rows_mt(wrench, Gp).reshape(len(wrench), -1, 3)
+        d = (share[:, None] * normals_in[idx]).ravel()
+        d_int = (d - mv(Gp, mv(G, d))).reshape(-1, 3)
+        d_int /= dot(d_int[0], normals_in[idx[0]])
+        f_int = np.zeros((K, 3))
+        f_int[idx] = d_int
+        mu = self.friction / (1.0 + self.safety_margin)
+        nrm = normals_in[idx]
+        n0 = np.einsum("nkj,kj->nk", f_nom[:, idx], nrm)
+        n1 = np.einsum("kj,kj->k", d_int, nrm)
+        t0 = f_nom[:, idx] - n0[..., None] * nrm
+        t1 = d_int - n1[:, None] * nrm
+        a = mu**2 * n1**2 - np.einsum("kj,kj->k", t1, t1)
+        b = 2 * (mu**2 * n0 * n1 - np.einsum("nkj,kj->nk", t0, t1))
+        c = mu**2 * n0**2 - np.einsum("nkj,nkj->nk", t0, t0)
+        ok = (c >= 0) & (n0 >= 0)
+        root = (-b + np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))) / (2 * np.maximum(a, 1e-9))
+        grip = np.max(np.where(ok, 0.0, np.maximum(root, -n0 / np.maximum(n1, 1e-9))), axis=1)
+        # every digit keeps pressing with at least min_finger_force_n
+        grip = np.maximum(grip, np.max((self.min_finger_force_n - n0) / np.maximum(n1, 1e-9), axis=1))
+        grip = np.maximum(grip, 0.0)
+        if single:
+            return f_nom[0], f_int, float(grip[0])
+        return f_nom, f_int, grip
+
+
+MAX_FINGER_FORCE_N = 35.0  # commanded fingertip forces are capped here (human range of such grips: < 40 N)
+
+
+def _quat_of(R: np.ndarray) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R).ravel())
+    return q
+
+
+class Human:
+    """The synthetic human acting in a world: moves the palm's mocap target and sets finger torques.
+
+    The human plans ahead (its motor plan is the task's motion): :meth:`__init__` computes, for
+    every physics step, the palm's target pose and the fingers' posture targets, and for every
+    control tick the fingertip forces of the grip policy in the object frame, anticipating the
+    planned load by the user's anticipation time and low-pass filtered by the user's response
+    time. At run time :meth:`act` writes ``data.mocap_pos/quat``, ``data.ctrl`` (position
+    actuators of the fingers) and, on control ticks, ``data.qfrc_applied`` on the finger joints:
+    tau = J^T (R f), with R the box's actual orientation.
+
+    Args:
+        scenario: The scenario (user, grasp).
+        world: Its compiled world.
+        motion: The planned box motion (world frame).
+        phases: The prehension phases.
+        releases: Whether the hand lets go at the end.
+        times: Times of the physics steps, (N,), [s].
+        ctrl_every: Control tick every this many steps.
+    """
+
+    def __init__(self, scenario: Scenario, world: World, motion, phases, releases: bool, times: np.ndarray,
+                 ctrl_every: int):
+        self.world, self.motion, self.phases, self.releases = world, motion, phases, releases
+        self.plan = plan = plan_grasp(scenario)
+        self.policy = pol = GripPolicy.for_scenario(scenario, world)
+        self.ctrl_every = ctrl_every
+        self._jac = np.zeros((3, world.model.nv))
+        m = world.model
+        mass = float(m.body_mass[world.box_body])
+        inertia = np.diag(m.body_inertia[world.box_body])
+        gravity = m.opt.gravity.copy()
+        self.R_palm_obj = _rot(plan.palm_quat)
+        self.approach = np.array([0.0, -0.06, 0.12])
+        ph = phases
+        t = np.asarray(times, dtype=float)
+
+        # Palm target and finger posture targets at every step.
+        pos, rot, *_ = motion.evaluate(t)
+        palm_pos = pos + mv(rot, plan.palm_pos)
+        palm_rot = mm(rot, self.R_palm_obj)
+        reach = _mj(t / ph.reach_end)
+        palm_pos += ((1 - reach) * (t < ph.reach_end))[:, None] * self.approach
+        closing = _mj((t - ph.reach_end) / (ph.close_end - ph.reach_end))
+        q = plan.q_open + closing[:, None] * (plan.q_grasp - plan.q_open)
+        if releases:
+            opening = _mj((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
+            q = np.where((t >= ph.unload_end)[:, None], plan.q_grasp + opening[:, None] * (plan.q_open - plan.q_grasp), q)
+            leave = _mj((t - ph.open_end) / max(ph.duration - ph.open_end, 1e-9))
+            palm_pos += (leave * (t >= ph.open_end))[:, None] * self.approach
+        self.palm_pos = palm_pos
+        self.palm_quat = np.array([_quat_of(R) for R in palm_rot])
+        self.ctrl = q[:, world.actuator_joint]
+
+        # Grip forces at every control tick, object frame.
+        tk = t[::ctrl_every]
+        ta = tk + pol.anticipation_s
+        _, rot_a, _, acc, omega, alpha = motion.evaluate(ta)
+        load = np.ones_like(ta)
+        load = np.where(ta < ph.close_end, 0.0, load)
+        load = np.where((ta >= ph.close_end) & (ta < ph.load_end), _mj((ta - ph.close_end) / (ph.load_end - ph.close_end)), load)
+        if releases:
+            load = np.where(ta >= ph.move_end, 1 - _mj((ta - ph.move_end) / max(ph.unload_end - ph.move_end, 1e-9)), load)
+        # wrench in the object frame: R^T m (a - g), and J_box R^T alpha + w_b x J_box w_b
+        force_obj = np.einsum("nji,nj->ni", rot_a, mass * (acc - gravity))
+        w_b = np.einsum("nji,nj->ni", rot_a, omega)
+        a_b = np.einsum("nji,nj->ni", rot_a, alpha)
+        torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
+        wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
+        f_nom, f_int, grip_slip = pol.distribute(wrench, plan.spot, plan.normal_in, plan.active)
+        target = pol.baseline_grip_n + grip_slip
+        ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
+        target = np.where(tk < ph.close_end, pol.baseline_grip_n * ramp, target)
+        if releases:
+            fade = 1 - _mj((tk - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
+            target = np.where(tk >= ph.unload_end, pol.baseline_grip_n * fade, target)
+        grip = np.zeros_like(target)
+        keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
+        g = 0.0
+        for i, gt in enumerate(target):
+            g = keep * g + (1 - keep) * gt
+            grip[i] = g
+        forces = f_nom + grip[:, None, None] * f_int
+        norm = np.linalg.norm(forces, axis=2, keepdims=True)
+        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
+        off = (tk < ph.reach_end) | ((tk >= ph.open_end) if releases else False)
+        forces[off] = 0.0
+        self.forces_obj = forces
+        self._views = None
+        self._fingers = []
+        for k in np.flatnonzero(plan.active):
+            dofs = world.finger_dofs[k]
+            contiguous = np.array_equal(dofs, np.arange(dofs[0], dofs[-1] + 1))
+            self._fingers.append((int(k), int(world.tip_site[k]), slice(int(dofs[0]), int(dofs[-1]) + 1) if contiguous else dofs))
+        self.grip = grip
+        self.grip_target = target
+
+    def palm_start(self) -> tuple[np.ndarray, np.ndarray]:
+        """Palm pose at the first step."""
+        return self.palm_pos[0].copy(), self.palm_quat[0].copy()
+
+    def act(self, data: mujoco.MjData, step: int) -> None:
+        """Writes the palm target, posture targets and (on control ticks) finger torques of a step."""
+        if self._views is None or self._views[0] is not data:
+            w = self.world
+            self._views = (data, data.mocap_pos[w.mocap], data.mocap_quat[w.mocap], data.ctrl, data.qfrc_applied,
+                           data.xmat[w.box_body].reshape(3, 3))
+        _, mocap_pos, mocap_quat, ctrl, qfrc, box_rot = self._views
+        mocap_pos[:] = self.palm_pos[step]
+        mocap_quat[:] = self.palm_quat[step]
+        ctrl[:] = self.ctrl[step]
+        if step % self.ctrl_every:
+            return
+        f = rows_mt(self.forces_obj[step // self.ctrl_every], box_rot)
+        m, jac = self.world.model, self._jac
+        for k, site, dofs in self._fingers:
+            mujoco.mj_jacSite(m, data, jac, None, site)
+            qfrc[dofs] = vm(f[k], jac[:, dofs])
+
+
+def _mj(s: np.ndarray) -> np.ndarray:
+    s = np.clip(s, 0.0, 1.0)
+    return s * s * s * (10 - 15 * s + 6 * s * s)
+
+
+def _rot(quat: np.ndarray) -> np.ndarray:
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, np.asarray(quat, dtype=float))
+    return R.reshape(3, 3)
+
+
+def main(argv=None) -> int:
+    """``python -m benchmark.world.grip --write-plans``: re-solves and stores every grasp plan."""
+    import argparse
+
+    from benchmark.atomic import write_text
+
+    parser = argparse.ArgumentParser(prog="python -m benchmark.world.grip", description=main.__doc__)
+    parser.add_argument("--write-plans", action="store_true", help="solve every plan and write sim_assets/" + PLANS_FILE)
+    args = parser.parse_args(argv)
+    if not args.write_plans:
+        parser.print_help()
+        return 0
+    path = importlib.resources.files("sim_assets") / PLANS_FILE
+    write_text(str(path), json.dumps(solve_all_plans(), indent=1) + "\n")
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
