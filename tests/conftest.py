@@ -175,3 +175,15 @@ def tracked_lifts():
         learned = score_episode(ep, est.forces, est.kinematics, est.contacts)
         out.append((ep, est, tracking, forces, learned))
     return out
+
+
+@pytest.fixture(scope="session")
+def ray_cluster():
+    """A local Ray cluster owned by this test process (loopback only, tests/conftest.py): its address."""
+    assert os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] == "0"
+    ray = pytest.importorskip("ray")
+    context = ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        yield context.address_info["gcs_address"]
+    finally:
+        ray.shutdown()

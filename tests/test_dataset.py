@@ -314,18 +314,6 @@ def test_an_episode_of_another_scenario_under_the_right_name_is_rebuilt(tmp_path
     assert len(load_dataset(tmp_path / "two")) == 3
 
 
-@pytest.fixture(scope="module")
-def ray_cluster():
-    """A local Ray cluster owned by this test process (loopback only, tests/conftest.py): its address."""
-    assert os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] == "0"
-    ray = pytest.importorskip("ray")
-    context = ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-    try:
-        yield context.address_info["gcs_address"]
-    finally:
-        ray.shutdown()
-
-
 def test_a_local_ray_cluster_makes_the_same_dataset_as_the_local_pool(learn_oracle_dataset, ray_cluster, tmp_path):
     import pandas as pd
 

@@ -156,3 +156,26 @@ def test_the_paper_suites_hold_the_paper_protocols_episodes():
     assert grid == {"--tasks": "lift", "--grasps": "0,1", "--masses": "1,4", "--seeds": "0-5", "--users": "0,4"}
     assert {(sc.user, sc.grasp, sc.mass, sc.seed) for sc in SUITES["table2"].scenarios} == \
            {(u, g, m, s) for u in (0, 4) for g in (0, 1) for m in (1, 4) for s in range(6)}
+
+
+def test_a_local_ray_cluster_gives_the_scores_of_the_local_run(tiny, ray_cluster, tmp_path):
+    from benchmark.suites.evaluate import evaluate
+
+    cache = tmp_path / "cache"
+    local = evaluate(TINY, cache=cache, progress=False)
+    on_ray = evaluate(TINY, cache=cache, progress=False, ray_address=ray_cluster)
+    drop = ("seconds", "rendered")
+    assert [{k: v for k, v in r.items() if k not in drop} for r in on_ray["episodes"]] == \
+           [{k: v for k, v in r.items() if k not in drop} for r in local["episodes"]]
+    assert on_ray["rendered"] == 0  # the Ray worker found the episode in the shared cache
+
+
+def test_eval_on_a_bad_ray_address_exits_2_within_seconds(tiny, tmp_path, capsys):
+    import time
+
+    t0 = time.perf_counter()
+    code = main(["eval", "--suite", "tiny", "--out", str(tmp_path / "o"), "--cache", str(tmp_path / "c"),
+                 "--ray-address", "127.0.0.1:9"])
+    assert code == 2 and time.perf_counter() - t0 < 10
+    assert "'127.0.0.1:9': no Ray cluster answers there" in capsys.readouterr().err
+    assert not (tmp_path / "c").exists() and not (tmp_path / "o").exists()

@@ -106,7 +106,7 @@ def _episode_rows(job) -> list:
 
 
 def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-             workers: int = 1, init_scale: float = 1.0) -> dict:
+             workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None) -> dict:
     """Scores one method (default: the reference) on every episode of ``suite``.
 
     Episodes run in ``workers`` local processes (1: in this process); the scores do not depend on it.
@@ -118,13 +118,15 @@ def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None 
     from benchmark.method import MethodSpec
 
     return evaluate_many(suite, [spec or MethodSpec()], gates=gates, cache=cache, progress=progress,
-                         workers=workers, init_scale=init_scale)[0]
+                         workers=workers, init_scale=init_scale, ray_address=ray_address)[0]
 
 
 def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-                  workers: int = 1, init_scale: float = 1.0) -> list:
+                  workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None) -> list:
     """Scores several methods on every episode of ``suite``, each episode rendered (or read) once.
 
+    Episodes run in this process, ``workers`` local processes, or as tasks on the Ray cluster at
+    ``ray_address`` (:mod:`benchmark.parallel`); the scores do not depend on where.
     ``init_scale`` scales the seeded first-frame perturbation handed to the methods
     (``benchmark.method.init.INIT_PERTURBATION``; 1 = the suites' protocol).
 
@@ -139,28 +141,19 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
     cache = pathlib.Path(cache or default_cache())
     gates = suite.gates if gates is None else gates
     t0 = time.perf_counter()
-    per_episode = []
     bar = None
     if progress:
         from tqdm import tqdm
 
         bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
     jobs = [(suite, sc, cache, specs, init_scale) for sc in suite.scenarios]
-    if workers == 1:
-        for job in jobs:
-            per_episode.append(_episode_rows(job))
-            if bar is not None:
-                bar.update(1)
-    else:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
+    from benchmark.parallel import run_jobs
 
-        ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-            for rows in pool.map(_episode_rows, jobs):
-                per_episode.append(rows)
-                if bar is not None:
-                    bar.update(1)
+    per_episode = [None] * len(jobs)
+    for i, rows in run_jobs(_episode_rows, jobs, workers=workers, ray_address=ray_address):
+        per_episode[i] = rows
+        if bar is not None:
+            bar.update(1)
     if bar is not None:
         bar.close()
     seconds = time.perf_counter() - t0
@@ -274,6 +267,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
     p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
+    p.add_argument("--ray-address", default=None,
+                   help="run the episodes as tasks on this Ray cluster ('auto', host:port or ray://host:port; needs the ray extra)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_method_arguments(p)
 
@@ -316,7 +311,12 @@ def run(args: argparse.Namespace) -> dict:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)
     spec = spec_from_args(args)
-    scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers)
+    if args.ray_address is not None:
+        from benchmark.paper.dataset import check_ray_address
+
+        check_ray_address(args.ray_address)
+    scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers,
+                      ray_address=args.ray_address)
     write_outputs(scores, suite, args.out)
     print_verdict(scores, args.out, "eval")
     return scores

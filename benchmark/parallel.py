@@ -1,0 +1,64 @@
+"""Work over episodes in this process, a local process pool, or a Ray cluster, with the same results.
+
+    for i, result in run_jobs(fn, jobs, workers=2): ...          # local pool (spawned processes)
+    for i, result in run_jobs(fn, jobs, ray_address="host:port"): # Ray tasks
+
+``fn`` must be a module-level function (it is pickled to the workers); results arrive as they are
+done, with the index of their job, so callers can keep the jobs' order. The Ray path needs the
+``ray`` extra (``pip install 'fsv-bench[ray]'``); a bad address fails within seconds
+(:func:`benchmark.paper.dataset.check_ray_address`).
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Iterator
+
+
+def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | None = None) -> Iterator[tuple]:
+    """Yields ``(index, fn(jobs[index]))`` for every job, in the order they finish.
+
+    Args:
+        fn: A module-level function of one job.
+        jobs: The jobs.
+        workers: Local worker processes (1: in this process); ignored with ``ray_address``.
+        ray_address: A Ray cluster's address ("auto", "host:port" or "ray://host:port").
+    """
+    if ray_address is not None:
+        yield from _ray(fn, jobs, ray_address)
+    elif workers == 1:
+        for i, job in enumerate(jobs):
+            yield i, fn(job)
+    else:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor, as_completed
+
+        ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+            futures = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
+            for f in as_completed(futures):
+                yield futures[f], f.result()
+
+
+def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
+    from benchmark.paper.dataset import check_ray_address
+
+    check_ray_address(address)
+    try:
+        import ray
+    except ImportError as e:
+        raise ValueError(f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
+                         "(or run without --ray-address to use the local process pool)") from e
+    host = (address[len("ray://"):] if address.startswith("ray://") else address).rpartition(":")[0]
+    local = {"_node_ip_address": "127.0.0.1"} if host in ("127.0.0.1", "localhost") else {}  # stay on loopback
+    ray.init(address=address, ignore_reinit_error=True, log_to_driver=False, **local)
+    remote = ray.remote(fn)
+    refs = {remote.remote(job): i for i, job in enumerate(jobs)}
+    pending = list(refs)
+    try:
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=1)
+            yield refs[ready[0]], ray.get(ready[0])
+    except BaseException:
+        for r in pending:
+            ray.cancel(r)
+        raise
