@@ -359,3 +359,59 @@ def test_generate_refuses_a_bad_grid_before_any_work_and_writes_nothing(tmp_path
     assert main(["generate", "--out", str(out), *argv]) == 2
     err = capsys.readouterr().err
     assert needle in err and err.count("\n") == 1 and not out.exists()
+
+
+def _dead_pid() -> int:
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    return int(proc.stdout)
+
+
+def test_a_stale_claim_of_a_dead_run_is_taken_over(tmp_path):
+    import json
+    import socket
+
+    spec = DatasetSpec(tasks=("lift",), seeds=(0, 1))
+    (tmp_path / "episodes").mkdir(parents=True)
+    claim = tmp_path / "episodes" / "lift_u0_g0_m0_s0.claim"
+    claim.write_text(json.dumps({"host": socket.gethostname(), "pid": _dead_pid()}))  # a killed run's claim
+    CALLS.clear()
+    man = generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
+    assert sorted(CALLS) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1"] and (man["status"] == "ok").all()
+    assert not list((tmp_path / "episodes").glob("*.claim"))
+
+
+def test_concurrent_runs_share_the_work_instead_of_repeating_it(tmp_path, monkeypatch):
+    """An episode claimed by another live run is left to it; this run waits for its file."""
+    import json
+    import socket
+    import threading
+    import time
+
+    import benchmark.paper.dataset as dataset
+    from benchmark.paper.dataset import _run_one, _write_sealed
+
+    monkeypatch.setattr(dataset, "CLAIM_POLL_S", 0.05)
+    spec = DatasetSpec(tasks=("lift",), seeds=(0, 1, 2))
+    (tmp_path / "d" / "episodes").mkdir(parents=True)
+    other = tmp_path / "d" / "episodes" / "lift_u0_g0_m0_s1.claim"
+    other.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getppid()}))  # a live "other run"
+    CALLS.clear()
+    result = {}
+    run = threading.Thread(target=lambda: result.update(man=generate(spec, tmp_path / "d", workers=1, progress=False,
+                                                                     build=cheap_build)))
+    run.start()
+    deadline = time.time() + 30
+    while sorted(CALLS) != ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s2"] and time.time() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.3)
+    assert run.is_alive()  # waiting for the other run's episode
+    sc = next(s for s in spec.scenarios() if s.seed == 1)  # the other run finishes its episode
+    _write_sealed(_run_one(sc, spec, lambda s, p: cheap_build(s, p)), str(tmp_path / "d" / "episodes" / "lift_u0_g0_m0_s1.parquet"))
+    other.unlink()
+    run.join(30)
+    assert not run.is_alive()
+    assert CALLS.count("lift_u0_g0_m0_s1") == 1  # made once, by the other run
+    assert sorted(result["man"]["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1", "lift_u0_g0_m0_s2"]

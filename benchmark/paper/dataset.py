@@ -381,8 +381,10 @@ def _write_sealed(table: pa.Table, path: str) -> str:
 def _prepare(spec: DatasetSpec, out: str) -> str:
     episodes = os.path.join(out, "episodes")
     os.makedirs(episodes, exist_ok=True)
-    for tmp in glob.glob(os.path.join(out, ".tmp-*")) + glob.glob(os.path.join(episodes, ".tmp-*")):
-        os.unlink(tmp)  # debris of a killed run: never a complete file
+    claims = _Claims(out)
+    if not any(not claims._stale(c) for c in glob.glob(os.path.join(episodes, "*.claim"))):  # no other live run
+        for tmp in glob.glob(os.path.join(out, ".tmp-*")) + glob.glob(os.path.join(episodes, ".tmp-*")):
+            os.unlink(tmp)  # debris of a killed run: never a complete file
     header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict())
     path = os.path.join(out, "dataset.json")
     if os.path.exists(path):
@@ -520,24 +522,122 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
     from tqdm.auto import tqdm
 
     bar = tqdm(total=total, initial=total - len(todo), unit="episode", desc="generate", disable=not progress, file=sys.stderr)
+    claims = _Claims(out)
 
     def done(table: pa.Table) -> None:
         meta = json.loads(table.schema.metadata[b"fsv"])
         rel = os.path.join("episodes", meta["episode"] + ".parquet")
         written[rel] = _write_sealed(table, os.path.join(out, rel))
+        claims.release(meta["episode"])
         bar.update(1)
 
     try:
-        if ray_address is not None:
-            _run_ray(todo, spec, build, ray_address, done)
-        elif (workers or os.cpu_count() or 1) == 1 or len(todo) <= 1:
-            for sc in todo:
-                done(_run_one(sc, spec, build))
-        else:
-            _run_pool(todo, spec, build, min(int(workers or os.cpu_count() or 1), len(todo)), done)
+        while todo:
+            mine = [sc for sc in todo if claims.take(episode_id(sc))]  # episodes another live run makes are skipped
+            if ray_address is not None:
+                _run_ray(mine, spec, build, ray_address, done)
+            elif (workers or os.cpu_count() or 1) == 1 or len(mine) <= 1:
+                for sc in mine:
+                    done(_run_one(sc, spec, build))
+            else:
+                _run_pool(mine, spec, build, min(int(workers or os.cpu_count() or 1), len(mine)), done)
+            todo = [sc for sc in todo if sc not in mine]
+            todo = claims.wait_for_others(todo, bar)  # until their files appear, or their runs die (then ours)
     finally:
+        claims.release_all()
         bar.close()
-    return write_manifest(out, written)
+    return write_manifest(out, _check_existing(spec, out, episodes) if claims.waited else written)
+
+
+CLAIM_POLL_S = 0.5
+"""How often a run checks on the episodes another run is making [s]."""
+
+
+class _Claims:
+    """Which run makes which episode of a dataset folder: ``episodes/<id>.claim`` files.
+
+    A run creates the claim (exclusively: ``O_CREAT | O_EXCL``, so two runs never both get it) with
+    its host name and process id before building the episode and removes it once the episode's file
+    is written. A claim whose process is gone (same host) is stale and may be taken over; claims of
+    other hosts are trusted. Concurrent ``generate`` runs into one folder thus share the work.
+    """
+
+    def __init__(self, out: str):
+        import socket
+
+        self.folder = os.path.join(out, "episodes")
+        self.host, self.pid = socket.gethostname(), os.getpid()
+        self.mine: set = set()
+        self.waited = False
+
+    def _path(self, episode: str) -> str:
+        return os.path.join(self.folder, episode + ".claim")
+
+    def take(self, episode: str) -> bool:
+        path = self._path(episode)
+        for _ in range(2):
+            try:
+                fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+            except FileExistsError:
+                if not self._stale(path):
+                    return False
+                try:
+                    os.unlink(path)
+                except FileNotFoundError:
+                    pass
+                continue
+            with os.fdopen(fd, "w") as fh:
+                fh.write(json.dumps({"host": self.host, "pid": self.pid}))
+            self.mine.add(episode)
+            return True
+        return False
+
+    def _stale(self, path: str) -> bool:
+        try:
+            with open(path) as fh:
+                owner = json.loads(fh.read() or "{}")
+        except (OSError, ValueError):
+            return False  # being written right now
+        if owner.get("host") != self.host or not isinstance(owner.get("pid"), int):
+            return False
+        try:
+            os.kill(owner["pid"], 0)
+        except ProcessLookupError:
+            return True
+        except PermissionError:
+            return False
+        return False
+
+    def release(self, episode: str) -> None:
+        if episode in self.mine:
+            self.mine.discard(episode)
+            try:
+                os.unlink(self._path(episode))
+            except FileNotFoundError:
+                pass
+
+    def release_all(self) -> None:
+        for episode in list(self.mine):
+            self.release(episode)
+
+    def wait_for_others(self, todo: list, bar) -> list:
+        """Waits while other runs make the episodes of ``todo``; returns those whose run died."""
+        while todo:
+            self.waited = True
+            left = []
+            for sc in todo:
+                e = episode_id(sc)
+                if os.path.exists(os.path.join(self.folder, e + ".parquet")) and not os.path.exists(self._path(e)):
+                    bar.update(1)
+                elif os.path.exists(self._path(e)) and not self._stale(self._path(e)):
+                    left.append(sc)
+                else:
+                    return todo  # a claim went stale (or vanished without a file): build what is left
+            if not left:
+                return []
+            todo = left
+            time.sleep(CLAIM_POLL_S)
+        return []
 
 
 def _exit_with_parent(parent_pid: int) -> None:
