@@ -263,3 +263,40 @@ def test_a_solver_that_gives_up_is_reported_failed_with_nan_forces():
     sol = nominal_forces(kin, contacts, model, settings=ForceSettings(max_iter=1))
     assert list(sol.status) == [FrameStatus.FAILED] * 2
     assert np.isnan(sol.force).all() and np.isnan(sol.objective).all()
+
+
+def _sliding_single_contact(required_dir):
+    """``_single_contact`` with the finger flagged sliding along +x (kinetic friction along +x)."""
+    model, contacts, kin = _single_contact(required_dir)
+    sliding = Contacts(finger_names=["thumb"], active=[[True]], sliding=[[True]], point=contacts.point,
+                       normal=contacts.normal, slide_dir=[[[1.0, 0.0, 0.0]]])
+    return model, sliding, kin
+
+
+def test_a_sliding_flag_that_makes_the_frame_infeasible_is_retried_with_static_friction():
+    # A pure push (-y) cannot come from kinetic friction along +x (force along -y + 0.8 x) but lies
+    # inside the static cone: the retry solves it exactly and reports the contact as held.
+    model, contacts, kin = _sliding_single_contact((0.0, -3.0, 0.0))
+    sol = nominal_forces(kin, contacts, model)
+    assert sol.status[0] == FrameStatus.STATIC_FRICTION and not sol.sliding[0, 0]
+    assert np.allclose(sol.force[0, 0], [0.0, -3.0, 0.0], atol=1e-6) and _rel_residual(sol)[0] <= REL
+    kinetic_only = nominal_forces(kin, contacts, model, settings=ForceSettings(static_retry=False))
+    assert kinetic_only.status[0] == FrameStatus.LEAST_VIOLATION and kinetic_only.sliding[0, 0]
+    assert np.linalg.norm(kinetic_only.residual[0]) > 0.5
+
+
+def test_the_physical_bound_follows_the_grasp_mechanics():
+    from fsv.forces import force_bound
+
+    required = np.array([[0.0, 0.0, 2.94, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.03, 0.0, 0.0]])
+    bound = force_bound(required, friction=0.8, lever_m=0.03, factor=5.0)
+    assert bound == pytest.approx([5 * 2.25 * 2.94, 5 * 2.25 * 0.03 / 0.03])  # 33.1 N and 11.25 N
+
+
+def test_forces_above_the_physical_bound_are_flagged_and_never_passed_on():
+    model, contacts, kin = _single_contact((0.0, -3.0, 0.0))
+    assert nominal_forces(kin, contacts, model).status[0] == FrameStatus.OPTIMAL  # 3 N against a bound of 34 N
+    tight = nominal_forces(kin, contacts, model, settings=ForceSettings(bound_factor=0.05))  # bound 0.34 N
+    assert tight.status[0] == FrameStatus.IMPLAUSIBLE and np.isnan(tight.force).all()
+    unbounded = nominal_forces(kin, contacts, model, settings=ForceSettings(bound_factor=np.inf))
+    assert unbounded.status[0] == FrameStatus.OPTIMAL

@@ -33,7 +33,9 @@ files written by other programs; when present they are checked.
     nominal/force      (T, K, 3)  float  nominal finger forces on the box, object frame, [N]  optional
     nominal/env_wrench (T, 6)     float  table force and torque about the COM, object frame   optional
     nominal/status     (T,)       int8   0 solved, 1 least violation, 2 no contacts,
-                                         3 no kinematics, 4 failed (fsv.forces.FrameStatus)  optional
+                                         3 no kinematics, 4 failed, 5 solved with static
+                                         friction, 6 above the physical bound
+                                         (fsv.forces.FrameStatus)                         optional
     forces/force, forces/env_wrench, forces/status   the method's final forces, as nominal/*  optional
     hand/fingertips    (T, K, 3)  float  fingertip pad centres in the world, [m]          optional
 

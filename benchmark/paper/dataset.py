@@ -83,6 +83,7 @@ from benchmark.world.scenario import Scenario
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
+from fsv.forces import ForceSettings
 from fsv.provenance import provenance
 
 FORMAT = "fsv-bench-dataset"
@@ -237,6 +238,11 @@ def sample_mask(kin: Kinematics, con: Contacts, feats, truth, min_fingers: int =
     return usable, usable & (gap <= max_gap_n), gap
 
 
+DATASET_FORCE_SETTINGS = ForceSettings(static_retry=False)
+"""Settings of the decomposition that makes the training targets: a frame whose program with the
+tracked sliding flags is infeasible is dropped as unsolved, without the static-friction retry the
+method's own programs make (the committed datasets and the shipped model were made this way)."""
+
 MAX_EXCESS_N = 1.5
 """Default of the plausibility rule (:func:`nominal_excess_n`), [N]: the paper's 1.5 N threshold."""
 
@@ -284,7 +290,8 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     measured = tactile_normal_forces(tr, scenario.rng("tactile"), full_scale_n=np.inf, noise_n=spec.tactile_noise_n)
     keep_contacts, keep, gap = sample_mask(kin, con, feats, tr, spec.min_fingers, spec.max_gap_n)
     idx = np.flatnonzero(keep)
-    dec = decompose_forces(_take_kin(kin, idx), _take_con(con, idx), model, measured[idx], gravity=tr.gravity)
+    dec = decompose_forces(_take_kin(kin, idx), _take_con(con, idx), model, measured[idx], gravity=tr.gravity,
+                           settings=DATASET_FORCE_SETTINGS)
     ok = dec.status == int(FrameStatus.OPTIMAL)
     rows = idx[ok]
     stats = dict(

@@ -44,7 +44,7 @@ import numpy as np
 import pandas as pd
 
 from benchmark.atomic import save_figure, write_text
-from benchmark.paper.dataset import MAX_EXCESS_N, finger_names_of, frames_of, load_dataset, training_set
+from benchmark.paper.dataset import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, finger_names_of, frames_of, load_dataset, training_set
 from benchmark.errors import DatasetError
 from fsv import ObjectModel
 from fsv.forces import FrameStatus, reconstruct_forces
@@ -146,7 +146,8 @@ def evaluate(model: InternalForceModel | None, df: pd.DataFrame, models: dict, p
     for ep, idx in df.groupby("episode", sort=False).indices.items():
         obj, gravity = models[ep]
         kin, con = frames_of(df.iloc[idx])
-        sol = reconstruct_forces(kin, con, obj, np.where(con.active, pred[idx], np.nan), gravity=gravity)
+        sol = reconstruct_forces(kin, con, obj, np.where(con.active, pred[idx], np.nan), gravity=gravity,
+                                 settings=DATASET_FORCE_SETTINGS)  # the protocol of the committed Table 2
         normal[idx] = sol.normal_force
         status[idx] = sol.status
         ok = sol.status == int(FrameStatus.OPTIMAL)

@@ -8,8 +8,8 @@ Metrics (all floats; NaN where a stage has nothing to score):
 * kinematics: ``acc_err_rms`` [m/s^2] and ``gyro_err_rms`` [rad/s], the AHRS-frame errors of the
   estimated kinematics against the truth's simulated AHRS over the valid frames (Table 1's signals);
 * nominal forces (:func:`benchmark.scores.forces.score_forces`): ``net_force_err_n_rms`` [N],
-  ``net_torque_err_nm_rms`` [N m], ``least_violation_frac`` (fraction of the scored frames whose
-  programs were infeasible);
+  ``net_torque_err_nm_rms`` [N m], ``least_violation_frac`` (fraction of the frames with kinematics
+  whose forces are a fallback: least violation, failed, or above the physical bound);
 * learned forces (:func:`benchmark.scores.learned.score_episode`): ``learned_rel_err_pct`` (Table 2's
   relative error) and ``learned_mae_n``, the mean absolute error of the reconstructed normal force
   per finger-frame [N] over the frames where estimate and truth both have the contact and the
@@ -51,7 +51,7 @@ def score_episode(episode, estimate) -> dict:
     if estimate.nominal is not None:
         f = score_forces(estimate.nominal, tr, estimate.kinematics.rot)
         out.update(net_force_err_n_rms=f["net_force_err_n_rms"], net_torque_err_nm_rms=f["net_torque_err_nm_rms"],
-                   least_violation_frac=f["solver_failures"] / max(f["frames_scored"], 1))
+                   least_violation_frac=f["fallback_frac"])
     else:
         out.update(net_force_err_n_rms=np.nan, net_torque_err_nm_rms=np.nan, least_violation_frac=np.nan)
     out.update(learned_errors(episode, estimate))
@@ -74,11 +74,11 @@ def learned_errors(episode, estimate) -> dict:
         return {"learned_rel_err_pct": np.nan, "learned_mae_n": np.nan}
     from benchmark.scores.learned import score_episode as score_learned
     from benchmark.scores.forces import true_normal_forces
-    from fsv.forces import FrameStatus
+    from fsv.forces import SOLVED
 
     sol = estimate.forces
     block = score_learned(episode, sol, estimate.kinematics, estimate.contacts)
     tr = episode.truth
-    both = estimate.contacts.active & tr.contact_active & (sol.status == int(FrameStatus.OPTIMAL))[:, None]
+    both = estimate.contacts.active & tr.contact_active & np.isin(sol.status, [int(s) for s in SOLVED])[:, None]
     mae = float(np.mean(np.abs(sol.normal_force - true_normal_forces(tr))[both])) if both.any() else np.nan
     return {"learned_rel_err_pct": block["rel_err_pct_mean"], "learned_mae_n": mae}

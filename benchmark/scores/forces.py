@@ -13,7 +13,9 @@ Metric definitions (docs/design.md):
 * Sum of squares (eq. 6): Σ_k ||F_k||² over the fingers, true and nominal. Since the nominal grasp
   is L2-minimal among those the program allows, the true sum is not below it wherever the true forces
   are feasible for the program (frames where neither the truth nor the estimate has the table).
-* ``solver_failures``: frames whose program was infeasible (least-violation answer) or failed.
+* ``solver_failures``: frames whose forces are a fallback (:data:`fsv.forces.FALLBACKS`: least
+  violation, failed, or above the physical bound); ``fallback_frac`` their fraction of the frames
+  with kinematics. Frames solved with static friction for sliding contacts count as solved.
 * Sensitivity (§4.2): the nominal forces computed with vision contact points minus those computed
   with the true contact points, same kinematics; per finger normal force, pooled over fingers and
   frames where both have the contact; mean and standard deviation (the paper: 0.216 N, 1.548 N).
@@ -28,11 +30,11 @@ import numpy as np
 from benchmark.atomic import save_figure
 from benchmark.world.truth import Truth
 from fsv import Contacts, Kinematics, ObjectModel
-from fsv.forces import ForceSettings, ForceSolution, FrameStatus, nominal_forces, to_world_frame
+from fsv.forces import FALLBACKS, SOLVED, ForceSettings, ForceSolution, FrameStatus, nominal_forces, to_world_frame
 
 PAPER_SENSITIVITY_N = {"mean": 0.216, "std": 1.548}
 
-_ESTIMATED = (FrameStatus.OPTIMAL, FrameStatus.LEAST_VIOLATION, FrameStatus.NO_CONTACTS)
+_ESTIMATED = (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION, FrameStatus.LEAST_VIOLATION, FrameStatus.NO_CONTACTS)
 
 
 def true_net_wrench(truth: Truth) -> np.ndarray:
@@ -90,7 +92,8 @@ def score_forces(solution: ForceSolution, truth: Truth, rot: np.ndarray) -> dict
         "sos_true_not_below_nominal_frac": float(np.mean(sos_true[free] >= solution.sum_of_squares[free] - tol[free]))
         if free.any() else nan,
         "sos_frames": int(free.sum()),
-        "solver_failures": solution.count(FrameStatus.LEAST_VIOLATION) + solution.count(FrameStatus.FAILED),
+        "solver_failures": sum(solution.count(s) for s in FALLBACKS),
+        "fallback_frac": sum(solution.count(s) for s in FALLBACKS) / max(len(solution) - solution.count(FrameStatus.NO_KINEMATICS), 1),
         "status": {s.name.lower(): solution.count(s) for s in FrameStatus},
         "frames_scored": int(ok.sum()),
     }
@@ -189,19 +192,19 @@ def plot_fig5(solution: ForceSolution, truth: Truth, rot: np.ndarray, path, titl
     K = len(solution.finger_names)
     fig, axes = plt.subplots(3, 1, figsize=(13, 10), sharex=True)
     ok = scored_frames(solution)
-    bad = np.isin(solution.status, [int(FrameStatus.LEAST_VIOLATION), int(FrameStatus.FAILED)])
+    bad = np.isin(solution.status, [int(s) for s in FALLBACKS])
     fn_true = np.where(truth.contact_active, true_normal_forces(truth), np.nan)
     fn_nom = np.where(solution.active & ok[:, None], solution.nominal_normal, np.nan)
     fn_learn = None
     if learned is not None:
-        ok_l = learned.status == int(FrameStatus.OPTIMAL)
+        ok_l = np.isin(learned.status, [int(s) for s in SOLVED])
         fn_learn = np.where(learned.active & ok_l[:, None], learned.normal_force, np.nan)
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for ax in axes:
-        _mark_frames(ax, t, bad, "red", "nominal program infeasible or failed")
+        _mark_frames(ax, t, bad, "red", "nominal forces: least violation, failed or implausible")
         if learned is not None:
-            _mark_frames(ax, t, np.isin(learned.status, [int(FrameStatus.LEAST_VIOLATION), int(FrameStatus.FAILED)]),
-                         "orange", "learned program infeasible or failed")
+            _mark_frames(ax, t, np.isin(learned.status, [int(s) for s in FALLBACKS]),
+                         "orange", "learned forces: least violation or failed")
     lim = robust_limits(fn_true, fn_nom, *(() if fn_learn is None else (fn_learn,)))
     clipped = 0
     for k in range(K):
@@ -235,7 +238,7 @@ def plot_fig5(solution: ForceSolution, truth: Truth, rot: np.ndarray, path, titl
     sos = {"true": np.einsum("tki,tki->t", truth.contact_force, truth.contact_force),
            "nominal (L2-minimal)": np.where(ok, solution.sum_of_squares, np.nan)}
     if learned is not None:
-        sos["learned"] = np.where(learned.status == int(FrameStatus.OPTIMAL), learned.sum_of_squares, np.nan)
+        sos["learned"] = np.where(np.isin(learned.status, [int(s) for s in SOLVED]), learned.sum_of_squares, np.nan)
     lim = robust_limits(*sos.values())
     clipped = 0
     for (label, y), ls in zip(sos.items(), ("-", "--", ":")):

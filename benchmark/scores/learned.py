@@ -19,10 +19,10 @@ import argparse
 
 import numpy as np
 
-from benchmark.paper.dataset import MAX_EXCESS_N, nominal_excess_n, sample_mask, true_normal_forces
+from benchmark.paper.dataset import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask, true_normal_forces
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
-from fsv.forces import FrameStatus
+from fsv.forces import SOLVED, FrameStatus
 
 
 def score_episode(episode, solution, kinematics: Kinematics, contacts: Contacts) -> dict:
@@ -56,11 +56,11 @@ def score_episode(episode, solution, kinematics: Kinematics, contacts: Contacts)
     excess = np.full(len(tr.t), np.inf)
     if idx.size:
         dec = decompose_forces(_take(kinematics, idx), _take(contacts, idx), episode.object_model, measured[idx],
-                               gravity=tr.gravity)
+                               gravity=tr.gravity, settings=DATASET_FORCE_SETTINGS)
         solved = dec.status == int(FrameStatus.OPTIMAL)
         excess[idx[solved]] = nominal_excess_n(dec.nominal_normal, measured[idx], contacts.active[idx])[solved]
     plausible = excess <= MAX_EXCESS_N
-    solved = sol.status == int(FrameStatus.OPTIMAL)
+    solved = np.isin(sol.status, [int(s) for s in SOLVED])
     ok = keep & plausible & solved
     both = contacts.active & tr.contact_active
     err = relative_errors_pct(sol.normal_force, true_normal_forces(tr), both & ok[:, None])
@@ -75,7 +75,7 @@ def score_episode(episode, solution, kinematics: Kinematics, contacts: Contacts)
         rel_err_pct_mean_all=float(np.mean(err_all)) if err_all.size else float("nan"),
         rel_err_pct_std_all=float(np.std(err_all)) if err_all.size else float("nan"),
         scored_all=int(err_all.size),
-        solver_failures=int(np.sum(keep & (sol.status != int(FrameStatus.OPTIMAL)))),
+        solver_failures=int(np.sum(keep & ~solved)),
         residual_rel_max=resid,
     )
     return block

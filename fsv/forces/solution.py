@@ -23,6 +23,10 @@ class FrameStatus(IntEnum):
     NO_KINEMATICS: the kinematics are not valid at this frame (``Kinematics.valid`` is False);
         the forces are NaN.
     FAILED: the solver failed on both the exact and the least-violation program; forces are NaN.
+    STATIC_FRICTION: the program with the kinetic friction of the sliding contacts was infeasible;
+        solved with those contacts held by static friction (their Coulomb cones) instead.
+    IMPLAUSIBLE: solved, but the finger forces exceed the physical bound of the frame
+        (:func:`fsv.forces.force_bound`); they are not passed on: NaN.
     """
 
     OPTIMAL = 0
@@ -30,6 +34,15 @@ class FrameStatus(IntEnum):
     NO_CONTACTS = 2
     NO_KINEMATICS = 3
     FAILED = 4
+    STATIC_FRICTION = 5
+    IMPLAUSIBLE = 6
+
+
+SOLVED = (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION)
+"""Statuses whose forces satisfy the cones and Newton–Euler exactly."""
+
+FALLBACKS = (FrameStatus.LEAST_VIOLATION, FrameStatus.FAILED, FrameStatus.IMPLAUSIBLE)
+"""Statuses of frames whose contacts could not explain the motion physically."""
 
 
 KINDS = ("nominal", "decomposition", "reconstruction")

@@ -22,9 +22,17 @@ internal parts alone need not (a finger may press less than its nominal share). 
 parts have zero net force and torque (eq. 8). Table corners take part in both: a finger pressing
 the box onto the table is a workless squeeze whose reaction is the table's internal part.
 
-A frame whose program is infeasible (e.g. a single contact that would have to pull) is solved
-again with a slack σ on the nominal wrench equality and ``slack_weight`` ||σ||² added to the cost:
-the least-violation answer, flagged :attr:`FrameStatus.LEAST_VIOLATION`.
+A frame whose program is infeasible is first solved again with its sliding contacts held by static
+friction (their Coulomb cones instead of kinetic friction along the sliding direction; a contact
+flagged sliding from noisy tracking often cannot pull the way kinetic friction forces it to),
+flagged :attr:`FrameStatus.STATIC_FRICTION` when that succeeds (``settings.static_retry``). If it
+is still infeasible (e.g. a single contact that would have to pull), it is solved with a slack σ on
+the nominal wrench equality and ``slack_weight`` ||σ||² added to the cost: the least-violation
+answer, flagged :attr:`FrameStatus.LEAST_VIOLATION`.
+
+Nominal forces are checked against :func:`force_bound`, what the object's mass, its measured
+motion and the grasp's size can need at most; a frame whose finger forces exceed it is flagged
+:attr:`FrameStatus.IMPLAUSIBLE` and its forces are NaN, never passed on as estimates.
 """
 
 from __future__ import annotations
@@ -44,6 +52,35 @@ from fsv.models import ObjectModel
 from fsv.types import Contacts, Kinematics
 
 
+BOUND_FACTOR = 5.0
+"""Safety factor of the physical bound on the nominal forces: how far above the grasp-mechanics
+estimate of :func:`force_bound` a minimal solution may go before it is called absurd. Chosen by hand
+(not tuned on any suite): the L2-minimal forces of the truth's contacts stay below one bound."""
+
+
+def force_bound(required: np.ndarray, friction: float, lever_m: float, factor: float = BOUND_FACTOR) -> np.ndarray:
+    """The most the fingers' total force may need to be to produce the required wrench.
+
+    Friction carries a force F with normal forces of about |F| / μ, and a torque τ needs forces of
+    |τ| / lever about a lever arm; so the L2-minimal finger forces stay below
+    ``factor * ((1 + 1/μ) |F| + (1 + 1/μ) |τ| / lever)``.
+
+    Args:
+        required: Required wrench per frame (force, torque about the centre of mass), shape (T, 6).
+        friction: Finger friction coefficient μ.
+        lever_m: The smallest lever arm of the grasp: half the object's smallest dimension, [m].
+        factor: Safety factor.
+
+    Returns:
+        Bound on Σ_k ||F_k|| per frame, shape (T,), [N].
+    """
+    required = np.asarray(required, dtype=float)
+    scale = 1.0 + 1.0 / float(friction)
+    force = np.sqrt(np.sum(required[:, :3] ** 2, axis=1))
+    torque = np.sqrt(np.sum(required[:, 3:] ** 2, axis=1))
+    return factor * scale * (force + torque / float(lever_m))
+
+
 @dataclass(frozen=True)
 class ForceSettings:
     """Modelling and solver choices of the force programs.
@@ -56,6 +93,8 @@ class ForceSettings:
         slack_weight: Weight of the squared wrench violation in least-violation programs.
         regularization: Weight of the squared internal components without a target.
         max_iter: Interior-point iteration limit per solve.
+        static_retry: Solve an infeasible frame with its sliding contacts static before least violation.
+        bound_factor: Safety factor of :func:`force_bound` on the nominal forces (``inf``: no bound).
     """
 
     table: bool = True
@@ -65,6 +104,8 @@ class ForceSettings:
     slack_weight: float = 1e6
     regularization: float = 1e-3
     max_iter: int = 100
+    static_retry: bool = True
+    bound_factor: float = BOUND_FACTOR
 
     def __post_init__(self):
         for name in ("table_height_tol_m", "regularization"):
@@ -77,6 +118,10 @@ class ForceSettings:
                 raise InputError(f"ForceSettings.{name} must be a finite number > 0, got {v!r}")
         if isinstance(self.max_iter, bool) or not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 1:
             raise InputError(f"ForceSettings.max_iter must be a positive integer, got {self.max_iter!r}")
+        if not isinstance(self.static_retry, (bool, np.bool_)):
+            raise InputError(f"ForceSettings.static_retry must be True or False, got {self.static_retry!r}")
+        if not (self.bound_factor > 0):
+            raise InputError(f"ForceSettings.bound_factor must be > 0 (inf: no bound), got {self.bound_factor!r}")
 
 
 def nominal_forces(
@@ -281,6 +326,16 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
             continue
         t0 = time.perf_counter()
         forces, code, objective[t], iterations[t] = programs[(keys[t], False)].run(prepared[t])
+        if code not in OK and settings.static_retry and sliding[t].any():
+            held = np.zeros(K, bool)
+            key = (np.concatenate([use[t], held, fitted[t], corners_on[t]]).tobytes(), False)
+            static = programs.get(key)
+            if static is None:
+                static = programs[key] = _program(False, kind, use[t], held, fitted[t], corners_on[t], weights, K)
+            forces, code, objective[t], iterations[t] = static.solve(bank[t], required[t], target[t])
+            if code in OK:
+                status[t] = FrameStatus.STATIC_FRICTION
+                sliding[t] = held
         if code not in OK:
             retry = programs.get((keys[t], True))
             if retry is None:
@@ -291,6 +346,14 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
                 forces, objective[t] = np.full((2 * K + 16, 3), np.nan), np.nan
         out[t] = forces
         seconds[t] += time.perf_counter() - t0
+    if kind == "nominal" and np.isfinite(settings.bound_factor):
+        bound = force_bound(required, model.friction, float(np.min(model.size_m)) / 2, settings.bound_factor)
+        total = np.sqrt(np.sum(out[:, :K] ** 2, axis=2)).sum(axis=1)
+        absurd = np.isin(status, [int(s) for s in (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION,
+                                                   FrameStatus.LEAST_VIOLATION)]) & (total > bound)
+        status[absurd] = FrameStatus.IMPLAUSIBLE
+        out[absurd] = np.nan
+        objective[absurd] = np.nan
     nominal, internal = out[:, :K], out[:, K : 2 * K]
     corner, corner_internal = out[:, 2 * K : 2 * K + 8], out[:, 2 * K + 8 :]
     env = np.concatenate([corner.sum(axis=1), np.cross(table.point, corner).sum(axis=1)], axis=1)
