@@ -415,3 +415,12 @@ def test_concurrent_runs_share_the_work_instead_of_repeating_it(tmp_path, monkey
     assert not run.is_alive()
     assert CALLS.count("lift_u0_g0_m0_s1") == 1  # made once, by the other run
     assert sorted(result["man"]["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1", "lift_u0_g0_m0_s2"]
+
+
+def test_generate_shows_every_tracked_frame_across_the_worker_processes(tmp_path, capsys):
+    """The tracker source reports each tracked frame from the workers to one progress bar."""
+    spec = DatasetSpec(tasks=("lift",), seeds=(0, 1), duration_s=1.5, kinematics="oracle")
+    man = generate(spec, tmp_path, workers=2, progress=True)
+    assert (man["status"] == "ok").all()
+    err = capsys.readouterr().err
+    assert "tracked: 100%" in err and "92/92" in err  # 2 episodes x 46 frames

@@ -188,16 +188,20 @@ def true_normal_forces(truth) -> np.ndarray:
     return np.where(truth.contact_active, f, 0.0)
 
 
+_ON_FRAME = None
+"""Called with 1 after every tracked frame of the episode being built (the progress of ``generate``;
+set per worker by :func:`_run_one`)."""
+
+
 def track_episode(episode):
-    """Renders a simulated episode and tracks it from depth alone, exactly as ``fsv-bench`` does
-    (same first-frame initialisation, same random streams): ``(rendered episode, Tracking)``."""
+    """Renders a simulated episode and tracks it from depth alone with the method's tracker stage,
+    exactly as ``fsv-bench`` does (same camera inputs, same random streams): ``(rendered episode, Tracking)``."""
     from benchmark.camera.render import render
-    from benchmark.method.init import tracker_init
-    from fsv.track.tracker import track
+    from benchmark.method import camera_input
+    from fsv.method import ReferenceTracker
 
     ep = render(episode)
-    init = tracker_init(ep.truth, ep.scenario, ep.hand_model)
-    return ep, track(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, rng=ep.scenario.rng("tracker"))
+    return ep, ReferenceTracker(on_frame=_ON_FRAME)(camera_input(ep), ep.scenario.rng("tracker"))
 
 
 def episode_contacts(episode, source: str, tracking=None) -> Contacts:
@@ -364,8 +368,13 @@ def _with_meta(table: pa.Table, sc: Scenario, spec: DatasetSpec, finger_names, s
     return table.replace_schema_metadata({b"fsv": json.dumps(meta).encode()})
 
 
-def _run_one(scenario: Scenario, spec: DatasetSpec, build) -> pa.Table:
-    """Builds one episode's table in a worker; a world failure becomes an empty table with the error."""
+def _run_one(scenario: Scenario, spec: DatasetSpec, build, on_frame=None) -> pa.Table:
+    """Builds one episode's table in a worker; a world failure becomes an empty table with the error.
+
+    ``on_frame`` (a callable, or a queue whose ``put`` is called) hears of every tracked frame.
+    """
+    global _ON_FRAME
+    _ON_FRAME = getattr(on_frame, "put", on_frame)
     t0 = time.perf_counter()
     try:
         table = build(scenario, spec)
@@ -529,6 +538,9 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
     from tqdm.auto import tqdm
 
     bar = tqdm(total=total, initial=total - len(todo), unit="episode", desc="generate", disable=not progress, file=sys.stderr)
+    tracked = spec.contacts == "tracker" and build is build_episode and ray_address is None
+    frames = tqdm(total=sum(_frames_of(sc) for sc in todo), unit="frame", desc="tracked", position=1, leave=True,
+                  disable=not (progress and tracked), file=sys.stderr)  # per frame across the episodes
     claims = _Claims(out)
 
     def done(table: pa.Table) -> None:
@@ -545,13 +557,15 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
                 _run_ray(mine, spec, build, ray_address, done)
             elif (workers or os.cpu_count() or 1) == 1 or len(mine) <= 1:
                 for sc in mine:
-                    done(_run_one(sc, spec, build))
+                    done(_run_one(sc, spec, build, frames.update if tracked and progress else None))
             else:
-                _run_pool(mine, spec, build, min(int(workers or os.cpu_count() or 1), len(mine)), done)
+                _run_pool(mine, spec, build, min(int(workers or os.cpu_count() or 1), len(mine)), done,
+                          frames if tracked and progress else None)
             todo = [sc for sc in todo if sc not in mine]
             todo = claims.wait_for_others(todo, bar)  # until their files appear, or their runs die (then ours)
     finally:
         claims.release_all()
+        frames.close()
         bar.close()
     return write_manifest(out, _check_existing(spec, out, episodes) if claims.waited else written)
 
@@ -659,20 +673,47 @@ def _exit_with_parent(parent_pid: int) -> None:
     threading.Thread(target=watch, daemon=True).start()
 
 
-def _run_pool(todo, spec, build, workers, done) -> None:
+def _frames_of(sc: Scenario) -> int:
+    """Frames of a scenario's episode (as the simulation makes them)."""
+    from benchmark.world.simulate import duration_of
+
+    return int(np.floor(duration_of(sc) * sc.fps + 1e-9)) + 1
+
+
+def _run_pool(todo, spec, build, workers, done, frames=None) -> None:
+    """Builds ``todo`` in a pool of ``workers`` processes; ``frames`` (a progress bar) hears of every
+    tracked frame through a queue the workers put to."""
+    import queue as queue_module
+
     ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_exit_with_parent,
                                initargs=(os.getpid(),))
+    manager = ctx.Manager() if frames is not None else None
+    heard = manager.Queue() if manager is not None else None
+
+    def drain():
+        while heard is not None:
+            try:
+                frames.update(heard.get_nowait())
+            except queue_module.Empty:
+                return
+
     try:
-        pending = {pool.submit(_run_one, sc, spec, build) for sc in todo}
+        pending = {pool.submit(_run_one, sc, spec, build, heard) for sc in todo}
         while pending:
-            finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+            finished, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            drain()
             for f in finished:
                 done(f.result())
     except BaseException:
         pool.shutdown(wait=False, cancel_futures=True)
+        if manager is not None:
+            manager.shutdown()
         raise
     pool.shutdown(wait=True)
+    if manager is not None:
+        drain()
+        manager.shutdown()
 
 
 RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head node answers at once; Ray's own client retries for minutes
