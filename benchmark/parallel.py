@@ -14,6 +14,10 @@ from __future__ import annotations
 from typing import Callable, Iterator
 
 
+class RayUnavailable(ValueError):
+    """A Ray address was given but Ray is not installed."""
+
+
 def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | None = None) -> Iterator[tuple]:
     """Yields ``(index, fn(jobs[index]))`` for every job, in the order they finish.
 
@@ -46,7 +50,7 @@ def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
     try:
         import ray
     except ImportError as e:
-        raise ValueError(f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
+        raise RayUnavailable(f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
                          "(or run without --ray-address to use the local process pool)") from e
     host = (address[len("ray://"):] if address.startswith("ray://") else address).rpartition(":")[0]
     local = {"_node_ip_address": "127.0.0.1"} if host in ("127.0.0.1", "localhost") else {}  # stay on loopback

@@ -744,26 +744,19 @@ def check_ray_address(address: str) -> None:
 
 
 def _run_ray(todo, spec, build, address, done) -> None:
+    """Builds ``todo`` as tasks on the Ray cluster at ``address`` (:func:`benchmark.parallel.run_jobs`)."""
+    from benchmark.parallel import RayUnavailable, run_jobs
+
     try:
-        import ray
-    except ImportError as e:
-        raise DatasetError(
-            f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
-            "(or run without --ray-address to use the local process pool)"
-        ) from e
-    host = (address[len("ray://"):] if address.startswith("ray://") else address).rpartition(":")[0]
-    local = {"_node_ip_address": "127.0.0.1"} if host in ("127.0.0.1", "localhost") else {}  # stay on loopback
-    ray.init(address=address, ignore_reinit_error=True, log_to_driver=False, **local)
-    remote = ray.remote(_run_one)
-    refs = [remote.remote(sc, spec, build) for sc in todo]
-    try:
-        while refs:
-            ready, refs = ray.wait(refs, num_returns=1)
-            done(ray.get(ready[0]))
-    except BaseException:
-        for r in refs:
-            ray.cancel(r)
-        raise
+        for _, table in run_jobs(_run_one_job, [(sc, spec, build) for sc in todo], ray_address=address):
+            done(table)
+    except RayUnavailable as e:
+        raise DatasetError(str(e)) from e
+
+
+def _run_one_job(job) -> pa.Table:
+    """:func:`_run_one` of a ``(scenario, spec, build)`` job."""
+    return _run_one(*job)
 
 
 MANIFEST_COLUMNS = (
