@@ -300,3 +300,17 @@ def test_forces_above_the_physical_bound_are_flagged_and_never_passed_on():
     assert tight.status[0] == FrameStatus.IMPLAUSIBLE and np.isnan(tight.force).all()
     unbounded = nominal_forces(kin, contacts, model, settings=ForceSettings(bound_factor=np.inf))
     assert unbounded.status[0] == FrameStatus.OPTIMAL
+
+
+def test_a_violation_within_the_solvers_precision_counts_as_solved():
+    # Friction needed 2e-7 beyond the cone (mu = 0.8 of a 1 N push): infeasible by a hair, as when the
+    # box slides on the table with its force exactly on the cone; the least-violation answer then
+    # explains the motion to 1.3e-6 N (mostly the slack weight's own trade-off) and is reported
+    # solved, unless the tolerance is 0.
+    model, contacts, kin = _single_contact((0.8 * (1 + 2e-7), -1.0, 0.0))
+    strict = nominal_forces(kin, contacts, model, settings=ForceSettings(feasibility_tol=0.0))
+    assert strict.status[0] == FrameStatus.LEAST_VIOLATION and 0 < np.linalg.norm(strict.residual[0]) < 1e-5
+    sol = nominal_forces(kin, contacts, model)
+    assert sol.status[0] == FrameStatus.OPTIMAL and np.allclose(sol.force, strict.force)
+    model, contacts, kin = _single_contact((0.8 * 1.01, -1.0, 0.0))  # 1 % outside: a real violation
+    assert nominal_forces(kin, contacts, model).status[0] == FrameStatus.LEAST_VIOLATION
