@@ -47,11 +47,10 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``."""
     from dataclasses import asdict
 
-    from benchmark.suites.evaluate import cached_episode, default_cache, episode_name, scores_document
-    from benchmark.exchange.estimates_file import load_estimate
-    from benchmark.scores.episode import score_episode
     from benchmark.archive import read_archive
-    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError
+    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, load_estimate
+    from benchmark.scores.episode import score_episode
+    from benchmark.suites.evaluate import cached_episode, default_cache, episode_name, scores_document
 
     paths = estimate_paths(suite, folder)
     metas = {sc: read_archive(p, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,

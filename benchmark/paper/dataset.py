@@ -398,10 +398,9 @@ def _write_sealed(table: pa.Table, path: str) -> str:
 def _prepare(spec: DatasetSpec, out: str) -> str:
     episodes = os.path.join(out, "episodes")
     os.makedirs(episodes, exist_ok=True)
-    claims = _Claims(out)
-    if not any(not claims._stale(c) for c in glob.glob(os.path.join(episodes, "*.claim"))):  # no other live run
+    if not _Claims(out).others_live():  # no other run is writing here: leftovers are a killed run's
         for tmp in glob.glob(os.path.join(out, ".tmp-*")) + glob.glob(os.path.join(episodes, ".tmp-*")):
-            os.unlink(tmp)  # debris of a killed run: never a complete file
+            os.unlink(tmp)  # never a complete file
     header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict())
     path = os.path.join(out, "dataset.json")
     if os.path.exists(path):
@@ -613,6 +612,10 @@ class _Claims:
             self.mine.add(episode)
             return True
         return False
+
+    def others_live(self) -> bool:
+        """Whether another live run holds a claim in this folder (its temporary files are not debris)."""
+        return any(not self._stale(c) for c in glob.glob(os.path.join(self.folder, "*.claim")))
 
     def _stale(self, path: str) -> bool:
         try:

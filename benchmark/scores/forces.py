@@ -78,6 +78,7 @@ def score_forces(solution: ForceSolution, truth: Truth, rot: np.ndarray) -> dict
     free &= solution.active.any(axis=1)
     tol = 1e-6 * (1.0 + sos_true)
     nan = float("nan")
+    fallbacks = sum(solution.count(s) for s in FALLBACKS)
 
     def rms(x):
         return float(np.sqrt(np.mean(np.sum(x**2, axis=1)))) if x.size else nan
@@ -92,8 +93,8 @@ def score_forces(solution: ForceSolution, truth: Truth, rot: np.ndarray) -> dict
         "sos_true_not_below_nominal_frac": float(np.mean(sos_true[free] >= solution.sum_of_squares[free] - tol[free]))
         if free.any() else nan,
         "sos_frames": int(free.sum()),
-        "solver_failures": sum(solution.count(s) for s in FALLBACKS),
-        "fallback_frac": sum(solution.count(s) for s in FALLBACKS) / max(len(solution) - solution.count(FrameStatus.NO_KINEMATICS), 1),
+        "solver_failures": fallbacks,
+        "fallback_frac": fallbacks / max(len(solution) - solution.count(FrameStatus.NO_KINEMATICS), 1),
         "status": {s.name.lower(): solution.count(s) for s in FrameStatus},
         "frames_scored": int(ok.sum()),
     }

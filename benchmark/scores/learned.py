@@ -46,8 +46,7 @@ def score_episode(episode, solution, kinematics: Kinematics, contacts: Contacts)
     from fsv.forces import decompose_forces
     from fsv.learn import relative_errors_pct
 
-    tr = episode.truth
-    sol = solution
+    tr, sol = episode.truth, solution
     feats = grasp_features(kinematics, contacts, episode.object_model, gravity=tr.gravity)
     usable, keep, _ = sample_mask(kinematics, contacts, feats, tr)
     # the plausibility rule, as in the dataset: the decomposition (eq. 9) with the tactile readings

@@ -355,14 +355,6 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
                 retry = programs[(keys[t], True)] = _program(True, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K)
             forces, code, objective[t], iterations[t] = retry.solve(bank[t], required[t], target[t])
             status[t] = FrameStatus.LEAST_VIOLATION if code in OK else FrameStatus.FAILED
-            if code in OK and settings.feasibility_tol > 0:
-                fingers, corners = forces[:K], forces[2 * K : 2 * K + 8]
-                got = np.concatenate([fingers.sum(axis=0) + corners.sum(axis=0),
-                                      np.cross(np.where(use[t][:, None], contacts.point[t], 0.0), fingers).sum(axis=0)
-                                      + np.cross(table.point, corners).sum(axis=0)])
-                if np.sqrt(np.sum((required[t] - got) ** 2)) <= settings.feasibility_tol * max(
-                        1.0, float(np.sqrt(np.sum(required[t] ** 2)))):
-                    status[t] = FrameStatus.OPTIMAL
             if code not in OK:
                 forces, objective[t] = np.full((2 * K + 16, 3), np.nan), np.nan
         out[t] = forces
@@ -384,6 +376,11 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     point = np.where(use[..., None], contacts.point, 0.0)
     achieved = np.concatenate([nominal.sum(axis=1), np.cross(point, nominal).sum(axis=1)], axis=1) + env
     residual = np.where(status[:, None] == FrameStatus.NO_CONTACTS, required, required - achieved)
+    if settings.feasibility_tol > 0:  # violations at the solver's precision: the frame was feasible
+        scale = np.maximum(1.0, np.sqrt(np.sum(required**2, axis=1)))
+        with np.errstate(invalid="ignore"):
+            tiny = np.sqrt(np.sum(residual**2, axis=1)) <= settings.feasibility_tol * scale
+        status[(status == FrameStatus.LEAST_VIOLATION) & tiny] = FrameStatus.OPTIMAL
     total = nominal + internal
     return ForceSolution(
         kind=kind,
