@@ -65,7 +65,7 @@ def stage_label(stage) -> str:
     """How reports name a stage: its ``name`` attribute, else its module-qualified name."""
     name = getattr(stage, "name", None)
     if not isinstance(name, str) or not name:
-        kind = stage if isinstance(stage, type) or callable(stage) and hasattr(stage, "__qualname__") else type(stage)
+        kind = stage if hasattr(stage, "__qualname__") else type(stage)  # a class or function, else an instance
         name = f"{kind.__module__}:{kind.__qualname__}"
     if name == ORACLE:
         raise InputError(f"a method's stage may not be named {ORACLE!r} (reserved for stages replaced by truth)")
