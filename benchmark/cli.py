@@ -170,6 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
     p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres, 0 to 0.1")
+    p.add_argument("--sensor", default="ds325", help="depth sensor preset: ds325 (the paper's camera), kinect-v1, ideal")
     p.add_argument("--user", type=int, default=0, help="index into sim_assets/users.yaml")
     p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
@@ -191,7 +192,7 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
     from benchmark.world.assets import validate
 
     sc = Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
-                  seed=args.seed, duration_s=args.duration)
+                  seed=args.seed, duration_s=args.duration, sensor=args.sensor)
     validate(sc)
     return sc
 

@@ -13,7 +13,7 @@ import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
-WORLD_MODULES = ("episode", "world/grip", "world/hand", "camera/render", "world/scenario", "camera/sensor",
+WORLD_MODULES = ("episode", "world/grip", "world/hand", "world/living", "camera/render", "world/scenario", "camera/sensor",
                  "world/simulate", "world/truth", "world/assets")
 """``benchmark`` modules (paths without ``.py``) that decide an episode's truth and depth (with
 ``benchmark/world/tasks/``)."""

@@ -36,7 +36,7 @@ def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys):
     capsys.readouterr()
     code = main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "scores"),
                  "--cache", str(cache), "--quiet"])
-    assert in_process["verdict"] == "fail" and code == 1  # central differences: learned error 94.6 % > 60 %
+    assert code == (1 if in_process["verdict"] == "fail" else 0)  # the same verdict from files
     from_files = json.loads((tmp_path / "scores" / "scores.json").read_text())
     drop = ("seconds", "rendered")
     assert [{k: v for k, v in r.items() if k not in drop} for r in from_files["episodes"]] == \

@@ -375,8 +375,10 @@ def test_render_gives_one_frame_per_truth_frame_with_calibration_and_labels(rend
     assert {1, 2, 9}.issubset(seen) and len(seen & {10, 11, 12, 13, 14}) >= 3
     valid = ep.depth.depth_m > 0
     assert 0.5 < valid.mean() < 0.98
-    clean = rendered[(0.0, 0)].depth.depth_m  # the range limits apply to the true depth
-    assert clean[clean > 0].min() >= 0.15 and clean.max() <= 1.0 and clean.max() > 0.95
+    clean = rendered[(0.0, 0)].depth.depth_m  # the range limits apply to the true depth (0.15-1 m);
+    # the DS325's own noise (14 mm at 1 m, more at grazing angles) spreads the measured depth around it
+    assert clean[clean > 0].min() >= 0.15 - 0.05 and np.percentile(clean[clean > 0], 99) <= 1.0 + 0.03
+    assert clean.max() > 0.95
 
 
 def test_render_same_seed_same_bits_other_seed_other_noise(rendered):
@@ -387,8 +389,18 @@ def test_render_same_seed_same_bits_other_seed_other_noise(rendered):
     np.testing.assert_array_equal(other.labels, again.labels)  # labels are exact, noise-free
 
 
-def test_render_noise_has_the_scenario_std_on_valid_pixels(rendered):
-    noisy, clean = rendered[(0.01, 0)].depth.depth_m, rendered[(0.0, 0)].depth.depth_m
+def test_render_noise_has_the_scenario_std_on_valid_pixels():
+    """The scenario's white noise on top of the sensor's masks (the preset's own noise, jitter,
+    multipath and flying pixels off: tests/test_sensor_presets.py checks those)."""
+    from dataclasses import replace
+
+    from benchmark.camera.sensor import sensor_preset
+
+    def white(noise):
+        return replace(sensor_preset("ds325", noise), axial="none", lateral="none", multipath_m=0.0, flying_frac=0.0)
+
+    noisy = R.render(synthetic_episode(0.01, 0), sensor=white(0.01)).depth.depth_m
+    clean = R.render(synthetic_episode(0.0, 0), sensor=white(0.0)).depth.depth_m
     both = (noisy > 0) & (clean > 0)
     assert both.sum() > 1e6
     assert np.std(noisy[both] - clean[both]) == pytest.approx(0.01, rel=0.05)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from benchmark.errors import BenchmarkError
-from benchmark.camera.sensor import SensorModel, _incidence_cos, dequantise, quantise
+from benchmark.camera.sensor import PRESETS, SensorModel, _incidence_cos, dequantise, quantise, sensor_preset
 
 H, W = 240, 320
 K = np.array([[212.0, 0.0, 159.5], [0.0, 216.0, 119.5], [0.0, 0.0, 1.0]])
@@ -28,18 +28,6 @@ def test_gaussian_noise_has_the_requested_std_on_valid_pixels():
         err = out[valid] - z[valid]
         assert np.std(err) == pytest.approx(sigma, rel=0.05)
         assert abs(np.mean(err)) < 0.05 * sigma
-
-
-def test_depth_dependent_noise_grows_with_the_square_of_depth():
-    sensor = SensorModel(noise_m=0.001, noise_quad_per_m=0.01, quantum_m=None, edge_jump_m=None, grazing_deg=None)
-    z, _ = plane_depth(np.array([0.0, 1.0, 0.6]), 0.25)  # depth from ~0.2 m to ~1 m down the image
-    out = sensor.measure(z, K, np.random.default_rng(2))
-    for lo, hi in ((0.3, 0.35), (0.6, 0.7), (0.85, 0.95)):
-        band = (z >= lo) & (z < hi) & (out > 0)
-        assert band.sum() > 2000
-        expected = np.sqrt(np.mean(sensor.sigma(z[band]) ** 2))
-        assert np.std(out[band] - z[band]) == pytest.approx(expected, rel=0.05)
-    assert sensor.sigma(np.array(1.0)) == pytest.approx(0.011)
 
 
 def test_same_seed_same_frames_other_seed_other_frames():

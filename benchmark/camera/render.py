@@ -32,7 +32,7 @@ import yaml
 
 from benchmark.episode import Episode
 from benchmark.errors import BenchmarkError, RenderError
-from benchmark.camera.sensor import SensorModel
+from benchmark.camera.sensor import SensorModel, sensor_preset
 from fsv import Calibration, DepthVideo
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
@@ -707,12 +707,13 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
 
 
 def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camera | None = None) -> Episode:
-    """Renders the depth video a DS325-like camera would record of a simulated episode.
+    """Renders the depth video the scenario's depth camera would record of a simulated episode.
 
     Args:
         episode: A simulated episode (its truth gives the box and hand pose per frame).
-        sensor: The sensor model; default ``SensorModel(noise_m=scenario.noise_m)`` (the defaults of
-            docs/scenarios.md). Its ``noise_m`` must equal the scenario's.
+        sensor: The sensor model; default the scenario's preset with its noise,
+            ``sensor_preset(scenario.sensor, scenario.noise_m)`` (docs/scenarios.md). Its
+            ``noise_m`` must equal the scenario's.
         camera: The camera; default ``sim_assets/camera.yaml``.
 
     Returns:
@@ -723,7 +724,7 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
     from benchmark.world.assets import build_world, set_frame
 
     sc = episode.scenario
-    sensor = SensorModel(noise_m=sc.noise_m) if sensor is None else sensor
+    sensor = sensor_preset(sc.sensor, sc.noise_m) if sensor is None else sensor
     if sensor.noise_m != sc.noise_m:
         raise BenchmarkError(
             f"sensor.noise_m = {sensor.noise_m} differs from the scenario's noise_m = {sc.noise_m}; "

@@ -24,6 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites import SUITES
 
     p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
     p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (suite.json, <episode>.npz)")
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -74,7 +75,7 @@ def run(args: argparse.Namespace) -> dict:
     from benchmark.suites.evaluate import check_out
     from benchmark.suites import get_suite
 
-    suite = get_suite(args.suite)
+    suite = get_suite(args.suite, args.sensor)
     check_out(args.out)
     index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet)
     print(f"fsv-bench export: suite {suite.name} v{suite.version}, {len(index['episodes'])} camera-input files "

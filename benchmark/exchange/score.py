@@ -21,6 +21,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites import SUITES
 
     p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
     p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
     p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (scores.json, report.md, junit.xml)")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
@@ -80,7 +81,7 @@ def run(args: argparse.Namespace) -> dict:
     from benchmark.suites.evaluate import check_out, load_gates, print_verdict, write_outputs
     from benchmark.suites import get_suite
 
-    suite = get_suite(args.suite)
+    suite = get_suite(args.suite, args.sensor)
     gates = load_gates(args.gates) if args.gates else None
     check_out(args.out)
     estimate_paths(suite, args.estimates)

@@ -263,6 +263,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites import SUITES
 
     p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
     p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (scores.json, report.md, junit.xml)")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
@@ -305,7 +306,7 @@ def spec_from_args(args: argparse.Namespace):
 
 def run(args: argparse.Namespace) -> dict:
     """Runs ``fsv-bench eval``: checks every input, evaluates, writes, prints; raises GateFailure on a failed gate."""
-    suite = get_suite(args.suite)
+    suite = get_suite(args.suite, args.sensor)
     gates = load_gates(args.gates) if args.gates else None
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")

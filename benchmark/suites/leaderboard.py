@@ -34,6 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites import SUITES
 
     p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
     p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (leaderboard.md, <variant>/)")
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
     p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
@@ -45,7 +46,7 @@ def run(args: argparse.Namespace) -> list:
     from benchmark.scores.leaderboard import leaderboard_markdown
     from benchmark.suites import get_suite
 
-    suite = get_suite(args.suite)
+    suite = get_suite(args.suite, args.sensor)
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)

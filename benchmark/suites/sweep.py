@@ -5,10 +5,11 @@
 
 Axes (:data:`AXES`): ``noise`` (depth noise standard deviation, m), ``mass`` (index into
 sim_assets/masses.yaml), ``fps`` (camera frame rate, Hz), ``init`` (scale of the seeded first-frame
-perturbation handed to the method, ``benchmark.method.init.INIT_PERTURBATION``). Every scenario of the
+perturbation handed to the method, ``benchmark.method.init.INIT_PERTURBATION``), ``sensor`` (depth
+sensor preset: ``ds325``, ``kinect-v1``, ``ideal``). Every scenario of the
 suite is run at every value (the rest of the scenario unchanged). ``DIR`` receives ``sweep.json``
 (aggregates with 95 % intervals per value, provenance), ``sweep.md`` and ``sweep.png`` (median and
-interval of each metric against the axis). The world has no friction or sensor-model axis yet.
+interval of each metric against the axis). The world has no friction axis.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ AXES = {
     "mass": ("mass", int, "mass index (sim_assets/masses.yaml)"),
     "fps": ("fps", float, "frame rate [Hz]"),
     "init": (None, float, "first-frame perturbation scale"),
+    "sensor": ("sensor", str, "depth sensor preset"),
 }
 """Axis name -> (Scenario field or None for the method's initialisation, type, label)."""
 
@@ -89,7 +91,8 @@ def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
     from benchmark.atomic import save_figure
 
     fig, axes = plt.subplots(2, 3, figsize=(12, 6.5))
-    x = np.asarray(values, dtype=float)
+    categorical = AXES[axis][1] is str
+    x = np.arange(len(values), dtype=float) if categorical else np.asarray(values, dtype=float)
     for ax, metric in zip(axes.ravel(), PLOTTED):
         stat = "mean" if metric == "least_violation_frac" else "median"
         aggs = [r["aggregate"][metric][stat] for r in results]
@@ -99,6 +102,8 @@ def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
         ax.errorbar(x, v, yerr=[v - lo, hi - v], marker="o", capsize=3, color="tab:blue", label=f"{stat} [95 % CI]")
         ax.set_title(metric, fontsize=9)
         ax.set_xlabel(AXES[axis][2], fontsize=8)
+        if categorical:
+            ax.set_xticks(x, [str(v) for v in values], fontsize=8)
         ax.grid(alpha=0.3)
     axes[0, 0].legend(fontsize=7)
     fig.suptitle(f"{results[0]['suite']['name']}: errors against {AXES[axis][2]} ({len(results[0]['episodes'])} episodes per value)",

@@ -11,7 +11,8 @@ Two parts:
   motor-control literature: the grip (normal) force tracks the load force in parallel with a
   user-specific safety margin over the slip limit (Johansson & Westling 1984), from a baseline
   grip, anticipating the planned load rather than reacting to it (Flanagan & Wing 1995), with a
-  per-finger share of the internal force (Radwin et al. 1992). The forces become joint torques
+  per-finger share of the internal force (Radwin et al. 1992), varying within a hold and from trial
+  to trial (:mod:`benchmark.world.living`). The forces become joint torques
   through the fingertip Jacobians, tau = J^T f; MuJoCo's contact solver then produces the true
   contact forces.
 """
@@ -22,7 +23,7 @@ import functools
 import hashlib
 import importlib.resources
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -31,6 +32,7 @@ from scipy.optimize import least_squares
 from benchmark.errors import ScenarioError
 from benchmark.world.scenario import Scenario
 from benchmark.world.assets import World, build_world, grasp_of, user_of
+from benchmark.world.living import MOVING_ACC, MOVING_ALPHA, LivingGrip
 from fsv.linalg import dot, inv, mm, mv, rows_mt, vm
 
 # Relaxed postures (radians): [abduction, flexion, flexion, flexion] per digit.
@@ -392,9 +394,16 @@ class Human:
         self.palm_quat = np.array([_quat_of(R) for R in palm_rot])
         self.ctrl = q[:, world.actuator_joint]
 
-        # Grip forces at every control tick, object frame.
+        # Grip forces at every control tick, object frame. The grip follows the load planned
+        # anticipation_s ahead of its own response (an internal model of the grip's lag), so that
+        # it leads or matches the load.
+        grip_rng = scenario.rng("grip")
+        living = LivingGrip.draw(grip_rng)
+        pol = replace(pol, safety_margin=pol.safety_margin * living.trial_scale,
+                      baseline_grip_n=pol.baseline_grip_n * living.trial_scale)
+        self.policy, self.living = pol, living
         tk = t[::ctrl_every]
-        ta = tk + pol.anticipation_s
+        ta = tk + pol.anticipation_s + pol.response_s
         _, rot_a, _, acc, omega, alpha = motion.evaluate(ta)
         load = np.ones_like(ta)
         load = np.where(ta < ph.close_end, 0.0, load)
@@ -407,8 +416,15 @@ class Human:
         a_b = np.einsum("nji,nj->ni", rot_a, alpha)
         torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
         wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
-        f_nom, f_int, grip_slip = pol.distribute(wrench, plan.spot, plan.normal_in, plan.active)
-        target = pol.baseline_grip_n + grip_slip
+        # The grip is the sum of the baseline (relaxing in holds), the grip at which every digit
+        # presses with min_finger_force_n without load, and the grip the load's slip limit needs:
+        # a sum, so that the grip follows the load at light loads too.
+        f_nom, f_int, grip_slip = replace(pol, min_finger_force_n=0.0).distribute(
+            wrench, plan.spot, plan.normal_in, plan.active)
+        n_int = np.einsum("kj,kj->k", f_int, plan.normal_in)[plan.active]
+        grip_floor = float(np.max(pol.min_finger_force_n / np.maximum(n_int, 1e-9)))
+        moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
+        target = pol.baseline_grip_n * living.relaxation(tk, moving) + grip_floor + grip_slip
         ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
         target = np.where(tk < ph.close_end, pol.baseline_grip_n * ramp, target)
         if releases:
@@ -420,6 +436,7 @@ class Human:
         for i, gt in enumerate(target):
             g = keep * g + (1 - keep) * gt
             grip[i] = g
+        grip *= living.modulation(tk, grip_rng)
         forces = f_nom + grip[:, None, None] * f_int
         norm = np.linalg.norm(forces, axis=2, keepdims=True)
         forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
@@ -456,6 +473,11 @@ class Human:
         for k, site, dofs in self._fingers:
             mujoco.mj_jacSite(m, data, jac, None, site)
             qfrc[dofs] = vm(f[k], jac[:, dofs])
+
+
+def norm_rows(v: np.ndarray) -> np.ndarray:
+    """Euclidean norm of each row of (N, 3)."""
+    return np.sqrt(np.einsum("ni,ni->n", v, v))
 
 
 def _mj(s: np.ndarray) -> np.ndarray:

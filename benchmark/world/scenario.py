@@ -1,4 +1,4 @@
-"""A scenario: which task, user, grasp and mass to simulate, the sensor noise, and the seed."""
+"""A scenario: which task, user, grasp and mass to simulate, the depth sensor and its noise, and the seed."""
 
 from __future__ import annotations
 
@@ -30,6 +30,8 @@ class Scenario:
         seed: Seed of the scenario's random generator.
         duration_s: Episode length in [s]; None takes the task's default.
         fps: Camera frame rate in [Hz].
+        sensor: Name of a depth-sensor preset (``benchmark.camera.sensor.SENSORS``: "ds325", the
+            paper's camera, "kinect-v1" or "ideal"); ``noise_m`` is white noise added to its own.
     """
 
     task: str = "lift"
@@ -40,6 +42,7 @@ class Scenario:
     seed: int = 0
     duration_s: float | None = None
     fps: float = 30.0
+    sensor: str = "ds325"
 
     def __post_init__(self):
         for name in ("user", "grasp", "mass", "seed"):
@@ -52,6 +55,10 @@ class Scenario:
             raise ScenarioError(f"duration must be > 0 and <= {MAX_DURATION_S:g} seconds, got {self.duration_s!r}")
         if not (np.isfinite(self.fps) and 0 < self.fps <= MAX_FPS):
             raise ScenarioError(f"fps must be > 0 and <= {MAX_FPS:g}, got {self.fps!r}")
+        from benchmark.camera.sensor import SENSORS
+
+        if self.sensor not in SENSORS:
+            raise ScenarioError(f"sensor must be one of {', '.join(SENSORS)}, got {self.sensor!r}")
 
     def rng(self, stream: str) -> np.random.Generator:
         """An independent generator for one named use (e.g. "tracker-init", "depth-noise").

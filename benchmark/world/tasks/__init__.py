@@ -1,7 +1,7 @@
 """The task registry: name -> :class:`Task` (dm_control suite style, one module per task).
 
 A task says what happens to the box between the hand's grasp and its release, as minimum-jerk
-keyframes of the box's displacement and rotation relative to its start pose, and whether the box
+keyframes (movements at human speed, :mod:`benchmark.world.tasks.human`) of the box's displacement and rotation relative to its start pose, and whether the box
 is lifted off the table and whether the hand lets it go at the end. The reach, grasp and load
 phases before and the release after are common to every task (:class:`~benchmark.world.tasks.motion.Phases`).
 """
@@ -46,9 +46,9 @@ class Task:
 
 
 def _registry() -> dict:
-    from benchmark.world.tasks import excite, free, lift, place, release, rotate
+    from benchmark.world.tasks import excite, free, lift, place, release, rotate, shake
 
-    tasks = [lift.TASK, place.TASK, release.TASK, rotate.TASK, free.TASK, *excite.TASKS]
+    tasks = [lift.TASK, place.TASK, release.TASK, rotate.TASK, free.TASK, shake.TASK, *excite.TASKS]
     return {t.name: t for t in tasks}
 
 

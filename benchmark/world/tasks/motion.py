@@ -29,6 +29,11 @@ def min_jerk(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return (10 * s**3 - 15 * s**4 + 6 * s**5, 30 * s**2 - 60 * s**3 + 30 * s**4, 60 * s - 180 * s**2 + 120 * s**3)
 
 
+MIN_GRIP_COMPRESSION = 0.6
+"""Short episodes compress the closing and loading phases by at most this factor (the others by
+duration / 8 s)."""
+
+
 @dataclass(frozen=True)
 class Phases:
     """Times in [s] that split an episode into the phases of a prehension.
@@ -54,9 +59,11 @@ class Phases:
 
     @staticmethod
     def for_duration(duration: float, releases: bool) -> "Phases":
-        """Human-like phase lengths, compressed proportionally for short episodes."""
+        """Human-like phase lengths, compressed proportionally for short episodes (closing and
+        loading by at most :data:`MIN_GRIP_COMPRESSION`)."""
         k = min(1.0, duration / 8.0)
-        reach, close, load = 0.8 * k, 0.35 * k, 0.3 * k
+        k_grip = max(k, MIN_GRIP_COMPRESSION)  # the grip needs time to build before a human-speed lift
+        reach, close, load = 0.8 * k, 0.35 * k_grip, 0.3 * k_grip
         unload, open_ = (0.3 * k, 0.3 * k) if releases else (0.0, 0.0)
         tail = 0.25 * k if releases else 0.0
         move_end = duration - unload - open_ - tail

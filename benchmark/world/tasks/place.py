@@ -5,23 +5,23 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.world.tasks import Task
-from benchmark.world.tasks.motion import Phases, timed
+from benchmark.world.tasks.human import Plan
+from benchmark.world.tasks.motion import Phases
 
 # The box is put down this far into the table, so that the hand's compliance presses it on.
 PRESS_M = 0.002
 
 
 def keyframes(phases: Phases, rng: np.random.Generator) -> list:
-    """Lift, carry along a random horizontal direction (mostly +x), lower, hold on the table."""
-    zero = np.zeros(3)
+    """Lift, carry along a random horizontal direction (mostly +x) turning a little, lower, hold on
+    the table: movements at human speed with brief dwells between them."""
     height = 0.10 + 0.03 * rng.uniform()
     heading = rng.uniform(-0.5, 0.5)
     dist = 0.13 + 0.04 * rng.uniform()
     goal = dist * np.array([np.cos(heading), np.sin(heading), 0.0])
     yaw = np.array([0.0, 0.0, rng.uniform(-0.3, 0.3)])
-    way = [(zero, zero), ([0, 0, height], zero), (goal + [0, 0, height], yaw), (goal + [0, 0, -PRESS_M], yaw),
-           (goal + [0, 0, -PRESS_M], yaw)]
-    return timed(phases.load_end, phases.move_end, way, [1.0, 1.6, 1.0, 0.5])
+    plan = Plan(rng).move([0, 0, height]).hold().move(goal + [0, 0, height], yaw).hold().move(goal + [0, 0, -PRESS_M])
+    return plan.keyframes(phases.load_end, phases.move_end)
 
 
 TASK = Task(name="place", description="pick and place: carry the box ~15 cm sideways and put it down",

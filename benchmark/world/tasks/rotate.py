@@ -5,24 +5,22 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.world.tasks import Task
-from benchmark.world.tasks.motion import Phases, timed
+from benchmark.world.tasks.human import Plan
+from benchmark.world.tasks.motion import Phases
 
 ANGLES_RAD = (0.45, 0.35, 0.6)  # about the box's x (long edge), y (grasp axis) and z (vertical)
 
 
 def keyframes(phases: Phases, rng: np.random.Generator) -> list:
-    """Lift ~12 cm; for each axis, turn +angle, -angle, back to level; hold."""
-    zero = np.zeros(3)
+    """Lift ~12 cm; for each axis, turn +angle, -angle, back to level (human speeds, brief dwells; the
+    turns that do not fit a short episode are left out); hold."""
     up = np.array([0.0, 0.0, 0.12])
-    way, weights = [(zero, zero), (up, zero)], [1.0]
+    plan = Plan(rng).move(up).hold()
     for axis, angle in enumerate(ANGLES_RAD):
         a = angle * (1.0 + 0.1 * rng.uniform(-1, 1))
         e = np.eye(3)[axis]
-        way += [(up, a * e), (up, -a * e), (up, zero)]
-        weights += [0.7, 1.2, 0.7]
-    way.append((up, zero))
-    weights.append(0.3)
-    return timed(phases.load_end, phases.move_end, way, weights)
+        plan.move(up, a * e, optional=True).hold().move(up, -a * e, optional=True).hold().move(up, 0 * e, optional=True).hold()
+    return plan.keyframes(phases.load_end, phases.move_end)
 
 
 TASK = Task(name="rotate", description="lift, then rotate about each box axis and back", default_duration_s=10.0,

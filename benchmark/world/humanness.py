@@ -1,0 +1,184 @@
+"""How human the world is: motion peaks, grip fluctuations and grip-load coupling of the truth.
+
+    python -m benchmark.world.humanness [--suite standard] [--out results/world]
+
+simulates every episode of a suite (no rendering) and writes ``humanness.md`` and
+``humanness.json``: per task the distribution of the box's peak acceleration and angular velocity
+while lifted beside the ranges of :mod:`benchmark.world.tasks.human`, the thumb's grip-force
+coefficient of variation in holds, the grip-load correlation and lead on ``shake``, and the
+largest Newton-Euler residual of the truth.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+from dataclasses import dataclass
+
+import numpy as np
+
+STILL_ACC = 0.3
+"""A lifted box moves less than this during a hold, [m/s^2]."""
+STILL_OMEGA = 0.2
+"""... and turns slower than this, [rad/s]."""
+MIN_HOLD_S = 1.0
+"""Holds shorter than this are not scored, [s]."""
+MAX_LAG_S = 0.2
+"""The grip-load lag is searched within +- this, [s]."""
+
+
+@dataclass(frozen=True)
+class EpisodeHumanness:
+    """The statistics of one episode's truth.
+
+    Attributes:
+        peak_acc: Largest |box acceleration| while lifted (held, no table contact), [m/s^2].
+        peak_omega: Largest |box angular velocity| while lifted, [rad/s].
+        grip_cv: Median over holds (>= MIN_HOLD_S, lifted, still) of the thumb normal force's
+            coefficient of variation; nan without such a hold.
+        grip_load_corr: Largest correlation of the thumb normal force with the load force |m (a - g)|
+            over lags within +- MAX_LAG_S while lifted.
+        grip_lead_s: The lag of that correlation: > 0 when the grip leads the load, [s].
+        newton_euler_n: Largest Newton-Euler force residual over all frames, [N].
+    """
+
+    peak_acc: float
+    peak_omega: float
+    grip_cv: float
+    grip_load_corr: float
+    grip_lead_s: float
+    newton_euler_n: float
+
+
+def lifted(truth) -> np.ndarray:
+    """Frames held with no table contact, (T,) bool."""
+    return truth.held & (np.linalg.norm(truth.env_force, axis=1) == 0)
+
+
+def thumb_normal_force(truth) -> np.ndarray:
+    """The thumb's normal force on the box, (T,), [N] (0 without contact)."""
+    return np.einsum("tj,tj->t", truth.contact_force[:, 0], truth.contact_normal[:, 0])
+
+
+def holds(mask: np.ndarray, fps: float) -> list:
+    """Runs of True at least MIN_HOLD_S long, as slices."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
+    return [slice(a, b) for a, b in zip(edges[::2], edges[1::2]) if (b - a) / fps >= MIN_HOLD_S]
+
+
+def episode_humanness(truth, fps: float) -> EpisodeHumanness:
+    """The statistics of one episode's truth (see :class:`EpisodeHumanness`)."""
+    up = lifted(truth)
+    acc = np.linalg.norm(truth.box_acc, axis=1)
+    omega = np.linalg.norm(truth.box_omega, axis=1)
+    grip = thumb_normal_force(truth)
+    still = up & (acc < STILL_ACC) & (omega < STILL_OMEGA) & truth.contact_active[:, 0]
+    cvs = [np.std(grip[s]) / np.mean(grip[s]) for s in holds(still, fps)]
+    load = np.linalg.norm(truth.mass * (truth.box_acc - truth.gravity), axis=1)
+    corr, lead = _best_lag(grip, load, up, int(round(MAX_LAG_S * fps)))
+    force, _ = truth.newton_euler_residual()
+    return EpisodeHumanness(
+        peak_acc=float(acc[up].max()) if up.any() else float("nan"),
+        peak_omega=float(omega[up].max()) if up.any() else float("nan"),
+        grip_cv=float(np.median(cvs)) if cvs else float("nan"),
+        grip_load_corr=corr, grip_lead_s=lead / fps,
+        newton_euler_n=float(np.max(np.linalg.norm(force, axis=1))),
+    )
+
+
+def _best_lag(grip: np.ndarray, load: np.ndarray, mask: np.ndarray, max_lag: int) -> tuple[float, int]:
+    """The largest correlation of grip(t) with load(t + lag) over |lag| <= max_lag (lag > 0: the
+    grip leads), on frames where both are in ``mask``; and its lag in frames."""
+    best, best_lag = -np.inf, 0
+    T = len(grip)
+    for lag in range(-max_lag, max_lag + 1):
+        i = np.arange(max(0, -lag), min(T, T - lag))
+        sel = mask[i] & mask[i + lag]
+        if sel.sum() < 10:
+            continue
+        c = float(np.corrcoef(grip[i][sel], load[i + lag][sel])[0, 1])
+        if c > best:
+            best, best_lag = c, lag
+    return (best if np.isfinite(best) else float("nan")), best_lag
+
+
+def suite_humanness(suite, progress: bool = True) -> list:
+    """``(scenario, EpisodeHumanness)`` for every episode of a suite (simulated, not rendered)."""
+    from benchmark.world.simulate import simulate
+
+    scenarios = suite.scenarios
+    if progress:
+        from tqdm import tqdm
+
+        scenarios = tqdm(scenarios, desc=f"simulate {suite.name}", unit="episode", leave=False)
+    return [(sc, episode_humanness(simulate(sc).truth, sc.fps)) for sc in scenarios]
+
+
+def _span(values) -> str:
+    v = np.asarray([x for x in values if np.isfinite(x)], float)
+    if not len(v):
+        return "-"
+    return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
+
+
+def report_markdown(suite, rows: list) -> str:
+    """The per-task table of :func:`suite_humanness`'s rows, with the literature ranges."""
+    from benchmark.world.tasks.human import ROTATION_PEAK_ALPHA, SHAKE_PEAK_ACC, TRANSPORT_PEAK_ACC
+    from benchmark.world import living
+
+    lines = [
+        f"# How human the world is: suite {suite.name} v{suite.version} ({len(rows)} episodes, truth only)",
+        "",
+        "Peaks while the box is lifted (held, no table contact); median (min-max) over the task's episodes.",
+        f"Planned ranges (benchmark/world/tasks/human.py): transports peak at {TRANSPORT_PEAK_ACC.lo:g}-"
+        f"{TRANSPORT_PEAK_ACC.hi:g} m/s^2, turns at {ROTATION_PEAK_ALPHA.lo:g}-{ROTATION_PEAK_ALPHA.hi:g} rad/s^2, "
+        f"shake at {SHAKE_PEAK_ACC.lo:g}-{SHAKE_PEAK_ACC.hi:g} m/s^2; grip fluctuations drawn for a total "
+        f"coefficient of variation of about {100 * np.hypot(living.DRIFT_CV[0], living.TREMOR_CV[0]):.1f}-"
+        f"{100 * np.hypot(living.DRIFT_CV[1], living.TREMOR_CV[1]):.1f} % (benchmark/world/living.py).",
+        "",
+        "| task | episodes | peak acc [m/s^2] | peak angular velocity [rad/s] | thumb grip CV in holds [%] "
+        "| grip-load correlation | grip lead [ms] | Newton-Euler residual [N] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    tasks = sorted({sc.task for sc, _ in rows}, key=lambda t: [sc.task for sc, _ in rows].index(t))
+    for task in tasks:
+        hs = [h for sc, h in rows if sc.task == task]
+        lines.append(
+            f"| {task} | {len(hs)} | {_span(h.peak_acc for h in hs)} | {_span(h.peak_omega for h in hs)} "
+            f"| {_span(100 * h.grip_cv for h in hs)} | {_span(h.grip_load_corr for h in hs)} "
+            f"| {_span(1000 * h.grip_lead_s for h in hs)} | {max(h.newton_euler_n for h in hs):.1e} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    """``python -m benchmark.world.humanness``: writes humanness.md and humanness.json."""
+    from dataclasses import asdict
+
+    from benchmark.atomic import write_text
+    from benchmark.suites import get_suite
+    from fsv.provenance import provenance
+
+    p = argparse.ArgumentParser(prog="python -m benchmark.world.humanness", description=__doc__.splitlines()[0])
+    p.add_argument("--suite", default="standard", help="suite whose episodes are simulated (default standard)")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results/world"), help="output folder")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    args = p.parse_args(argv)
+    try:
+        suite = get_suite(args.suite)
+    except ValueError as e:
+        p.exit(2, f"{p.prog}: error: {e}\n")
+    rows = suite_humanness(suite, progress=not args.quiet)
+    md = report_markdown(suite, rows)
+    doc = {"suite": {"name": suite.name, "version": suite.version},
+           "episodes": [{"scenario": asdict(sc), **asdict(h)} for sc, h in rows], "provenance": provenance()}
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_text(str(args.out / "humanness.md"), md)
+    write_text(str(args.out / "humanness.json"), json.dumps(doc, indent=1, allow_nan=True) + "\n")
+    print(md)
+    print(f"written to {args.out}/ (humanness.md, humanness.json)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,150 @@
+"""Human movement speeds: the ranges a task plan draws its motions from, and a plan builder.
+
+A task plan is a sequence of minimum-jerk movements and holds. Each movement's duration follows
+from a peak acceleration drawn per trial from a range of natural manipulation: a minimum-jerk
+movement over a distance D in a time T peaks at ``MIN_JERK_PEAK_ACC * D / T**2`` (and at
+``MIN_JERK_PEAK_VEL * D / T`` in velocity), so ``T = sqrt(MIN_JERK_PEAK_ACC * D / a)``.
+
+Ranges and their sources (the literature reports them for unloaded reaches and for transports of
+hand-held objects of a few hundred grams; we use the part of each range a deliberate manipulation
+of our box covers):
+
+* ``TRANSPORT_PEAK_ACC`` 2.5-6 m/s^2: point-to-point arm movements of 10-40 cm at natural speed
+  last 0.4-1 s with bell-shaped speed profiles peaking at 0.5-1.5 m/s (Flash & Hogan 1985,
+  J. Neurosci. 5(7)); vertical transports of a held object reach peak accelerations of several
+  m/s^2 (Flanagan & Wing 1993, Exp. Brain Res. 95; Flanagan & Wing 1997, J. Neurosci. 17(4)).
+* ``ROTATION_PEAK_ALPHA`` 8-20 rad/s^2: chosen (we found no single source for turning a held
+  box), so that turns of 0.3-0.6 rad take 0.3-0.6 s with peak angular velocities of 2-4 rad/s, the
+  time scale of the transports above.
+* ``DWELL_S`` 0.2-0.6 s: chosen; the sub-movements of a manipulation are separated by brief
+  holds (Johansson et al. 2001, J. Neurosci. 21(17), on the phases of object manipulation).
+* ``SHAKE_FREQUENCY_HZ`` 1-2 Hz and ``SHAKE_PEAK_ACC`` 2.5-5 m/s^2: cyclic vertical arm movements
+  with a hand-held load, the load force changing by tens of percent of the weight (Flanagan &
+  Wing 1995, Exp. Brain Res. 105, "The stability of precision grip forces during cyclic arm
+  movements with a hand-held load").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+MIN_JERK_PEAK_ACC = 10.0 / np.sqrt(3.0)
+"""Peak of |d2p/ds2| of the minimum-jerk profile 10 s^3 - 15 s^4 + 6 s^5 (at s = 1/2 -+ sqrt(3)/6)."""
+MIN_JERK_PEAK_VEL = 1.875
+"""Peak of dp/ds of the minimum-jerk profile (at s = 1/2)."""
+
+
+@dataclass(frozen=True)
+class Range:
+    """A range of a human movement parameter, drawn uniformly per trial.
+
+    Attributes:
+        lo: Lower end.
+        hi: Upper end.
+        unit: Its unit.
+    """
+
+    lo: float
+    hi: float
+    unit: str
+
+    def draw(self, rng: np.random.Generator) -> float:
+        """One uniform draw in [lo, hi] from the scenario's generator."""
+        return float(self.lo + (self.hi - self.lo) * rng.uniform())
+
+
+TRANSPORT_PEAK_ACC = Range(2.5, 6.0, "m/s^2")
+ROTATION_PEAK_ALPHA = Range(8.0, 20.0, "rad/s^2")
+DWELL_S = Range(0.2, 0.6, "s")
+SHAKE_FREQUENCY_HZ = Range(1.0, 2.0, "Hz")
+SHAKE_PEAK_ACC = Range(2.5, 5.0, "m/s^2")
+
+MIN_MOVE_S = 0.25
+"""No movement is planned shorter than this, [s] (a tiny displacement does not make a twitch)."""
+MIN_DWELL_S = 0.1
+"""A plan too long for its episode first shortens its holds down to this, [s], then leaves out
+optional movements (it moves faster than planned only when its required movements do not fit)."""
+
+
+def move_duration(distance: float, peak: float) -> float:
+    """Duration of a minimum-jerk movement over ``distance`` (m or rad) peaking at ``peak``
+    (m/s^2 or rad/s^2), [s]; at least :data:`MIN_MOVE_S`."""
+    return max(MIN_MOVE_S, float(np.sqrt(MIN_JERK_PEAK_ACC * abs(distance) / peak)))
+
+
+class Plan:
+    """Builds a task's keyframes as movements and holds, from the box's start pose.
+
+    Args:
+        rng: The scenario's "task" generator (every duration is drawn from it).
+    """
+
+    def __init__(self, rng: np.random.Generator):
+        self.rng = rng
+        self.way = [(np.zeros(3), np.zeros(3))]
+        self.durations = []
+        self.optional = []
+
+    @property
+    def pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """The displacement and rotation vector the plan has reached."""
+        return self.way[-1]
+
+    def move(self, displacement, rotation=None, *, duration: float | None = None, optional: bool = False) -> "Plan":
+        """A minimum-jerk movement to ``displacement`` (3,) [m] and ``rotation`` (3,) [rad] (box
+        start frame), lasting ``duration`` [s] if given, else the longer of the translation's and
+        the rotation's durations at peaks drawn from :data:`TRANSPORT_PEAK_ACC` and
+        :data:`ROTATION_PEAK_ALPHA`. An ``optional`` movement is left out of a short episode
+        that has no time for it."""
+        d0, r0 = self.pose
+        d1 = np.asarray(displacement, float)
+        r1 = r0 if rotation is None else np.asarray(rotation, float)
+        if duration is None:
+            a, alpha = TRANSPORT_PEAK_ACC.draw(self.rng), ROTATION_PEAK_ALPHA.draw(self.rng)
+            T = max(move_duration(np.linalg.norm(d1 - d0), a), move_duration(np.linalg.norm(r1 - r0), alpha))
+        else:
+            T = float(duration)
+        self.way.append((d1, r1))
+        self.durations.append(T)
+        self.optional.append(bool(optional))
+        return self
+
+    def hold(self, seconds: float | None = None) -> "Plan":
+        """Stays still for ``seconds`` (default: a dwell drawn from :data:`DWELL_S`)."""
+        self.way.append(self.pose)
+        self.durations.append(DWELL_S.draw(self.rng) if seconds is None else float(seconds))
+        self.optional.append(False)
+        return self
+
+    def keyframes(self, t0: float, t1: float) -> list:
+        """The keyframes from ``t0``, the last pose held until ``t1``. A plan longer than the
+        window [t0, t1] first shortens its holds (down to :data:`MIN_DWELL_S`), then leaves out
+        its optional movements from the last one back (each with the hold after it); only if the
+        required movements alone do not fit do they speed up to fit.
+
+        Returns:
+            ``(t, displacement, rotation vector)`` keyframes for :class:`~benchmark.world.tasks.motion.Motion`.
+        """
+        way, d, optional = list(self.way), list(self.durations), list(self.optional)
+        window = t1 - t0
+        moves = [not (np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])) for a, b in zip(way[:-1], way[1:])]
+        d = np.asarray(d, float)
+        if d.sum() > window:  # shorten the holds
+            excess = d.sum() - window
+            room = np.where(moves, 0.0, np.maximum(d - MIN_DWELL_S, 0.0))
+            if room.sum() > 0:
+                d = d - room * min(1.0, excess / room.sum())
+        d = list(d)
+        while sum(d) > window + 1e-12 and any(optional):
+            i = len(optional) - 1 - optional[::-1].index(True)  # the last optional segment
+            drop = [i]
+            if i + 1 < len(d) and not moves[i + 1]:
+                drop.append(i + 1)  # and the hold after it
+            for j in reversed(drop):
+                del way[j + 1], d[j], optional[j], moves[j]
+        if sum(d) > window:  # only in an episode too short for the required movements: faster
+            d = [x * window / sum(d) for x in d]
+        times = t0 + np.concatenate([[0.0], np.cumsum(d)])
+        return [(float(t), np.asarray(dd, float), np.asarray(rr, float)) for t, (dd, rr) in zip(times, way)]
