@@ -47,6 +47,17 @@ def test_resume_with_another_spec_is_refused(tmp_path):
         generate(DatasetSpec(seeds=(0, 1)), tmp_path, workers=1, progress=False, build=cheap_build)
 
 
+def test_resume_of_a_dataset_of_another_world_is_refused(tmp_path):
+    import json
+
+    generate(DatasetSpec(seeds=(0,)), tmp_path, workers=1, progress=False, build=cheap_build)
+    header = json.loads((tmp_path / "dataset.json").read_text())
+    header["world"] = "0" * 64  # as if the simulation had changed since
+    (tmp_path / "dataset.json").write_text(json.dumps(header))
+    with pytest.raises(DatasetError, match="another world"):
+        generate(DatasetSpec(seeds=(0,)), tmp_path, workers=1, progress=False, build=cheap_build)
+
+
 def test_ray_without_ray_installed_says_how_to_get_it(tmp_path):
     try:
         import ray  # noqa: F401

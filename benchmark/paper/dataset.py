@@ -24,7 +24,8 @@ paper's measured contact-point error (mean -1.55 mm, std 6.13 mm per axis, white
 
 Layout of a dataset folder::
 
-    dataset.json              spec, sources, format version (a resumed run must match it), and the
+    dataset.json              spec, sources, format version and the world's fingerprint (a resumed
+                              run must match them), and the
                               provenance of the run that made it (``resumed_with``: of later runs)
     episodes/<id>.parquet     one table per episode (one row per kept frame), written atomically
     manifest.parquet          one row per episode (counts, timing, status, SHA-256 of the file's
@@ -401,7 +402,9 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
     if not _Claims(out).others_live():  # no other run is writing here: leftovers are a killed run's
         for tmp in glob.glob(os.path.join(out, ".tmp-*")) + glob.glob(os.path.join(episodes, ".tmp-*")):
             os.unlink(tmp)  # never a complete file
-    header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict())
+    from benchmark.fingerprint import world_fingerprint
+
+    header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict(), world=world_fingerprint())
     path = os.path.join(out, "dataset.json")
     if os.path.exists(path):
         with open(path) as fh:
@@ -414,6 +417,9 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
                 f"{out!r} holds a dataset made with another spec ({old.get('spec')}); "
                 f"use a new folder or the same arguments ({header['spec']})"
             )
+        if old.get("world") != header["world"]:
+            raise DatasetError(f"{out!r} holds a dataset of another world (the simulation, the sensor or their assets "
+                               "changed since it was made): use a new folder")
         now = provenance()
         if now != old.get("provenance") and now not in old.get("resumed_with", []):
             old["resumed_with"] = old.get("resumed_with", []) + [now]
