@@ -274,7 +274,7 @@ def main(argv: list | None = None) -> int:
     path = out / "episode.npz"
     sc = scenario
     print(f"fsv-bench: task {sc.task}, user {sc.user}, grasp {sc.grasp}, mass {sc.mass}, seed {sc.seed}, "
-          f"noise {sc.noise_m} m, {len(run.episode.truth.t)} frames")
+          f"sensor {sc.sensor}, noise {sc.noise_m} m, {len(run.episode.truth.t)} frames")
     for line in run.lines:
         print(line.replace(str(tmp), str(out)))
     print(f"episode: {path}\nsummary: {out / 'summary.json'} ({run.timing_s['total']:.1f} s)")

@@ -18,7 +18,7 @@ WORLD_MODULES = ("episode", "world/grip", "world/hand", "world/living", "camera/
 """``benchmark`` modules (paths without ``.py``) that decide an episode's truth and depth (with
 ``benchmark/world/tasks/``)."""
 
-RESULTS_MODULES = WORLD_MODULES + ("paper/dataset", "world/motion", "paper/table1", "paper/table2", "world/tactile",
+RESULTS_MODULES = WORLD_MODULES + ("world/humanness", "paper/dataset", "world/motion", "paper/table1", "paper/table2", "world/tactile",
                                    "paper/training", "method/spec", "method/run", "method/load", "method/init")
 """``benchmark`` modules that decide the committed results (with ``fsv/`` and the packages of
 :data:`RESULTS_PACKAGES`)."""

@@ -18,10 +18,10 @@ from benchmark.episode import Episode
 
 
 def scenario_block(episode: Episode) -> dict:
-    """The ``scenario`` block: task, user, grasp, mass, noise_m, seed, frames."""
+    """The ``scenario`` block: task, user, grasp, mass, sensor, noise_m, seed, frames, fps."""
     sc = episode.scenario
-    return {"task": sc.task, "user": sc.user, "grasp": sc.grasp, "mass": sc.mass, "noise_m": sc.noise_m,
-            "seed": sc.seed, "frames": int(len(episode.truth.t)), "fps": sc.fps}
+    return {"task": sc.task, "user": sc.user, "grasp": sc.grasp, "mass": sc.mass, "sensor": sc.sensor,
+            "noise_m": sc.noise_m, "seed": sc.seed, "frames": int(len(episode.truth.t)), "fps": sc.fps}
 
 
 def max_slip_m(episode: Episode) -> float:

@@ -170,11 +170,14 @@ def main(argv=None) -> int:
         p.exit(2, f"{p.prog}: error: {e}\n")
     rows = suite_humanness(suite, progress=not args.quiet)
     md = report_markdown(suite, rows)
+    def strict(h):  # nan (no hold, no lifted frame) as null
+        return {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in asdict(h).items()}
+
     doc = {"suite": {"name": suite.name, "version": suite.version},
-           "episodes": [{"scenario": asdict(sc), **asdict(h)} for sc, h in rows], "provenance": provenance()}
+           "episodes": [{"scenario": asdict(sc), **strict(h)} for sc, h in rows], "provenance": provenance()}
     args.out.mkdir(parents=True, exist_ok=True)
     write_text(str(args.out / "humanness.md"), md)
-    write_text(str(args.out / "humanness.json"), json.dumps(doc, indent=1, allow_nan=True) + "\n")
+    write_text(str(args.out / "humanness.json"), json.dumps(doc, indent=1, allow_nan=False) + "\n")
     print(md)
     print(f"written to {args.out}/ (humanness.md, humanness.json)")
     return 0
