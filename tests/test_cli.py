@@ -19,8 +19,8 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)
     assert verdict["method"]["tracker"] == "reference tracker" and f"verdict: {verdict['verdict'].upper()}" in \
         text.replace("verdict: pass", "verdict: PASS")
-    assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "noise_m": 0.01, "seed": 2,
-                                   "frames": 46, "fps": 30.0}
+    assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "sensor": "ds325", "noise_m": 0.01,
+                                   "seed": 2, "frames": 46, "fps": 30.0}
     assert summary["world"]["ne_force_residual_n"] < 0.01
     assert summary["world"]["lift_height_m"] > 0.05
     assert set(summary["timing_s"]) >= {"simulate", "total"}
@@ -41,7 +41,7 @@ def test_a_broken_tracker_fails_the_verdict_with_exit_1_naming_the_gates(tmp_pat
     code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out),
                  "--tracker", "external_stages:FrozenTracker"])
     err = capsys.readouterr().err
-    assert code == 1 and "median box_pos_err_mm <= 1.5" in err and "median contact_recall >= 0.85" in err
+    assert code == 1 and "median box_pos_err_mm <= 2" in err and "median contact_recall >= 0.85" in err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["verdict"]["verdict"] == "fail" and summary["tracking"]["tracker"] == "frozen tracker (a broken example)"
     assert summary["tracking"]["contact_recall"] == 0.0
