@@ -1,5 +1,6 @@
 """fsv-bench eval: suites scored with intervals and a verdict; bad input exits 2, failed gates 1."""
 
+import dataclasses
 import json
 
 import pytest
@@ -141,6 +142,23 @@ def test_a_bad_method_exits_2_before_any_work(tiny, tmp_path, capsys, argv, need
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and needle in err
     assert not (tmp_path / "cache").exists() and not out.exists()
+
+
+def test_a_suite_seen_by_another_sensor_is_its_own_suite(tmp_path, capsys):
+    from benchmark.cli import main
+    from benchmark.suites import get_suite
+
+    smoke = get_suite("smoke")
+    assert get_suite("smoke", "ds325") is smoke  # its own sensor: the suite itself
+    kinect = get_suite("smoke", "kinect-v1")
+    assert kinect.name == "smoke-kinect-v1" and kinect.version == smoke.version and kinect.gates == smoke.gates
+    assert [sc.sensor for sc in kinect.scenarios] == ["kinect-v1"] * len(smoke.scenarios)
+    assert [dataclasses.replace(sc, sensor="ds325") for sc in kinect.scenarios] == list(smoke.scenarios)
+    assert main(["eval", "--suite", "smoke", "--sensor", "sonar", "--out", str(tmp_path / "o"),
+                 "--cache", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert "--sensor 'sonar': no such sensor; accepted: ds325, kinect-v1, ideal" in err and err.count("\n") == 1
+    assert not (tmp_path / "c").exists() and not (tmp_path / "o").exists()
 
 
 def test_the_paper_suites_hold_the_paper_protocols_episodes():

@@ -32,6 +32,7 @@ def test_a_sweep_of_the_initialisation_error_moves_the_tracking_error(tiny, tmp_
     (["--axis", "mass", "--values", "0,x"], "--values '0,x': 'x' is not an integer"),
     (["--axis", "mass", "--values", "0,42"], "mass 42 does not exist"),
     (["--axis", "noise", "--values", "0.01"], "need at least two distinct values"),
+    (["--axis", "sensor", "--values", "ds325,sonar"], "sensor must be one of ds325, kinect-v1, ideal, got 'sonar'"),
 ])
 def test_bad_sweeps_exit_2_before_any_work(tiny, tmp_path, capsys, argv, needle):
     assert main(["sweep", "--suite", "tiny", *argv, "--out", str(tmp_path / "o"), "--cache", str(tmp_path / "c")]) == 2
