@@ -96,7 +96,7 @@ def scene_frames(num: int):
 def main(argv=None) -> dict:
     """Measures and prints renderer speeds; returns them as a dict."""
     from benchmark.camera.render import world_labels
-    from benchmark.camera.sensor import SensorModel
+    from benchmark.camera.sensor import SENSORS, sensor_preset
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=150, help="frames per timed pass (default 150)")
@@ -112,7 +112,7 @@ def main(argv=None) -> dict:
     model = world.model
     data = mujoco.MjData(model)
     ours = DepthRenderer(model, camera, world_labels(world))
-    sensor = SensorModel(noise_m=0.01)
+    sensors = {name: sensor_preset(name, 0.01) for name in SENSORS}
     rng = np.random.default_rng(0)
 
     spec = mujoco.MjSpec.from_string(_model_xml(world))
@@ -130,9 +130,12 @@ def main(argv=None) -> dict:
         d = posed(k)
         ours.render(d.xpos, d.xmat)
 
-    def render_and_sense(k):
-        d = posed(k)
-        sensor.measure(ours.render(d.xpos, d.xmat)[0], camera.K, rng)
+    def render_and_sense(name):
+        def run(k):
+            d = posed(k)
+            sensors[name].measure(ours.render(d.xpos, d.xmat)[0], camera.K, rng)
+
+        return run
 
     def mujoco_depth(k):
         d = posed(k)
@@ -145,7 +148,9 @@ def main(argv=None) -> dict:
         peer.render()
 
     timed = _rates(
-        {"pyrender_depth_labels": render_only, "pyrender_depth_labels_sensor": render_and_sense, "mujoco_depth": mujoco_depth},
+        {"pyrender_depth_labels": render_only,
+         **{f"pyrender_depth_labels_sensor_{name}": render_and_sense(name) for name in SENSORS},
+         "mujoco_depth": mujoco_depth},
         args.frames,
         args.repeats,
     )
@@ -170,14 +175,15 @@ def main(argv=None) -> dict:
     print("                                   best fps  median fps  CPU ms/frame (all threads)")
     for name, text in (
         ("pyrender_depth_labels", "depth + labels                 "),
-        ("pyrender_depth_labels_sensor", "depth + labels + sensor        "),
+        *((f"pyrender_depth_labels_sensor_{n}", f"depth + labels + {n:<14s}") for n in SENSORS),
         ("mujoco_depth", "MuJoCo Renderer depth (peer)   "),
     ):
         print(f"{text}: {rates[name + '_fps']:8.1f}  {rates[name + '_fps_median']:10.1f}  {rates[name + '_cpu_ms']:8.2f}")
     peer_fps = rates["mujoco_depth_fps"]
     print(
         f"ratio ours / MuJoCo (best fps)   : {rates['pyrender_depth_labels_fps'] / peer_fps:7.2f} "
-        f"(with sensor {rates['pyrender_depth_labels_sensor_fps'] / peer_fps:.2f})"
+        "(with a sensor preset: " + ", ".join(
+            f"{n} {rates[f'pyrender_depth_labels_sensor_{n}_fps'] / peer_fps:.2f}" for n in SENSORS) + ")"
     )
     print(
         f"depth agreement with MuJoCo      : median {rates['agreement_median_m'] * 1e6:.2f} um, "
