@@ -266,18 +266,17 @@ class SensorModel:
         rng.standard_normal(dtype=np.float32, out=out)
         fx, fy, cx, cy = _intrinsics(K)
         if self.lateral != "none":
-            offsets = rng.standard_normal((2, *z.shape), dtype=np.float32)
+            rng.standard_normal(dtype=np.float32, out=ws.offsets)
             _pad(z, ws.w, ws.zz)
             _incidence_cos_kernel(z, ws.w, fx, fy, cx, cy, ws.c2)
-            jittered = np.empty_like(z)
-            _lateral_kernel(z, offsets[0], offsets[1], ws.c2, LATERAL_MODELS.index(self.lateral),
-                            np.float32(self.lateral_px), np.float32(self.discontinuity_m), jittered)
-            z = jittered
-        uniform = rng.random(dtype=np.float32, out=np.empty(z.shape, dtype=np.float32)) if self.dropout > 0 else ws.no_out
-        flying = rng.random(dtype=np.float32, out=np.empty(z.shape, dtype=np.float32)) if self.flying_frac > 0 else ws.no_out
+            _lateral_kernel(z, ws.offsets[0], ws.offsets[1], ws.c2, LATERAL_MODELS.index(self.lateral),
+                            np.float32(self.lateral_px), np.float32(self.discontinuity_m), ws.jittered)
+            z = ws.jittered
+        uniform = rng.random(dtype=np.float32, out=ws.uniform) if self.dropout > 0 else ws.no_out
+        flying = rng.random(dtype=np.float32, out=ws.flying) if self.flying_frac > 0 else ws.no_out
         bias = ws.no_out
         if self.multipath_m > 0:
-            bias = np.empty(z.shape, dtype=np.float32)
+            bias = ws.bias
             _multipath_kernel(z, int(self.multipath_window_px), np.float32(self.multipath_m),
                               np.float32(self.multipath_depth_m), bias)
         _pad(z, ws.w, ws.zz)
@@ -370,6 +369,11 @@ class _Workspace:
         self.edge = np.empty((H, W), dtype=bool)  # measurable but for a depth jump
         self.c2 = np.empty((H, W), dtype=np.float32)  # incidence cosine (squared, after the sensor kernel)
         self.zfar = np.empty((H, W), dtype=np.float32)  # deepest 4-neighbour's depth
+        self.offsets = np.empty((2, H, W), dtype=np.float32)  # lateral jitter's normals (rows, columns)
+        self.jittered = np.empty((H, W), dtype=np.float32)  # the depth after the jitter
+        self.uniform = np.empty((H, W), dtype=np.float32)  # dropout's uniforms
+        self.flying = np.empty((H, W), dtype=np.float32)  # flying pixels' uniforms
+        self.bias = np.empty((H, W), dtype=np.float32)  # multipath bias
         self.no_out = np.empty((0, W), dtype=np.float32)  # "no measurement, only the mask"
 
 

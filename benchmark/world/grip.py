@@ -365,7 +365,11 @@ class Human:
                  ctrl_every: int):
         self.world, self.motion, self.phases, self.releases = world, motion, phases, releases
         self.plan = plan = plan_grasp(scenario)
-        self.policy = pol = GripPolicy.for_scenario(scenario, world)
+        grip_rng = scenario.rng("grip")
+        self.living = living = LivingGrip.draw(grip_rng)
+        pol = GripPolicy.for_scenario(scenario, world)  # this trial's: margin and baseline scaled
+        self.policy = pol = replace(pol, safety_margin=pol.safety_margin * living.trial_scale,
+                                    baseline_grip_n=pol.baseline_grip_n * living.trial_scale)
         self.ctrl_every = ctrl_every
         self._jac = np.zeros((3, world.model.nv))
         m = world.model
@@ -397,11 +401,6 @@ class Human:
         # Grip forces at every control tick, object frame. The grip follows the load planned
         # anticipation_s ahead of its own response (an internal model of the grip's lag), so that
         # it leads or matches the load.
-        grip_rng = scenario.rng("grip")
-        living = LivingGrip.draw(grip_rng)
-        pol = replace(pol, safety_margin=pol.safety_margin * living.trial_scale,
-                      baseline_grip_n=pol.baseline_grip_n * living.trial_scale)
-        self.policy, self.living = pol, living
         tk = t[::ctrl_every]
         ta = tk + pol.anticipation_s + pol.response_s
         _, rot_a, _, acc, omega, alpha = motion.evaluate(ta)

@@ -141,8 +141,7 @@ def report_markdown(suite, rows: list) -> str:
         "| grip-load correlation | grip lead [ms] | Newton-Euler residual [N] |",
         "|---|---|---|---|---|---|---|---|",
     ]
-    tasks = sorted({sc.task for sc, _ in rows}, key=lambda t: [sc.task for sc, _ in rows].index(t))
-    for task in tasks:
+    for task in dict.fromkeys(sc.task for sc, _ in rows):  # in the suite's order
         hs = [h for sc, h in rows if sc.task == task]
         lines.append(
             f"| {task} | {len(hs)} | {_span(h.peak_acc for h in hs)} | {_span(h.peak_omega for h in hs)} "

@@ -86,6 +86,7 @@ class Plan:
         self.way = [(np.zeros(3), np.zeros(3))]
         self.durations = []
         self.optional = []
+        self.moves = []
 
     @property
     def pose(self) -> tuple[np.ndarray, np.ndarray]:
@@ -109,6 +110,7 @@ class Plan:
         self.way.append((d1, r1))
         self.durations.append(T)
         self.optional.append(bool(optional))
+        self.moves.append(True)
         return self
 
     def hold(self, seconds: float | None = None) -> "Plan":
@@ -116,6 +118,7 @@ class Plan:
         self.way.append(self.pose)
         self.durations.append(DWELL_S.draw(self.rng) if seconds is None else float(seconds))
         self.optional.append(False)
+        self.moves.append(False)
         return self
 
     def keyframes(self, t0: float, t1: float) -> list:
@@ -127,10 +130,9 @@ class Plan:
         Returns:
             ``(t, displacement, rotation vector)`` keyframes for :class:`~benchmark.world.tasks.motion.Motion`.
         """
-        way, d, optional = list(self.way), list(self.durations), list(self.optional)
+        way, optional, moves = list(self.way), list(self.optional), list(self.moves)
         window = t1 - t0
-        moves = [not (np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])) for a, b in zip(way[:-1], way[1:])]
-        d = np.asarray(d, float)
+        d = np.asarray(self.durations, float)
         if d.sum() > window:  # shorten the holds
             excess = d.sum() - window
             room = np.where(moves, 0.0, np.maximum(d - MIN_DWELL_S, 0.0))

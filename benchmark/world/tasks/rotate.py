@@ -19,7 +19,8 @@ def keyframes(phases: Phases, rng: np.random.Generator) -> list:
     for axis, angle in enumerate(ANGLES_RAD):
         a = angle * (1.0 + 0.1 * rng.uniform(-1, 1))
         e = np.eye(3)[axis]
-        plan.move(up, a * e, optional=True).hold().move(up, -a * e, optional=True).hold().move(up, 0 * e, optional=True).hold()
+        for turn in (a * e, -a * e, np.zeros(3)):
+            plan.move(up, turn, optional=True).hold()
     return plan.keyframes(phases.load_end, phases.move_end)
 
 
