@@ -21,6 +21,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Callable
 
+from benchmark.background import Background
 from benchmark.episode import Episode, save_episode
 from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.report import format_world, scenario_block, world_block, write_json
@@ -44,6 +45,7 @@ class Run:
         tracking: The tracker's output (box poses, hand, contacts), once tracked.
         method_spec: The method the command runs (its options, checked before any work).
         estimate: The method's estimate on the episode (tracking, kinematics, forces).
+        background: Pictures and files the stages start and the command waits for at its end.
     """
 
     args: argparse.Namespace
@@ -56,6 +58,7 @@ class Run:
     tracking: object = None  # fsv.track.tracker.Tracking, once the tracking stage ran
     method_spec: object = None  # benchmark.method.MethodSpec: which method the tracking stage runs
     estimate: object = None  # fsv.method.Estimate, once the tracking stage ran the method
+    background: Background = field(default_factory=Background)
 
 
 @dataclass(frozen=True)
@@ -96,7 +99,8 @@ STAGES: list = [SIMULATE]
 # Render (issue 3): noisy depth video, calibration and labels; depth preview PNG/GIF in DIR.
 from benchmark.camera.render import add_cli_arguments as _render_arguments, run_cli_stage as _render  # noqa: E402
 
-STAGES.append(Stage(name="render", add_arguments=_render_arguments, run=_render))
+RENDER = Stage(name="render", add_arguments=_render_arguments, run=_render)
+STAGES.append(RENDER)
 
 # tracking (issue 6): box and hand from depth alone, contacts; scores and overlay (benchmark/scores/tracking.py).
 from benchmark.scores import tracking as _tracking  # noqa: E402
@@ -250,25 +254,33 @@ def main(argv: list | None = None) -> int:
             t0 = time.perf_counter()
             stage.run(run)
             run.timing_s[stage.name] = time.perf_counter() - t0
-        save_episode(run.episode, tmp / "episode.npz")
+            if stage is RENDER:  # the episode is complete: its archive is written beside the later stages
+                run.background.thread("episode.npz", save_episode, run.episode, tmp / "episode.npz")
+        t0 = time.perf_counter()
+        run.background.wait()
+        run.timing_s["wait_background"] = time.perf_counter() - t0
         run.timing_s["total"] = time.perf_counter() - start
         run.summary["timing_s"] = run.timing_s
         run.summary["provenance"] = provenance()
         write_json(tmp / "summary.json", run.summary)
         swap_folder(tmp, out)
     except (ScenarioError, InputError) as e:
+        run.background.cancel()
         shutil.rmtree(tmp, ignore_errors=True)
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
     except BenchmarkError as e:
+        run.background.cancel()
         shutil.rmtree(tmp, ignore_errors=True)
         print(f"fsv-bench: failed: {e}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
+        run.background.cancel()
         shutil.rmtree(tmp, ignore_errors=True)
         print(f"fsv-bench: interrupted; {out} is as it was before the run", file=sys.stderr)
         return 130
     except BaseException:
+        run.background.cancel()
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     path = out / "episode.npz"

@@ -18,7 +18,7 @@ WORLD_MODULES = ("episode", "world/grip", "world/hand", "world/living", "camera/
 """``benchmark`` modules (paths without ``.py``) that decide an episode's truth and depth (with
 ``benchmark/world/tasks/``)."""
 
-RESULTS_MODULES = WORLD_MODULES + ("world/humanness", "paper/dataset", "world/motion", "paper/table1", "paper/table2", "world/tactile",
+RESULTS_MODULES = WORLD_MODULES + ("world/humanness", "paper/dataset", "paper/samples", "world/motion", "paper/table1", "paper/table2", "world/tactile",
                                    "paper/training", "method/spec", "method/run", "method/load", "method/init")
 """``benchmark`` modules that decide the committed results (with ``fsv/`` and the packages of
 :data:`RESULTS_PACKAGES`)."""
@@ -41,7 +41,7 @@ def source_fingerprint(root: pathlib.Path, python_files: list, data_files: list)
 
 def _data_files(root: pathlib.Path, folders) -> list:
     return sorted(p for d in folders if (root / d).is_dir() for p in (root / d).iterdir()
-                  if p.is_file() and p.suffix in (".xml", ".yaml", ".json", ".pt") and not p.name.startswith("."))
+                  if p.is_file() and p.suffix in (".xml", ".yaml", ".json", ".npz") and not p.name.startswith("."))
 
 
 def world_fingerprint(root: pathlib.Path = ROOT) -> str:
@@ -59,7 +59,7 @@ def results_fingerprint(root: pathlib.Path = ROOT) -> str:
     for pkg in RESULTS_PACKAGES:
         files += sorted((root / "benchmark" / pkg).glob("*.py"))
     files += [root / "benchmark" / f"{m}.py" for m in sorted(RESULTS_MODULES)]
-    data = [p for p in _data_files(root, ("sim_assets", "fsv/data")) if p.suffix != ".pt"]
+    data = [p for p in _data_files(root, ("sim_assets", "fsv/data")) if p.suffix != ".npz"]
     return source_fingerprint(root, files, data)
 
 

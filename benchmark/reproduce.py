@@ -38,6 +38,8 @@ import time
 from dataclasses import dataclass
 from typing import Callable
 
+import numpy as np
+
 from benchmark.atomic import swap_folder, write_text
 from benchmark.errors import BenchmarkError
 from benchmark.fingerprint import results_fingerprint
@@ -151,10 +153,11 @@ def _compare_model(new: pathlib.Path, old: pathlib.Path) -> list[str]:
     sa, sb = a.state(), b.state()
     for key in ("net_l2", "net_decomp"):
         for i, (x, y) in enumerate(zip(sa[key], sb[key])):
-            for p in x:
-                d = float((x[p] - y[p]).abs().max())
-                if d > REL_TOL:
-                    diffs.append(f"{key}[{i}].{p}: weights differ by up to {d:.2e}")
+            for j, (u, v) in enumerate(zip(x, y)):
+                for p in ("weight", "bias"):
+                    d = float(np.max(np.abs(u[p] - v[p]))) if u[p].shape == v[p].shape else float("inf")
+                    if d > REL_TOL:
+                        diffs.append(f"{key}[{i}][{j}].{p}: weights differ by up to {d:.2e}")
     return diffs
 
 
@@ -166,7 +169,7 @@ def _table2(out_sub: str, data: str, extra: tuple = ()) -> Result:
 
 
 RESULTS = (
-    Result(name="shipped-model", path="fsv/data/internal_forces.pt", datasets=("default",),
+    Result(name="shipped-model", path="fsv/data/internal_forces.npz", datasets=("default",),
            commands=(("fsv-bench", "train", "--data", "{data}/default", "--out", "{out}", "--folds", "3"),),
            compare=_compare_model),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
@@ -291,7 +294,7 @@ def run(args: argparse.Namespace) -> list[str]:
         for r in results:
             t0 = time.perf_counter()
             committed = ROOT / r.path
-            new = pathlib.Path(tmp) / (r.name + (".pt" if committed.suffix == ".pt" else ""))
+            new = pathlib.Path(tmp) / (r.name + committed.suffix)
             make(r, data, new, workers=args.workers)
             diffs = r.compare(new, committed) if committed.exists() else [f"{r.path}: not committed yet"]
             differences += [f"{r.name}: {d}" for d in diffs]

@@ -31,13 +31,14 @@ Forces. :func:`learned_forces` chains the features, the networks and the reconst
 (eq. 14, :func:`fsv.forces.reconstruct_forces`): full contact forces that explain the motion and
 whose internal normal components follow the predictions.
 
-Files. :meth:`InternalForceModel.save` writes one ``torch.save`` archive (weights, input and
-target normalisation, config, finger names, free-form metadata with the provenance of the
-environment that first wrote it, :func:`fsv.provenance.provenance`) atomically, with a SHA-256 of
-all of that (:func:`content_sha256`); :func:`load` reads it back with ``weights_only=True``,
-recomputes the digest and refuses the file if it differs, and predicts bit-identically. The digest
-is needed: torch's zip reader does not check the archive's CRCs, so flipped bytes in the weights
-load without an error.
+Files. :meth:`InternalForceModel.save` writes one NumPy ``.npz`` archive (weights and biases of
+every layer, input and target normalisation; a JSON header with the config, finger names and
+free-form metadata with the provenance of the environment that first wrote it,
+:func:`fsv.provenance.provenance`) atomically, with a SHA-256 of all of that
+(:func:`content_sha256`); :func:`load` reads it back without pickles, recomputes the digest and
+refuses the file if it differs. Torch is needed to train, not to load or predict: the forward
+pass is a few NumPy contractions (no BLAS, so the same bits on every BLAS kernel), which keeps the
+~1.4 s import of torch out of every command that only applies a model.
 """
 
 from __future__ import annotations
@@ -46,8 +47,9 @@ import os
 import tempfile
 from dataclasses import asdict, dataclass, field
 
+import json
+
 import numpy as np
-import torch
 
 from fsv.digest import tree_sha256
 from fsv.errors import InputError, one_line
@@ -57,7 +59,7 @@ from fsv.models import ObjectModel
 from fsv.types import Contacts, Kinematics
 
 FORMAT = "fsv-internal-forces"
-VERSION = 3  # versions 1 and 2 carried no digest and are not read
+VERSION = 4  # versions 1 and 2 carried no digest; 3 was a torch archive. None of them is read
 
 
 @dataclass(frozen=True)
@@ -165,7 +167,10 @@ def _targets(internal: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.n
     return l2, shares
 
 
-def _mlp(n_in: int, hidden: tuple, n_out: int, gen: torch.Generator) -> torch.nn.Sequential:
+def _mlp(n_in: int, hidden: tuple, n_out: int, gen):
+    """A torch MLP (sigmoid hidden layers, linear output) with weights drawn from ``gen``."""
+    import torch
+
     layers, prev = [], n_in
     for h in hidden:
         layers += [torch.nn.utils.skip_init(torch.nn.Linear, prev, h, dtype=torch.float64), torch.nn.Sigmoid()]
@@ -180,7 +185,9 @@ def _mlp(n_in: int, hidden: tuple, n_out: int, gen: torch.Generator) -> torch.nn
     return torch.nn.Sequential(*layers)
 
 
-def _rprop(net: torch.nn.Module, x: torch.Tensor, loss_fn, config: LearnConfig, on_epoch=None) -> float:
+def _rprop(net, x, loss_fn, config: LearnConfig, on_epoch=None) -> float:
+    import torch
+
     opt = torch.optim.Rprop(net.parameters(), lr=config.lr, etas=config.etas, step_sizes=config.step_sizes, foreach=False)
     loss = None
     for _ in range(config.epochs):
@@ -194,6 +201,33 @@ def _rprop(net: torch.nn.Module, x: torch.Tensor, loss_fn, config: LearnConfig, 
         return float(loss_fn(net(x)))
 
 
+def _layers(net) -> list:
+    """The (weight (out, in), bias (out,)) pairs of a torch MLP's linear layers, as float64 arrays."""
+    import torch
+
+    return [(m.weight.detach().numpy().copy(), m.bias.detach().numpy().copy())
+            for m in net if isinstance(m, torch.nn.Linear)]
+
+
+def forward(layers: list, z: np.ndarray) -> np.ndarray:
+    """An MLP's output: logistic hidden layers, linear output layer.
+
+    Args:
+        layers: (weight (out, in), bias (out,)) per layer.
+        z: Standardised inputs, shape (N, in).
+
+    Returns:
+        Shape (N, out of the last layer).
+    """
+    h = z
+    for i, (W, b) in enumerate(layers):
+        h = np.einsum("ni,oi->no", h, W) + b
+        if i < len(layers) - 1:
+            with np.errstate(over="ignore"):  # exp(-h) = inf far below 0: the logistic is 0 there
+                h = 1.0 / (1.0 + np.exp(-h))
+    return h
+
+
 class InternalForceModel:
     """The trained pair of networks with their normalisation.
 
@@ -202,7 +236,8 @@ class InternalForceModel:
         finger_names: The K finger slots, thumb first.
         x_mean, x_std: Input standardisation, shape (2 + 3K,).
         l2_mean, l2_std: Standardisation of ANN_L2's target, [N].
-        net_l2, net_decomp: The networks (float64), one per member (lists of ``config.members``).
+        net_l2, net_decomp: The networks, one per member (lists of ``config.members``); each is its
+            list of (weight (out, in), bias (out,)) float64 layers (see :func:`forward`).
         metadata: Free-form description (dataset, command, losses); JSON-like values only.
     """
 
@@ -213,8 +248,8 @@ class InternalForceModel:
         self.x_std = np.asarray(x_std, dtype=np.float64)
         self.l2_mean = float(l2_mean)
         self.l2_std = float(l2_std)
-        self.net_l2 = [n.eval() for n in net_l2]
-        self.net_decomp = [n.eval() for n in net_decomp]
+        self.net_l2 = [[(np.asarray(W, np.float64), np.asarray(b, np.float64)) for W, b in net] for net in net_l2]
+        self.net_decomp = [[(np.asarray(W, np.float64), np.asarray(b, np.float64)) for W, b in net] for net in net_decomp]
         if len(self.net_l2) != len(self.net_decomp) or not self.net_l2:
             raise InputError(f"a model needs as many ANN_L2 as ANN_decomp networks (>= 1), got {len(self.net_l2)}, "
                              f"{len(self.net_decomp)}")
@@ -242,14 +277,13 @@ class InternalForceModel:
         K = self.num_fingers
         if x.ndim != 2 or x.shape[1] != 2 + 3 * K or a.shape != (x.shape[0], K):
             raise InputError(f"predict expects x of shape (N, {2 + 3 * K}) and active of shape (N, {K}), got {x.shape}, {a.shape}")
-        z = torch.from_numpy((x - self.x_mean) / self.x_std)
-        with torch.no_grad():
-            l2 = np.mean([net(z)[:, 0].numpy() for net in self.net_l2], axis=0) * self.l2_std + self.l2_mean
-            s = np.zeros((x.shape[0], K))
-            for net in self.net_decomp:
-                out = np.where(a, net(z).numpy(), 0.0)
-                n = np.linalg.norm(out, axis=1)
-                s += out / np.where(n > 0, n, 1.0)[:, None]
+        z = (x - self.x_mean) / self.x_std
+        l2 = np.mean([forward(net, z)[:, 0] for net in self.net_l2], axis=0) * self.l2_std + self.l2_mean
+        s = np.zeros((x.shape[0], K))
+        for net in self.net_decomp:
+            out = np.where(a, forward(net, z), 0.0)
+            n = np.linalg.norm(out, axis=1)
+            s += out / np.where(n > 0, n, 1.0)[:, None]
         norm = np.linalg.norm(s, axis=1)
         s = s / np.where(norm > 0, norm, 1.0)[:, None]
         l2 = np.maximum(l2, 0.0)
@@ -277,12 +311,12 @@ class InternalForceModel:
             "version": VERSION,
             "config": asdict(self.config),
             "finger_names": list(self.finger_names),
-            "x_mean": torch.from_numpy(self.x_mean.copy()),
-            "x_std": torch.from_numpy(self.x_std.copy()),
+            "x_mean": self.x_mean.copy(),
+            "x_std": self.x_std.copy(),
             "l2_mean": self.l2_mean,
             "l2_std": self.l2_std,
-            "net_l2": [n.state_dict() for n in self.net_l2],
-            "net_decomp": [n.state_dict() for n in self.net_decomp],
+            "net_l2": [[{"weight": W.copy(), "bias": b.copy()} for W, b in net] for net in self.net_l2],
+            "net_decomp": [[{"weight": W.copy(), "bias": b.copy()} for W, b in net] for net in self.net_decomp],
             "metadata": metadata,
         }
         st["sha256"] = content_sha256(st)
@@ -293,10 +327,10 @@ class InternalForceModel:
         path = os.fspath(path)
         folder = os.path.dirname(os.path.abspath(path))
         os.makedirs(folder, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-", suffix=".pt")
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-", suffix=".npz")
         try:
             with os.fdopen(fd, "wb") as fh:
-                torch.save(self.state(), fh)
+                np.savez(fh, **_to_arrays(self.state()))
                 fh.flush()
                 os.fsync(fh.fileno())
             os.chmod(tmp, 0o644)  # mkstemp makes it private; a model is shared like any data file
@@ -309,19 +343,44 @@ class InternalForceModel:
 
 def content_sha256(state: dict) -> str:
     """SHA-256 of a model file's content: every entry of ``state`` but ``sha256`` (format, config,
-    finger names, normalisation, every weight tensor's dtype, shape and bytes, metadata), in a
+    finger names, normalisation, every weight array's dtype, shape and bytes, metadata), in a
     canonical order (:func:`fsv.digest.tree_sha256`)."""
+    return tree_sha256({k: v for k, v in state.items() if k != "sha256"})
 
-    def plain(obj):
-        if isinstance(obj, torch.Tensor):
-            return obj.detach().cpu().contiguous().numpy()
-        if isinstance(obj, dict):
-            return {k: plain(v) for k, v in obj.items()}
-        if isinstance(obj, (list, tuple)):
-            return [plain(v) for v in obj]
-        return obj
 
-    return tree_sha256({k: plain(v) for k, v in state.items() if k != "sha256"})
+_NETS = ("net_l2", "net_decomp")
+
+
+def _to_arrays(state: dict) -> dict:
+    """The ``.npz`` members of a state: its arrays by name, and the rest as a JSON ``header``."""
+    arrays = {"x_mean": state["x_mean"], "x_std": state["x_std"]}
+    header = {k: v for k, v in state.items() if k not in ("x_mean", "x_std", *_NETS)}
+    header["layers"] = {}
+    for key in _NETS:
+        header["layers"][key] = [len(net) for net in state[key]]
+        for m, net in enumerate(state[key]):
+            for i, layer in enumerate(net):
+                arrays[f"{key}.{m}.{i}.weight"] = layer["weight"]
+                arrays[f"{key}.{m}.{i}.bias"] = layer["bias"]
+    arrays["header"] = np.array(json.dumps(header, allow_nan=False))
+    return arrays
+
+
+def _from_arrays(npz) -> dict:
+    """The state of a model file's ``.npz`` members (the inverse of :func:`_to_arrays`)."""
+    state = json.loads(str(npz["header"][()]))
+    layers = state.pop("layers")
+    state["x_mean"], state["x_std"] = npz["x_mean"], npz["x_std"]
+    for key in _NETS:
+        state[key] = [[{"weight": npz[f"{key}.{m}.{i}.weight"], "bias": npz[f"{key}.{m}.{i}.bias"]} for i in range(n)]
+                      for m, n in enumerate(layers[key])]
+    return state
+
+
+def read_state(path) -> dict:
+    """The raw content of a model file (what :meth:`InternalForceModel.state` wrote), unchecked."""
+    with np.load(path, allow_pickle=False) as npz:
+        return _from_arrays(npz)
 
 
 def load(path) -> InternalForceModel:
@@ -336,14 +395,14 @@ def load(path) -> InternalForceModel:
     if not os.path.isfile(path):
         raise InputError(f"no internal-force model at {path!r}")
     try:
-        st = torch.load(path, map_location="cpu", weights_only=True)
+        st = read_state(path)
     except Exception as e:  # a truncated, corrupt or foreign file: report it as bad input
         raise InputError(f"{path!r} is not a readable internal-force model: {one_line(e)}") from e
     if not isinstance(st, dict) or st.get("format") != FORMAT:
         raise InputError(f"{path!r} is not an {FORMAT} file")
     if st.get("version") != VERSION:
         raise InputError(f"{path!r} is an {FORMAT} file of version {st.get('version')!r}; this fsv reads version "
-                         f"{VERSION} (files of versions 1 and 2 carry no digest: train the model again)")
+                         f"{VERSION} (train the model again)")
     try:
         digest = content_sha256(st)
     except InputError as e:
@@ -354,18 +413,16 @@ def load(path) -> InternalForceModel:
     try:
         config = LearnConfig(**dict(st["config"]))
         K = len(st["finger_names"])
-        gen = torch.Generator().manual_seed(0)
-        net_l2, net_decomp = [], []
-        for a, b in zip(st["net_l2"], st["net_decomp"]):
-            net_l2.append(_mlp(2 + 3 * K, config.hidden_l2, 1, gen))
-            net_decomp.append(_mlp(2 + 3 * K, config.hidden_decomp, K, gen))
-            net_l2[-1].load_state_dict(a)
-            net_decomp[-1].load_state_dict(b)
-        return InternalForceModel(
-            config, st["finger_names"], st["x_mean"].numpy(), st["x_std"].numpy(), st["l2_mean"], st["l2_std"],
-            net_l2, net_decomp, st["metadata"],
-        )
-    except (KeyError, TypeError, AttributeError, RuntimeError, InputError) as e:
+        nets = {key: [[(layer["weight"], layer["bias"]) for layer in net] for net in st[key]] for key in _NETS}
+        for key, hidden, n_out in (("net_l2", config.hidden_l2, 1), ("net_decomp", config.hidden_decomp, K)):
+            sizes = [2 + 3 * K, *hidden, n_out]
+            for net in nets[key]:
+                if [W.shape for W, _ in net] != list(zip(sizes[1:], sizes[:-1])) or \
+                        [b.shape for _, b in net] != [(n,) for n in sizes[1:]]:
+                    raise InputError(f"{key} layers do not have the config's sizes {sizes}")
+        return InternalForceModel(config, st["finger_names"], st["x_mean"], st["x_std"], st["l2_mean"], st["l2_std"],
+                                  nets["net_l2"], nets["net_decomp"], st["metadata"])
+    except (KeyError, TypeError, AttributeError, ValueError, InputError) as e:
         raise InputError(f"{path!r} has inconsistent internal-force model data: {one_line(e)}") from e
 
 
@@ -395,6 +452,8 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
     x_std = np.where(x_std > 1e-12, x_std, 1.0)
     l2, shares = _targets(data.internal, data.active)
     l2_mean, l2_std = float(l2.mean()), float(l2.std()) if l2.std() > 1e-12 else 1.0
+    import torch
+
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
@@ -414,7 +473,8 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
         torch.set_num_threads(threads)
     meta = dict(metadata or {})
     meta.update(samples=len(data), train_mse_l2_std=float(np.mean(loss_l2)), train_mse_shares=float(np.mean(loss_dec)))
-    return InternalForceModel(config, names, x_mean, x_std, l2_mean, l2_std, net_l2, net_decomp, meta)
+    return InternalForceModel(config, names, x_mean, x_std, l2_mean, l2_std, [_layers(n) for n in net_l2],
+                              [_layers(n) for n in net_decomp], meta)
 
 
 def relative_errors_pct(predicted: np.ndarray, truth: np.ndarray, active: np.ndarray, min_force_n: float = 1.0) -> np.ndarray:
@@ -521,8 +581,8 @@ def learned_forces(
 
 
 def default_model() -> InternalForceModel:
-    """The small model shipped with the package (``fsv/data/internal_forces.pt``); see docs/data.md
+    """The small model shipped with the package (``fsv/data/internal_forces.npz``); see docs/data.md
     for the command that trained it and the data it was trained on."""
     from importlib.resources import files
 
-    return load(files("fsv").joinpath("data", "internal_forces.pt"))
+    return load(files("fsv").joinpath("data", "internal_forces.npz"))

@@ -50,7 +50,7 @@ def test_a_broken_tracker_fails_the_verdict_with_exit_1_naming_the_gates(tmp_pat
 @pytest.mark.parametrize("argv, needle", [
     (["--tracker", "external_stages:Nope"], "external_stages has no attribute 'Nope'"),
     (["--kinematics", "central", "--differentiator", "gaussian"], "--kinematics central and --differentiator gaussian"),
-    (["--internal-model", "missing.pt"], "--internal-model missing.pt: no internal-force model"),
+    (["--internal-model", "missing.npz"], "--internal-model missing.npz: no internal-force model"),
     (["--task", "juggle"], "'juggle'; accepted: lift"),
     (["--user", "9"], "user 9 does not exist; accepted: 0 ("),
     (["--grasp", "-1"], "grasp must be a non-negative integer, got -1"),

@@ -51,10 +51,10 @@ def test_training_is_deterministic_and_leaves_global_rng_alone():
     state = torch.random.get_rng_state()
     a, b = train(data, cfg), train(data, cfg)
     assert torch.equal(state, torch.random.get_rng_state())
-    for pa, pb in zip(a.state()["net_decomp"][0].values(), b.state()["net_decomp"][0].values()):
-        assert torch.equal(pa, pb)
+    for (wa, ba), (wb, bb) in zip(a.net_decomp[0], b.net_decomp[0]):
+        assert wa.tobytes() == wb.tobytes() and ba.tobytes() == bb.tobytes()
     c = train(data, LearnConfig(epochs=50, seed=6))
-    assert not torch.equal(a.state()["net_l2"][0]["0.weight"], c.state()["net_l2"][0]["0.weight"])
+    assert not np.array_equal(a.net_l2[0][0][0], c.net_l2[0][0][0])
 
 
 def test_members_average_their_predictions_and_round_trip(tmp_path):
@@ -65,7 +65,7 @@ def test_members_average_their_predictions_and_round_trip(tmp_path):
     l2_two, s_two, _ = two.predict(test.x, test.active)
     l2_one, s_one, _ = one.predict(test.x, test.active)
     # the first member is the single-pair model (same generator, drawn first) ...
-    np.testing.assert_array_equal(two.state()["net_l2"][0]["0.weight"].numpy(), one.state()["net_l2"][0]["0.weight"].numpy())
+    np.testing.assert_array_equal(two.state()["net_l2"][0][0]["weight"], one.state()["net_l2"][0][0]["weight"])
     from fsv.learn import InternalForceModel
 
     alone = [InternalForceModel(two.config, two.finger_names, two.x_mean, two.x_std, two.l2_mean, two.l2_std, [a], [d])
@@ -76,13 +76,13 @@ def test_members_average_their_predictions_and_round_trip(tmp_path):
     np.testing.assert_allclose(l2_two, (l2s[0] + l2s[1]) / 2, rtol=1e-12)
     shares = sum(m.predict(test.x, test.active)[1] for m in alone)
     np.testing.assert_allclose(s_two, shares / np.linalg.norm(shares, axis=1, keepdims=True), rtol=1e-12)
-    two.save(tmp_path / "two.pt")
-    for u, v in zip(two.predict(test.x, test.active), load(tmp_path / "two.pt").predict(test.x, test.active)):
+    two.save(tmp_path / "two.npz")
+    for u, v in zip(two.predict(test.x, test.active), load(tmp_path / "two.npz").predict(test.x, test.active)):
         np.testing.assert_array_equal(u, v)
 
 
 def test_save_load_round_trip_is_bit_exact(model, tmp_path):
-    path = tmp_path / "m.pt"
+    path = tmp_path / "m.npz"
     model.metadata["dataset"] = "synthetic"
     model.save(path)
     back = load(path)
@@ -91,16 +91,16 @@ def test_save_load_round_trip_is_bit_exact(model, tmp_path):
         np.testing.assert_array_equal(u, v)
     assert back.finger_names == ("thumb", "index", "middle", "ring")
     assert back.metadata["dataset"] == "synthetic" and back.config == model.config
-    assert [p.name for p in tmp_path.iterdir()] == ["m.pt"]  # no temporary left behind
+    assert [p.name for p in tmp_path.iterdir()] == ["m.npz"]  # no temporary left behind
 
 
 def test_load_rejects_foreign_files(tmp_path):
-    bad = tmp_path / "x.pt"
+    bad = tmp_path / "x.npz"
     bad.write_bytes(b"not a model")
     with pytest.raises(InputError, match="not a readable"):
         load(bad)
     with pytest.raises(InputError, match="no internal-force model"):
-        load(tmp_path / "missing.pt")
+        load(tmp_path / "missing.npz")
 
 
 def test_cross_validation_folds_hold_out_whole_groups():
@@ -165,7 +165,7 @@ def test_learned_forces_explain_the_motion_and_follow_the_predictions():
 @pytest.fixture(scope="module")
 def small_file(tmp_path_factory):
     m = train(synthetic(200, 4), LearnConfig(epochs=20, seed=3, members=2), finger_names=("thumb", "index", "middle", "ring"))
-    path = tmp_path_factory.mktemp("model") / "small.pt"
+    path = tmp_path_factory.mktemp("model") / "small.npz"
     m.save(path)
     return path
 
@@ -178,90 +178,114 @@ def _flipped(src, dest, offset, n):
     return dest
 
 
-def _largest_tensor_offset(path):
+def _largest_array_offset(path):
     import zipfile
 
     with zipfile.ZipFile(path) as z:
-        info = max((i for i in z.infolist() if "/data/" in i.filename), key=lambda i: i.file_size)
+        info = max((i for i in z.infolist() if i.filename.startswith("net_")), key=lambda i: i.file_size)
         header = 30 + len(info.filename.encode()) + len(info.extra)  # local header: fixed part, name, extra
         return info.header_offset + header + info.file_size // 2
 
 
-@pytest.mark.parametrize("where", ["middle", "tensor", "pickle"])
+@pytest.mark.parametrize("where", ["middle", "weights", "header"])
 def test_flipped_bytes_are_refused_with_the_files_name(small_file, tmp_path, where):
     """Flips in what is loaded are refused naming the file. The middle of the file may fall on zip
     padding or a header field nothing reads (the file's length varies with its provenance): then the
     file must load to exactly the original model."""
-    offset = {"middle": small_file.stat().st_size // 2, "tensor": _largest_tensor_offset(small_file), "pickle": 300}[where]
-    bad = _flipped(small_file, tmp_path / f"flipped-{where}.pt", offset, 32)
+    offset = {"middle": small_file.stat().st_size // 2, "weights": _largest_array_offset(small_file), "header": 300}[where]
+    bad = _flipped(small_file, tmp_path / f"flipped-{where}.npz", offset, 32)
     if where == "middle":
         try:
             model = load(bad)
         except InputError as e:
-            assert re.search(r"flipped-middle\.pt' (is corrupt|is not a readable)", str(e)), e
+            assert re.search(r"flipped-middle\.npz' (is corrupt|is not a readable)", str(e)), e
         else:
             assert _same_state(model.state(), load(small_file).state())
         return
-    with pytest.raises(InputError, match=r"flipped-%s\.pt' (is corrupt|is not a readable)" % where):
+    with pytest.raises(InputError, match=r"flipped-%s\.npz' (is corrupt|is not a readable)" % where):
         load(bad)
 
 
 def _same_state(a, b) -> bool:
-    import torch
-
     if isinstance(a, dict):
         return a.keys() == b.keys() and all(_same_state(a[k], b[k]) for k in a)
     if isinstance(a, (list, tuple)):
         return len(a) == len(b) and all(_same_state(x, y) for x, y in zip(a, b))
-    if isinstance(a, torch.Tensor):
-        return torch.equal(a, b)
+    if isinstance(a, np.ndarray):
+        return a.dtype == b.dtype and np.array_equal(a, b)
     return a == b
 
 
-def test_torch_alone_does_not_see_flipped_weights_but_the_digest_does(small_file, tmp_path):
-    """torch's zip reader does not check CRCs: the digest is what refuses the file."""
-    import torch
+def _rewrite(state, path):
+    """Writes a model file's state as it is (a consistent zip, whatever the digest says)."""
+    from fsv.learn import _to_arrays
 
-    bad = _flipped(small_file, tmp_path / "w.pt", _largest_tensor_offset(small_file), 4)
-    good, flipped = (torch.load(p, weights_only=True) for p in (small_file, bad))
-    changed = [k for k in good["net_decomp"][0] if not torch.equal(good["net_decomp"][0][k], flipped["net_decomp"][0][k])]
-    changed += [k for k in good["net_decomp"][1] if not torch.equal(good["net_decomp"][1][k], flipped["net_decomp"][1][k])]
-    assert changed and flipped["sha256"] == good["sha256"]  # weights differ, the file still loads in torch
-    with pytest.raises(InputError, match=r"'.*w\.pt' is corrupt: its content has SHA-256"):
-        load(bad)
+    with open(path, "wb") as fh:
+        np.savez(fh, **_to_arrays(state))
+    return path
 
 
 def test_an_edited_weight_or_metadata_with_the_old_digest_is_refused(small_file, tmp_path):
-    import torch
+    """The zip's CRCs only see damaged bytes; the digest also sees a file rewritten with other content."""
+    from fsv.learn import content_sha256, read_state
 
-    from fsv.learn import content_sha256
-
-    st = torch.load(small_file, weights_only=True)
+    st = read_state(small_file)
     assert st["sha256"] == content_sha256(st) and len(st["sha256"]) == 64
-    st["net_l2"][1]["0.bias"][0] += 1e-12
-    torch.save(st, tmp_path / "edited.pt")
-    with pytest.raises(InputError, match=r"edited\.pt' is corrupt"):
-        load(tmp_path / "edited.pt")
-    st = torch.load(small_file, weights_only=True)
+    st["net_l2"][1][0]["bias"][0] += 1e-12
+    with pytest.raises(InputError, match=r"edited\.npz' is corrupt"):
+        load(_rewrite(st, tmp_path / "edited.npz"))
+    st = read_state(small_file)
     st["metadata"]["samples"] = 201
-    torch.save(st, tmp_path / "meta.pt")
-    with pytest.raises(InputError, match=r"meta\.pt' is corrupt"):
-        load(tmp_path / "meta.pt")
+    with pytest.raises(InputError, match=r"meta\.npz' is corrupt"):
+        load(_rewrite(st, tmp_path / "meta.npz"))
+    st = read_state(small_file)
+    st["net_decomp"][0][0]["weight"] = st["net_decomp"][0][0]["weight"][:, :-1].copy()
+    st["sha256"] = content_sha256(st)
+    with pytest.raises(InputError, match=r"shape\.npz' has inconsistent internal-force model data: net_decomp layers"):
+        load(_rewrite(st, tmp_path / "shape.npz"))
 
 
-def test_files_without_a_digest_are_not_read(small_file, tmp_path):
+def test_files_of_other_versions_or_without_a_digest_are_not_read(small_file, tmp_path):
+    from fsv.learn import read_state
+
+    st = read_state(small_file)
+    st["version"] = 3
+    with pytest.raises(InputError, match=r"v3\.npz' is an fsv-internal-forces file of version 3; this fsv reads version 4"):
+        load(_rewrite(st, tmp_path / "v3.npz"))
+    st["version"] = 4
+    del st["sha256"]
+    with pytest.raises(InputError, match=r"nodigest\.npz' is corrupt"):
+        load(_rewrite(st, tmp_path / "nodigest.npz"))
+
+
+def test_loading_and_predicting_do_not_import_torch(small_file):
+    """A model is applied with NumPy alone: torch (a ~1.4 s import) is needed only to train."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np; from fsv.learn import load; m = load(sys.argv[1]); "
+            "m.predict(np.zeros((3, 14)), np.ones((3, 4), bool)); print('torch' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code, str(small_file)], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"
+
+
+def test_the_forward_pass_equals_torchs(small_file):
+    """fsv.learn.forward on the stored layers equals the torch network they came from."""
     import torch
 
-    st = torch.load(small_file, weights_only=True)
-    del st["sha256"]
-    st["version"] = 2
-    torch.save(st, tmp_path / "v2.pt")
-    with pytest.raises(InputError, match=r"v2\.pt' is an fsv-internal-forces file of version 2; this fsv reads version 3"):
-        load(tmp_path / "v2.pt")
-    st["version"] = 3
-    torch.save(st, tmp_path / "nodigest.pt")
-    with pytest.raises(InputError, match=r"nodigest\.pt' is corrupt"):
-        load(tmp_path / "nodigest.pt")
+    from fsv.learn import LearnConfig, _mlp, forward
+
+    m = load(small_file)
+    z = np.random.default_rng(0).normal(size=(50, 14))
+    for net, hidden, n_out in ((m.net_l2[1], m.config.hidden_l2, 1), (m.net_decomp[0], m.config.hidden_decomp, 4)):
+        t = _mlp(14, hidden, n_out, torch.Generator().manual_seed(0))
+        with torch.no_grad():
+            for lin, (W, b) in zip([x for x in t if isinstance(x, torch.nn.Linear)], net):
+                lin.weight.copy_(torch.from_numpy(W))
+                lin.bias.copy_(torch.from_numpy(b))
+            ref = t(torch.from_numpy(z)).numpy()
+        np.testing.assert_allclose(forward(net, z), ref, rtol=1e-12, atol=1e-12)
+    assert isinstance(m.config, LearnConfig)
 
 
 def test_model_files_record_their_provenance_and_keep_it_when_saved_again(small_file, tmp_path):
@@ -271,29 +295,27 @@ def test_model_files_record_their_provenance_and_keep_it_when_saved_again(small_
     assert m.metadata["provenance"]["fsv_bench"] == provenance()["fsv_bench"]
     assert m.metadata["provenance"]["dependencies"]["torch"] == provenance()["dependencies"]["torch"]
     m.metadata["provenance"]["python"]["version"] = "0.0.0"  # as if written elsewhere
-    m.save(tmp_path / "again.pt")
-    assert load(tmp_path / "again.pt").metadata["provenance"]["python"]["version"] == "0.0.0"
+    m.save(tmp_path / "again.npz")
+    assert load(tmp_path / "again.npz").metadata["provenance"]["python"]["version"] == "0.0.0"
 
 
 def test_the_shipped_model_carries_a_verified_digest():
-    import torch
     from importlib.resources import files
 
-    from fsv.learn import VERSION, content_sha256, default_model
+    from fsv.learn import VERSION, content_sha256, default_model, read_state
 
-    path = files("fsv").joinpath("data", "internal_forces.pt")
-    st = torch.load(path, weights_only=True)
+    st = read_state(files("fsv").joinpath("data", "internal_forces.npz"))
     assert st["version"] == VERSION and st["sha256"] == content_sha256(st)
     m = default_model()
     assert m.num_fingers == 5 and "provenance" in m.metadata
 
 
-def test_a_torch_error_is_reported_on_one_line(small_file, tmp_path):
-    bad = tmp_path / "cut.pt"
+def test_a_truncated_file_is_reported_on_one_line(small_file, tmp_path):
+    bad = tmp_path / "cut.npz"
     bad.write_bytes(small_file.read_bytes()[:5000])
     with pytest.raises(InputError) as e:
         load(bad)
-    assert "\n" not in str(e.value) and "cut.pt' is not a readable internal-force model" in str(e.value)
+    assert "\n" not in str(e.value) and "cut.npz' is not a readable internal-force model" in str(e.value)
 
 
 def test_progress_is_reported_once_per_epoch_of_every_network():

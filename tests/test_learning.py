@@ -9,7 +9,7 @@ from fsv.learn import default_model, learned_forces
 def test_shipped_model_was_trained_by_the_documented_command():
     model = default_model()
     assert model.finger_names == ("thumb", "index", "middle", "ring", "little")
-    assert model.metadata["command"] == "fsv-bench train --data data/default --out fsv/data/internal_forces.pt --folds 3"
+    assert model.metadata["command"] == "fsv-bench train --data data/default --out fsv/data/internal_forces.npz --folds 3"
     assert model.metadata["episodes"] == 32 and model.metadata["samples"] > 5000
     assert model.metadata["dataset"]["contacts"] == "tracker" and model.metadata["max_excess_n"] == 1.5
     assert model.config.hidden_l2 == (6, 7) and model.config.hidden_decomp == (8, 13) and model.config.members == 5

@@ -179,8 +179,8 @@ def test_free_space_pushes_the_model_out_of_pixels_that_see_the_scene(free_space
 
 
 def _ray_capsules_formulas(origin, rays, a, b, radius):
-    """The first hits of ``ray_capsules`` written as plain formulas, one temporary per operation
-    (its implementation before it updated its arrays in place): the reference it must equal bit for bit."""
+    """The first hits of ``ray_capsules`` written as plain vectorised formulas, one temporary per
+    operation: the reference the compiled ray caster must equal to rounding."""
     ab = b - a
     L = np.maximum(np.linalg.norm(ab, axis=1), 1e-12)
     u = ab / L[:, None]
@@ -211,8 +211,9 @@ def _ray_capsules_formulas(origin, rays, a, b, radius):
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_ray_capsules_equal_their_formulas_bit_for_bit(seed):
-    """The in-place evaluation keeps every operation and its order: same depths and capsules to the bit."""
+def test_ray_capsules_equal_their_formulas(seed):
+    """The compiled ray caster (bounding-sphere rejection, one ray at a time) finds the same first
+    hits as the formulas evaluated on every ray and capsule: the same capsules, depths to 1e-12 m."""
     kin = HandKinematics(HAND)
     p, r, _, _ = kin.pose(hover_state(seed))
     a, b = kin.capsules(p, r)
@@ -222,8 +223,10 @@ def test_ray_capsules_equal_their_formulas_bit_for_bit(seed):
     g = np.argmin(best, axis=1)
     ref = best[np.arange(best.shape[0]), g]
     assert np.isfinite(ref).sum() > 300
-    assert depth.tobytes() == ref.tobytes()
-    np.testing.assert_array_equal(geom, np.where(np.isfinite(ref), g, -1))
+    np.testing.assert_array_equal(np.isfinite(depth), np.isfinite(ref))
+    hit = np.isfinite(ref)
+    np.testing.assert_allclose(depth[hit], ref[hit], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(geom, np.where(hit, g, -1))
     fast = ray_capsules(rays.origin, rays.ray, a, b, HAND.geom_radius, surface=False)
     assert fast[0].tobytes() == depth.tobytes() and fast[2] is None and fast[3] is None
     np.testing.assert_array_equal(fast[1], geom)

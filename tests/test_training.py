@@ -6,7 +6,7 @@ from fsv.learn import load
 
 def test_train_writes_a_model_that_predicts_on_its_data(learn_oracle_dataset, tmp_path, capsys):
     _, folder, _ = learn_oracle_dataset
-    out = tmp_path / "model.pt"
+    out = tmp_path / "model.npz"
     code = main(["train", "--data", str(folder), "--out", str(out), "--folds", "2", "--epochs", "60", "--members", "1"])
     assert code == 0, capsys.readouterr().err
     text = capsys.readouterr().out
@@ -19,7 +19,7 @@ def test_train_writes_a_model_that_predicts_on_its_data(learn_oracle_dataset, tm
 
 def test_train_refuses_more_folds_than_episodes_before_training(learn_oracle_dataset, tmp_path, capsys):
     _, folder, _ = learn_oracle_dataset
-    out = tmp_path / "model.pt"
+    out = tmp_path / "model.npz"
     assert main(["train", "--data", str(folder), "--out", str(out)]) == 2  # default 5 folds, 2 episodes
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--folds 5 needs between 2 and the dataset's 2 episodes" in err

@@ -85,14 +85,13 @@ def write_preview(
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     t = np.arange(len(depth_m)) / fps
-    paths = [out_dir / "depth_preview.png"]
+    paths = preview_paths(out_dir, gif)
     frames = strip(depth_m, t, num)
     png = _palette(np.concatenate([frames, colour_bar(frames.shape[1])], axis=0))
     _atomic(paths[0], lambda p: png.save(p, format="PNG", optimize=True))
     if gif:
         step = max(1, int(np.ceil(fps / gif_fps)))
         frames = [_indexed(d) for d in np.asarray(depth_m)[::step]]
-        paths.append(out_dir / "depth.gif")
         _atomic(
             paths[1],
             lambda p: frames[0].save(
@@ -100,6 +99,12 @@ def write_preview(
             ),
         )
     return paths
+
+
+def preview_paths(out_dir, gif: bool = True) -> list[pathlib.Path]:
+    """The files :func:`write_preview` writes into ``out_dir``: the PNG strip, then the GIF if ``gif``."""
+    out_dir = pathlib.Path(out_dir)
+    return [out_dir / "depth_preview.png"] + ([out_dir / "depth.gif"] if gif else [])
 
 
 COLOUR_BAR_HEIGHT = 40

@@ -757,11 +757,12 @@ def run_cli_stage(run) -> None:
     Args:
         run: The command's ``benchmark.cli.Run`` (its episode is replaced by the rendered one).
     """
-    from benchmark.camera.preview import write_preview
+    from benchmark.camera.preview import preview_paths, write_preview
 
     run.episode = render(run.episode)
     depth = run.episode.depth
-    paths = write_preview(depth.depth_m, depth.fps, run.out, gif=not run.args.no_gif)
+    paths = preview_paths(run.out, gif=not run.args.no_gif)
+    run.background.process("depth preview", write_preview, depth.depth_m, depth.fps, run.out, gif=not run.args.no_gif)
     T, H, W = depth.depth_m.shape
     block = {
         "frames": T,

@@ -81,10 +81,11 @@ import pyarrow.parquet as pq
 from benchmark.atomic import write_bytes, write_text
 from benchmark.errors import ScenarioError, BenchmarkError, DatasetError, DatasetFileError
 from benchmark.world.scenario import Scenario
+from benchmark.paper.samples import (DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask,  # noqa: F401
+                                     take_contacts as _take_con, take_kinematics as _take_kin, true_normal_forces)
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
-from fsv.forces import ForceSettings
 from fsv.provenance import provenance
 
 FORMAT = "fsv-bench-dataset"
@@ -183,12 +184,6 @@ def episode_id(sc: Scenario) -> str:
     return f"{sc.task}_u{sc.user}_g{sc.grasp}_m{sc.mass}_s{sc.seed}"
 
 
-def true_normal_forces(truth) -> np.ndarray:
-    """Each finger's true normal force n_k . F_k, shape (T, K), [N]; 0 off contact (the scoring reference)."""
-    f = np.sum(np.asarray(truth.contact_force) * np.asarray(truth.contact_normal), axis=-1)
-    return np.where(truth.contact_active, f, 0.0)
-
-
 _ON_FRAME = None
 """Called with 1 after every tracked frame of the episode being built (the progress of ``generate``;
 set per worker by :func:`_run_one`)."""
@@ -221,61 +216,6 @@ def episode_contacts(episode, source: str, tracking=None) -> Contacts:
     if source != "error-model":
         raise DatasetError(f"contacts source must be one of {CONTACTS}, got {source!r}")
     return vision_like_contacts(truth, episode.object_model, episode.scenario.rng("contact-error"))
-
-
-def sample_mask(kin: Kinematics, con: Contacts, feats, truth, min_fingers: int = 2, max_gap_n: float = 1.5):
-    """The paper's sample rule, per frame.
-
-    Args:
-        kin, con: The kinematics and contacts behind ``feats``.
-        feats: :class:`fsv.features.Features` (its ``net_force`` is the vision net force, object frame).
-        truth: The episode's truth (its finger forces are the tactile net force).
-        min_fingers: Fewest fingers in contact for an internal force to exist.
-        max_gap_n: Largest accepted |vision - tactile net force|, [N].
-
-    Returns:
-        ``(usable, keep, gap)``: frames with valid kinematics and enough fingers, shape (T,);
-        those of them whose net forces agree within ``max_gap_n``, shape (T,); and the gap, (T,), [N].
-    """
-    tactile_net = np.sum(np.asarray(truth.contact_force), axis=1)  # object frame, like feats.net_force
-    gap = np.linalg.norm(feats.net_force - tactile_net, axis=1)
-    usable = kin.valid & (con.active.sum(axis=1) >= min_fingers)
-    return usable, usable & (gap <= max_gap_n), gap
-
-
-DATASET_FORCE_SETTINGS = ForceSettings(static_retry=False, feasibility_tol=0.0)
-"""Settings of the decomposition that makes the training targets: a frame whose program with the
-tracked sliding flags is infeasible is dropped as unsolved, without the static-friction retry or the
-feasibility tolerance of the method's own programs (the committed datasets and the shipped model
-were made this way)."""
-
-MAX_EXCESS_N = 1.5
-"""Default of the plausibility rule (:func:`nominal_excess_n`), [N]: the paper's 1.5 N threshold."""
-
-
-def nominal_excess_n(nominal_normal, measured, active) -> np.ndarray:
-    """How far vision's nominal forces exceed the tactile readings, per frame (a plausibility rule).
-
-    The nominal forces are the least forces that explain the motion (eq. 4-6; here the nominal part of
-    the decomposition, eq. 9), and the paper found them individually below the tactile readings
-    (§4.2, Fig. 5): people grip harder than the minimum. A finger whose nominal normal force
-    exceeds its reading (0 where its sensor reads nothing) by more than a threshold means vision's
-    contacts cannot be right at that frame (e.g. a point on the wrong side of the centre of mass,
-    or a finger in contact for vision but not for touch). This is our reading of the paper's
-    "samples where FSV or tactile sensors are not reliable"; its 1.5 N rule on the net forces
-    (:func:`sample_mask`) only tests the kinematics here. Training and scoring drop frames above
-    ``MAX_EXCESS_N`` unless told otherwise, and say so.
-
-    Args:
-        nominal_normal: Nominal normal force per finger, shape (N, K), [N].
-        measured: Tactile readings, shape (N, K), [N]; NaN or 0 where the sensor reads nothing.
-        active: Finger in contact for vision, shape (N, K).
-
-    Returns:
-        max over vision's fingers of (nominal - reading), shape (N,), [N]; -inf without fingers.
-    """
-    f_nom, meas = np.asarray(nominal_normal, float), np.nan_to_num(np.asarray(measured, float), nan=0.0)
-    return np.max(np.where(np.asarray(active, bool), f_nom - meas, -np.inf), axis=1)
 
 
 def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
@@ -319,15 +259,6 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
 
         stats["tracking"] = score_tracking(tracking, tr)
     return _with_meta(pa.table(cols), scenario, spec, names, stats, status="ok")
-
-
-def _take_kin(kin: Kinematics, idx) -> Kinematics:
-    return Kinematics(kin.t[idx], kin.pos[idx], kin.rot[idx], kin.vel[idx], kin.acc[idx], kin.omega[idx],
-                      kin.alpha[idx], kin.valid[idx], kin.method, kin.delay_s)
-
-
-def _take_con(con: Contacts, idx) -> Contacts:
-    return Contacts(con.finger_names, con.active[idx], con.sliding[idx], con.point[idx], con.normal[idx], con.slide_dir[idx])
 
 
 def _columns(sc, tr, kin, con, feats, measured, true_normal, gap, rows) -> dict:

@@ -303,17 +303,23 @@ def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: st
     return path
 
 
-def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | os.PathLike, panels: list | None = None) -> dict:
+def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | os.PathLike, panels: list | None = None,
+                  background=None) -> dict:
     """Writes table1.md, table1.csv and fig4_kinematics.png into ``out_dir``; returns their paths.
 
-    ``panels`` is passed to :func:`plot_fig4` (e.g. one excitation episode per axis).
+    ``panels`` is passed to :func:`plot_fig4` (e.g. one excitation episode per axis). With a
+    ``background`` (:class:`benchmark.background.Background`) the figure is drawn there.
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"markdown": out / "table1.md", "csv": out / "table1.csv", "plot": out / "fig4_kinematics.png"}
     write_bytes(paths["markdown"], (table.markdown() + "\n").encode())
     write_bytes(paths["csv"], table.csv().encode())
-    plot_fig4(truth, kinematics, paths["plot"], title=f"Vision kinematics vs AHRS ({table.poses})", panels=panels)
+    title = f"Vision kinematics vs AHRS ({table.poses})"
+    if background is None:
+        plot_fig4(truth, kinematics, paths["plot"], title=title, panels=panels)
+    else:
+        background.process("Fig. 4", plot_fig4, truth, kinematics, paths["plot"], title=title, panels=panels)
     return paths
 
 
@@ -343,7 +349,7 @@ def run_stage(run) -> None:
         table, kins = score_table1(ep.truth, run.tracking.box, poses_label="tracked poses (fsv.track, from depth)")
     else:
         table, kins = score_table1(ep.truth, observed_poses(ep))
-    paths = write_outputs(table, ep.truth, kins, run.out)
+    paths = write_outputs(table, ep.truth, kins, run.out, background=run.background)
     run.summary["kinematics"] = table.summary()
     oracle = choice == "oracle"
     run.summary["kinematics_info"] = {

@@ -1,6 +1,6 @@
 """``fsv-bench train``: fit the internal-force networks on a generated dataset and save them.
 
-    fsv-bench train --data DIR --out model.pt [--seeds 0-2] [--epochs 1500] [--folds 5] [--members 5]
+    fsv-bench train --data DIR --out model.npz [--seeds 0-2] [--epochs 1500] [--folds 5] [--members 5]
 
 Runs k-fold cross-validation (folds made of whole episodes) to report the expected error, then
 trains on every selected sample and saves the model with its normalisation and a description of
@@ -27,7 +27,7 @@ from fsv.learn import LearnConfig, cross_validate, train
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
-    p.add_argument("--out", required=True, help="model file to write (.pt)")
+    p.add_argument("--out", required=True, help="model file to write (.npz)")
     p.add_argument("--seeds", default=None, help="episode seeds to train on (default: all)")
     p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
     p.add_argument("--folds", type=int, default=LearnConfig.folds, help="cross-validation folds (0: skip)")

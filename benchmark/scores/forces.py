@@ -320,8 +320,9 @@ def run_stage(run) -> None:
         }
     tag = f"ORACLE {', '.join(labels['oracle'])}" if labels["oracle"] else "no oracle input"
     run.out.mkdir(parents=True, exist_ok=True)
-    plot = plot_fig5(sol, ep.truth, kin.rot, run.out / "forces_fig5.png", learned=run.estimate.forces,
-                     title=f"forces — kinematics: {labels['kinematics']}; contacts: {labels['contacts']} [{tag}]")
+    plot = run.out / "forces_fig5.png"
+    run.background.process("Fig. 5", plot_fig5, sol, ep.truth, kin.rot, plot, learned=run.estimate.forces,
+                           title=f"forces — kinematics: {labels['kinematics']}; contacts: {labels['contacts']} [{tag}]")
     block["plot"] = plot.name
     run.summary["forces"] = block
     s = block["sensitivity"]

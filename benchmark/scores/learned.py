@@ -19,7 +19,7 @@ import argparse
 
 import numpy as np
 
-from benchmark.paper.dataset import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask, true_normal_forces
+from benchmark.paper.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask, true_normal_forces
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
 from fsv.forces import SOLVED, FrameStatus
@@ -88,7 +88,7 @@ def model_block(model) -> dict:
 
 def _take(x, idx):
     """The frames ``idx`` of a :class:`fsv.Kinematics` or :class:`fsv.Contacts`."""
-    from benchmark.paper.dataset import _take_con, _take_kin
+    from benchmark.paper.samples import take_contacts as _take_con, take_kinematics as _take_kin
 
     return _take_kin(x, idx) if isinstance(x, Kinematics) else _take_con(x, idx)
 
@@ -116,7 +116,7 @@ def run_stage(run) -> None:
     if est.labels["internal"].startswith("learned internal forces"):
         from fsv.learn import default_model, load
 
-        model_info = {"internal_model": path or "fsv/data/internal_forces.pt",
+        model_info = {"internal_model": path or "fsv/data/internal_forces.npz",
                       "model": model_block(default_model() if path is None else load(path))}
     block = {**labels, "program": est.labels["internal"], **model_info, **block}
     run.summary["learning"] = block

@@ -236,8 +236,9 @@ def run_stage(run) -> None:
     elapsed = run.estimate.timing_s["track"]
     scores = score_tracking(tracking, ep.truth)
     run.out.mkdir(parents=True, exist_ok=True)
-    overlay = plot_overlay(ep.depth, ep.calib, tracking, ep.object_model, ep.hand_model, run.out / "tracking_overlay.png",
-                           truth=ep.truth)
+    overlay = run.out / "tracking_overlay.png"
+    run.background.process("tracking overlay", plot_overlay, ep.depth, ep.calib, tracking, ep.object_model,
+                           ep.hand_model, overlay, truth=ep.truth)
     T = len(ep.truth.t)
     block = {
         **scores,

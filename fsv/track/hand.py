@@ -38,10 +38,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
-from fsv.linalg import dot, gram, mm, mv, norm, rows_mt, solve, tmv, vm
+from fsv.linalg import dot, gram, mm, norm, rows_mt, solve, tmv, vm
 from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
+from fsv.track.articulation import add_point_rows, mirror_upper, pose_chain
 from fsv.track.camera import CameraRays
+from fsv.track.capsules import closest_on_capsules, ray_capsules
 from fsv.rotation import cross, exp_so3, log_so3, project_to_so3, rot_from_skew, skew_stack
 from fsv.types import Calibration
 
@@ -191,12 +193,19 @@ class HandKinematics:
                 self.finger_of_segment[b] = k
                 b = int(model.parent[b])
         # Constants of :meth:`pose`: every hinge's cross-product matrix K and K @ K (Rodrigues'
-        # formula, the same arrays as ``axis_angle_to_rot`` builds on every call), and per segment
-        # its parent, offsets and hinges as Python objects (no NumPy indexing in the loop).
+        # formula, the same arrays as ``axis_angle_to_rot`` builds on every call).
         K = skew_stack(model.joint_axis)
         self.hinge_K, self.hinge_KK = K, mm(K, K)
-        self.chain = [(int(model.parent[b]), model.offset_pos[b], self.offset_rot[b],
-                       [(int(j), model.joint_axis[j]) for j in self.joints_of[b]]) for b in range(B)]
+        # The tree as flat arrays for the compiled chain (parents before children): segment b's
+        # hinges are joint_ids[joint_start[b]:joint_start[b + 1]], in the order they compose.
+        if np.any(model.parent[1:] >= np.arange(1, B)) or model.parent[0] != -1:
+            raise InputError("HandModel segments must be ordered parents first, the palm (parent -1) first")
+        self.parent = np.ascontiguousarray(model.parent, dtype=np.int64)
+        self.joint_start = np.concatenate([[0], np.cumsum([len(j) for j in self.joints_of])]).astype(np.int64)
+        self.joint_ids = np.concatenate(self.joints_of).astype(np.int64)
+        self.offset_pos = np.ascontiguousarray(model.offset_pos, dtype=np.float64)
+        self.offset_rot_c = np.ascontiguousarray(self.offset_rot, dtype=np.float64)
+        self.joint_axis = np.ascontiguousarray(model.joint_axis, dtype=np.float64)
 
     def hinges(self, joints: np.ndarray) -> np.ndarray:
         """Rotation of every hinge, bit for bit ``axis_angle_to_rot(model.joint_axis, joints)``: (n,) -> (n, 3, 3)."""
@@ -209,25 +218,9 @@ class HandKinematics:
             ``(pos (B, 3), rot (B, 3, 3), axis (n, 3), pivot (n, 3))``: segment origins and
             orientations, and each hinge's world axis and pivot, [m].
         """
-        m = self.model
-        B = len(self.chain)
-        hinge = self.hinges(state.joints)
-        pos = np.empty((B, 3))
-        rot = np.empty((B, 3, 3))
-        axis = np.empty((m.num_joints, 3))
-        pivot = np.empty((m.num_joints, 3))
-        for b, (p, offset_pos, offset_rot, joints) in enumerate(self.chain):
-            if b == 0:
-                pos[0], R = state.palm_pos, state.palm_rot
-            else:
-                pos[b] = pos[p] + mv(rot[p], offset_pos)
-                R = mm(rot[p], offset_rot)
-            for j, joint_axis in joints:
-                axis[j] = mv(R, joint_axis)
-                pivot[j] = pos[b]
-                R = mm(R, hinge[j])
-            rot[b] = R
-        return pos, rot, axis, pivot
+        return pose_chain(np.ascontiguousarray(state.palm_pos), np.ascontiguousarray(state.palm_rot),
+                          self.hinges(state.joints), self.parent, self.offset_pos, self.offset_rot_c,
+                          self.joint_start, self.joint_ids, self.joint_axis)
 
     def capsules(self, pos, rot) -> tuple[np.ndarray, np.ndarray]:
         """Capsule end points in the world, each (G, 3), [m]."""
@@ -274,120 +267,6 @@ class HandKinematics:
             c -= p2 * q2
         J[:, 6:] = np.where(moves, np.einsum("jk,pjk->pj", axis, lever_x_dir), 0.0)
         return J
-
-
-def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray):
-    """Nearest capsule of every point and the signed distance to its surface.
-
-    Args:
-        points: Shape (P, 3), [m].
-        a, b: Capsule end points, shape (G, 3), [m].
-        radius: Capsule radii, shape (G,), [m].
-
-    Returns:
-        ``(geom (P,), distance (P,), axis_point (P, 3), normal (P, 3))``: the nearest capsule, the
-        signed distance to its surface (negative inside), the closest point on its axis and the
-        unit outward direction from that point towards the observed point.
-    """
-    ab = b - a
-    L2 = np.maximum(np.einsum("gi,gi->g", ab, ab), 1e-12)
-    t = np.clip(np.einsum("pgi,gi->pg", points[:, None, :] - a[None], ab) / L2, 0.0, 1.0)
-    c = a[None] + t[..., None] * ab[None]
-    diff = points[:, None, :] - c
-    dist = np.linalg.norm(diff, axis=-1) - radius[None]
-    g = np.argmin(dist, axis=1)
-    rows = np.arange(points.shape[0])
-    cp = c[rows, g]
-    v = diff[rows, g]
-    nrm = np.linalg.norm(v, axis=1, keepdims=True)
-    normal = np.where(nrm > 1e-9, v / np.maximum(nrm, 1e-9), np.array([0.0, 0.0, 1.0]))
-    return g, dist[rows, g], cp, normal
-
-
-def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray, *,
-                 surface: bool = True):
-    """First intersection of camera rays with a set of capsules.
-
-    Args:
-        origin: Camera centre, shape (3,), [m].
-        rays: Ray directions with unit optical-axis component, shape (N, 3), so that the ray
-            parameter of a hit is its depth.
-        a, b: Capsule end points, shape (G, 3), [m].
-        radius: Capsule radii, shape (G,), [m].
-        surface: Also compute the hit points and normals (None otherwise).
-
-    Returns:
-        ``(depth (N,), geom (N,), point (N, 3), normal (N, 3))``: depth of the first hit (+inf for
-        none), the capsule hit (-1 for none), the hit point and the outward unit surface normal.
-    """
-    N = rays.shape[0]
-    ab = b - a
-    L = np.maximum(np.linalg.norm(ab, axis=1), 1e-12)
-    u = ab / L[:, None]
-    w = origin[None, :] - a  # (G, 3)
-    d = rays
-    dd = np.einsum("ni,ni->n", d, d)[:, None]  # (N, 1)
-    du = rows_mt(d, u)  # (N, G)
-    wu = np.einsum("gi,gi->g", w, u)[None]  # (1, G)
-    wd = rows_mt(d, w)  # (N, G)
-    ww = np.einsum("gi,gi->g", w, w)[None]
-    r2 = (radius**2)[None]
-    # The (N, G) arrays are updated in place (the same operations in the same order as the
-    # formulas in the comments, without a temporary per operation).
-    with np.errstate(invalid="ignore", divide="ignore"):
-        # Cylinder: |w_p + t d_p|^2 = r^2 with the components perpendicular to the axis.
-        A = du**2
-        np.subtract(dd, A, out=A)  # A = dd - du**2
-        B = wu * du
-        np.subtract(wd, B, out=B)
-        B *= 2  # B = 2 * (wd - wu * du)
-        C = ww - wu**2 - r2
-        disc = B**2
-        tmp = 4 * A
-        tmp *= C
-        disc -= tmp  # disc = B**2 - 4 * A * C
-        ok = (disc >= 0) & (A > 1e-12)
-        np.sqrt(disc, out=disc)  # max(disc, 0) is disc wherever ok; elsewhere t is +inf
-        np.negative(B, out=B)
-        B -= disc
-        A *= 2
-        B /= A  # (-B - sqrt(max(disc, 0))) / (2 * A)
-        t_cyl = np.where(ok, B, np.inf)
-        np.multiply(t_cyl, du, out=tmp)
-        np.add(wu, tmp, out=tmp)  # s = wu + t_cyl * du, the point's position along the axis
-        best = np.where((t_cyl > 0) & (tmp >= 0) & (tmp <= L[None]), t_cyl, np.inf)
-        dd2, dd4 = 2 * dd, 4 * dd
-        for end in (a, b):  # the two end spheres; for a, origin - a is w
-            if end is a:
-                Be, Ce = 2 * wd, ww - r2
-            else:
-                we = origin[None, :] - end
-                Be = rows_mt(d, we)
-                Be *= 2
-                Ce = np.einsum("gi,gi->g", we, we)[None] - r2
-            disc = Be**2
-            np.multiply(dd4, Ce, out=tmp)
-            disc -= tmp  # disc = Be**2 - 4 * dd * Ce
-            ok = disc >= 0
-            np.sqrt(disc, out=disc)
-            np.negative(Be, out=Be)
-            Be -= disc
-            Be /= dd2  # t = (-Be - sqrt(max(disc, 0))) / (2 * dd) where disc >= 0, else +inf
-            ok &= Be > 0
-            np.minimum(best, Be, out=best, where=ok)  # best = min(best, t if t > 0 else +inf)
-    geom = np.argmin(best, axis=1)
-    rows = np.arange(N)
-    depth = best[rows, geom]
-    hit = np.isfinite(depth)
-    if not surface:
-        return depth, np.where(hit, geom, -1), None, None
-    x = origin + np.where(hit, depth, 0.0)[:, None] * d
-    g = geom
-    sax = np.clip(np.einsum("ni,ni->n", x - a[g], u[g]), 0.0, L[g])
-    axis_pt = a[g] + sax[:, None] * u[g]
-    nrm = x - axis_pt
-    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-12)
-    return depth, np.where(hit, geom, -1), x, nrm
 
 
 def box_signed_distance(points_obj: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -510,36 +389,35 @@ class HandTracker:
         explained = 0.0
         k = c.cauchy_k * sigma
 
-        def add(J, r, w, scale=1.0):
-            nonlocal A, g
-            sw = scale * w
-            A += gram(J, sw)
-            g -= tmv(J, sw * r)
+        palm, _, axis, pivot = pose
+        moves, geom_seg, radius = self.kin.moves, self.model.geom_segment, self.model.geom_radius
+
+        def add(x, seg, direction, factor, r, w):
+            add_point_rows(A, g, x, seg, direction, factor, r, w, palm[0], moves, axis, pivot)
 
         if z_obs.size:
             # Where a capsule is hit, the residual is along the ray (observed minus predicted
             # depth): only the visible front surface explains a pixel, so depth noise cannot
             # pull points onto the far side of a thin finger.
-            zh, geom, x, nrm = ray_capsules(self.rays.origin, rays, a, b, self.model.geom_radius)
+            zh, geom, x, nrm = ray_capsules(self.rays.origin, rays, a, b, radius)
             r = z_obs - zh
             front = (geom >= 0) & (r > -3 * sigma)
             if np.any(front):
-                nd = np.einsum("ni,ni->n", nrm[front], rays[front])
-                seg = self.model.geom_segment[geom[front]]
-                J = -self.kin.point_jacobian(x[front], seg, nrm[front], pose) / nd[:, None]
+                nf = nrm[front]
                 rf = r[front]
-                add(J, rf, 1.0 / (1.0 + (rf / k) ** 2))
+                nd = np.einsum("ni,ni->n", nf, rays[front])
+                add(x[front], geom_seg[geom[front]], nf, -1.0 / nd, rf, 1.0 / (1.0 + (rf / k) ** 2))
                 cost += 0.5 * k**2 * float(np.sum(np.log1p((rf / k) ** 2)))
             explained = float(np.sum(front & (np.abs(r) < 2 * sigma)))
             # Elsewhere (outside the model's silhouette, or well in front of it), ICP: the point
             # pulls its nearest capsule surface.
             rest = ~front
             if np.any(rest):
-                gi, dist, cp, n2 = closest_on_capsules(pts[rest], a, b, self.model.geom_radius)
+                gi, dist, cp, n2 = closest_on_capsules(pts[rest], a, b, radius)
                 use = dist < c.assign_max_m
                 explained += float(np.sum(use & (np.abs(dist) < 2 * sigma)))
-                J = -self.kin.point_jacobian(cp, self.model.geom_segment[gi], n2, pose)
-                add(J, dist, np.where(use, 1.0 / (1.0 + (dist / k) ** 2), 0.0))
+                add(cp, geom_seg[gi], n2, np.full(dist.shape[0], -1.0), dist,
+                    np.where(use, 1.0 / (1.0 + (dist / k) ** 2), 0.0))
                 d_c = np.minimum(np.abs(dist), c.assign_max_m)
                 cost += 0.5 * k**2 * float(np.sum(np.log1p((d_c / k) ** 2)))
             explained /= z_obs.size
@@ -547,13 +425,12 @@ class HandTracker:
         # ray, observed minus predicted depth (positive: the capsule is in front of what is seen).
         f_rays, f_z = free
         if f_z.size:
-            zh, geom, x, nrm = ray_capsules(self.rays.origin, f_rays, a, b, self.model.geom_radius)
+            zh, geom, x, nrm = ray_capsules(self.rays.origin, f_rays, a, b, radius)
             hit = geom >= 0
             if np.any(hit):
                 nd = np.einsum("ni,ni->n", nrm[hit], f_rays[hit])
-                J = -self.kin.point_jacobian(x[hit], self.model.geom_segment[geom[hit]], nrm[hit], pose) / nd[:, None]
                 rf = f_z[hit] - zh[hit]
-                add(J, rf, 1.0 / (1.0 + (rf / k) ** 2))
+                add(x[hit], geom_seg[geom[hit]], nrm[hit], -1.0 / nd, rf, 1.0 / (1.0 + (rf / k) ** 2))
                 cost += 0.5 * k**2 * float(np.sum(np.log1p((rf / k) ** 2)))
         # No interpenetration with the box: capsule samples at least their radius outside.
         xs = pose[0][self.pen_segment] + np.einsum("pij,pj->pi", pose[1][self.pen_segment], self.pen_local)
@@ -561,9 +438,10 @@ class HandTracker:
         pen = self.pen_radius - sd
         hit = pen > 0
         if np.any(hit):
-            Jp = -self.kin.point_jacobian(xs[hit], self.pen_segment[hit], rows_mt(grad[hit], box_rot), pose)
             wp = (sigma / c.penetration_m) ** 2
-            add(Jp, pen[hit], np.ones(int(hit.sum())), wp)
+            nh = int(hit.sum())
+            add(xs[hit], self.pen_segment[hit], rows_mt(grad[hit], box_rot), np.full(nh, -1.0), pen[hit],
+                np.full(nh, wp))
             cost += 0.5 * wp * float(np.sum(pen[hit] ** 2))
         # Grasp closure for hidden fingers: a finger the camera cannot see whose pad is near the
         # box flexes until the pad meets its surface (fingers wrap the object they hold).
@@ -580,7 +458,8 @@ class HandTracker:
                 Jc[:, :6] = 0.0
                 Jc[:, 6:] *= self.flexion[None, :]
                 wc = (sigma / c.closure_m) ** 2
-                add(Jc, gap[close], np.ones(int(close.sum())), wc)
+                A += gram(Jc, np.full(Jc.shape[0], wc))  # its lower triangle is overwritten below
+                g -= tmv(Jc, wc * gap[close])
                 cost += 0.5 * wc * float(np.sum(gap[close] ** 2))
         # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
         for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, st.palm_pos - prior.palm_pos),
@@ -590,6 +469,7 @@ class HandTracker:
             A[sl, sl] += ws * np.eye(res.shape[0])
             g[sl] -= ws * res
             cost += 0.5 * ws * float(dot(res, res))
+        mirror_upper(A)
         return A, g, cost, explained
 
     def _solve(self, idx, z_obs, free, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):

@@ -15,22 +15,29 @@ iteratively reweighted Gauss-Newton with the analytic Jacobian of the predicted 
 Each frame starts from a constant-velocity prediction from the previous two frames, which also
 acts as a weak prior. When few pixels agree with the result (the fit is lost), and in the first
 frame, a small particle search around the prediction re-initialises it.
+
+The prediction and each iteration's normal equations are compiled with numba, one pixel at a time
+(:func:`_box_depth_kernel`, :func:`_box_normal_equations`): the Jacobian is never materialised.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from fsv.errors import InputError, TrackingError
-from fsv.linalg import dot, gram, mm, mv, norm, rows_mt, solve, tmv, vm
+from fsv.linalg import mm, norm, rows_mt, solve
 from fsv.models import ObjectModel
 from fsv.track.camera import CameraRays
-from fsv.rotation import cross, exp_so3, log_so3, project_to_so3
+from fsv.rotation import exp_so3, log_so3, project_to_so3
 from fsv.types import Calibration, DepthVideo, Poses
 
 _FAR_M = 1.0  # background depth behind the box where no table is seen, [m] past the box
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")  # inlined by numba
 
 
 @dataclass(frozen=True)
@@ -131,101 +138,209 @@ def predict_box_depth(rays: CameraRays, index: np.ndarray, pos: np.ndarray, rot:
 def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, rot: np.ndarray, half: np.ndarray,
                fx: float, silhouette_px: float, jacobian: bool):
     """:func:`predict_box_depth` on the rays ``d`` (N, 3) from ``o`` (3,) of the pixels, whose table
-    depths are ``bg`` (N,): a fit gathers them once for all its iterations."""
-    N = d.shape[0]
-    d_col = [np.ascontiguousarray(d[:, k]) for k in range(3)]
-    # A face is visible when the camera is outside its plane; an edge of a visible face lies on
-    # the silhouette when the face across it is not visible.
-    dist = {(a, s): s * dot(rot[:, a], o - pos) - half[a] for a in range(3) for s in (1.0, -1.0)}
-    rect_best = np.full(N, -np.inf)
-    best_z = np.full(N, np.inf)
-    best_m = np.full(N, -np.inf)
-    best_face = np.full(N, -1)
-    cache = []
-    for (a, s), dist_f in dist.items():
-        if dist_f <= 0:
-            continue
-        n = s * rot[:, a]
-        nd = mv(d, n)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            z = np.where(nd < -1e-9, -dist_f / nd, np.inf)
-        hit = np.isfinite(z)
-        z_hit = np.where(hit, z, 0.0)
-        p = np.empty((N, 3))  # o + z_hit * d, one column at a time (no (N, 3) broadcast)
+    depths are ``bg`` (N,): a fit gathers them once for all its iterations (see :func:`_box_rays`)."""
+    o, d, bg = _box_rays(o, d, bg)
+    depth, w, plane, J = _box_depth_kernel(o, d, bg, _f64(pos), _f64(rot), _f64(half), float(fx),
+                                           float(silhouette_px), bool(jacobian))
+    if not jacobian:
+        return depth, w, plane
+    return depth, w, plane, J
+
+
+def _f64(x) -> np.ndarray:
+    return np.ascontiguousarray(x, dtype=np.float64)
+
+
+def _box_rays(o, d, bg):
+    """The compiled kernels' ray arguments: origin (3,), rays (N, 3) and table depths (N,), float64, C order."""
+    return _f64(o), _f64(d), _f64(bg)
+
+
+# -- the compiled prediction -----------------------------------------------------------------
+# One pixel at a time, in a fixed order of operations (no BLAS, no fast-math: the same bits on every
+# CPU), the arithmetic of the vectorised NumPy model this replaces (kept as the reference in
+# tests/test_box_kernel.py): faces (a, s) in the order a = 0, 1, 2, s = +1, -1 (face f = 2 a + (s < 0)),
+# dot products summed left to right (NumPy's einsum sums 3-vectors in another order, so the two
+# agree to rounding, not bit for bit), the normal equations summed in pixel order.
+
+
+@_jit
+def _box_faces(o, pos, rot, half):  # pragma: no cover - compiled
+    """Signed distances of the camera outside each face's plane (> 0: the face is visible), (6,), and
+    the faces' outward normals s R_a, (6, 3)."""
+    dist = np.empty(6)
+    normal = np.empty((6, 3))
+    for a in range(3):
+        t = 0.0
         for k in range(3):
-            np.multiply(z_hit, d_col[k], out=p[:, k])
-            np.add(o[k], p[:, k], out=p[:, k])
-        q = vm(p - pos, rot)
-        rect = np.full(N, np.inf)  # margin inside the face's rectangle (all four edges)
-        sil = np.full(N, np.inf)  # margin inside its silhouette edges only
-        rect_axis = rect_sign = sil_axis = sil_sign = 0.0  # (axis, sign) of the edge setting each margin
+            t += rot[k, a] * (o[k] - pos[k])
+        dist[2 * a] = t - half[a]
+        dist[2 * a + 1] = -t - half[a]
+        for k in range(3):
+            normal[2 * a, k] = rot[k, a]
+            normal[2 * a + 1, k] = -rot[k, a]
+    return dist, normal
+
+
+@_jit_inline
+def _box_pixel(o, d0, d1, d2, bg, pos, rot, half, dist, normal, fx, silhouette_px, jacobian):  # pragma: no cover
+    """Predicted depth, soft coverage, extended plane depth and (with ``jacobian``) the Jacobian row
+    of one pixel's ray ``d``; see :func:`predict_box_depth`."""
+    rect_best = -np.inf
+    best_f = -1
+    best_z = np.inf
+    best_m = -np.inf
+    best_nd = 0.0
+    best_p0 = best_p1 = best_p2 = 0.0
+    best_axis = 0
+    best_sign = 0.0
+    for f in range(6):
+        dist_f = dist[f]
+        if not dist_f > 0:
+            continue
+        a = f // 2
+        n0, n1, n2 = normal[f, 0], normal[f, 1], normal[f, 2]
+        nd = d0 * n0 + d1 * n1 + d2 * n2
+        if not nd < -1e-9:
+            continue  # the ray misses the face's plane: its margin is -inf, never the best
+        z = -dist_f / nd
+        p0 = o[0] + z * d0
+        p1 = o[1] + z * d1
+        p2 = o[2] + z * d2
+        l0, l1, l2 = p0 - pos[0], p1 - pos[1], p2 - pos[2]
+        rect = np.inf  # margin inside the face's rectangle (all four edges)
+        sil = np.inf  # margin inside its silhouette edges only
+        rect_axis = sil_axis = 0
+        rect_sign = sil_sign = 0.0
         for b in range(3):
             if b == a:
                 continue
-            for e in (1.0, -1.0):
-                m_edge = half[b] - e * q[:, b]  # distance inside the edge q_b = e * half_b
-                closer = m_edge < rect
-                rect = np.where(closer, m_edge, rect)
-                rect_axis, rect_sign = np.where(closer, float(b), rect_axis), np.where(closer, -e, rect_sign)
-                if dist[(b, e)] > 0:
+            q = l0 * rot[0, b] + l1 * rot[1, b] + l2 * rot[2, b]
+            for j in range(2):
+                e = 1.0 if j == 0 else -1.0
+                m_edge = half[b] - e * q  # distance inside the edge q_b = e * half_b
+                if m_edge < rect:
+                    rect, rect_axis, rect_sign = m_edge, b, -e
+                if dist[2 * b + j] > 0:
                     continue  # the face across this edge is visible: not a silhouette edge
-                closer = m_edge < sil
-                sil = np.where(closer, m_edge, sil)
-                sil_axis, sil_sign = np.where(closer, float(b), sil_axis), np.where(closer, -e, sil_sign)
-        rect = np.where(hit, rect, -np.inf)
-        better = rect > rect_best
-        rect_best = np.where(better, rect, rect_best)
-        best_z = np.where(better, z, best_z)
-        # Inside the face, the coverage margin is the distance to the silhouette; outside the box
-        # (every rectangle margin negative) it is the best face's (negative) rectangle margin.
-        inside = rect >= 0
-        best_m = np.where(better, np.where(inside, sil, rect), best_m)
-        best_face = np.where(better, len(cache), best_face)
-        edge_axis = np.where(inside, sil_axis, rect_axis)
-        cache.append((n, nd, p, q, edge_axis.astype(int), np.where(inside, sil_sign, rect_sign)))
-    no_face = best_face < 0
-    z_box = np.where(no_face, 0.0, best_z)
-    bg_eff = np.where(np.isfinite(bg), bg, z_box + _FAR_M)
-    tau = silhouette_px * np.maximum(z_box, 1e-3) / fx
-    w = np.where(no_face | (z_box >= bg_eff), 0.0, 1.0 / (1.0 + np.exp(-np.clip(best_m / tau, -50, 50))))
+                if m_edge < sil:
+                    sil, sil_axis, sil_sign = m_edge, b, -e
+        if rect > rect_best:
+            rect_best = rect
+            best_f = f
+            best_z = z
+            best_nd = nd
+            best_p0, best_p1, best_p2 = p0, p1, p2
+            # Inside the face, the coverage margin is the distance to the silhouette; outside the
+            # box (every rectangle margin negative) it is the best face's (negative) rectangle margin.
+            if rect >= 0:
+                best_m, best_axis, best_sign = sil, sil_axis, sil_sign
+            else:
+                best_m, best_axis, best_sign = rect, rect_axis, rect_sign
+    no_face = best_f < 0
+    z_box = 0.0 if no_face else best_z
+    bg_eff = bg if np.isfinite(bg) else z_box + _FAR_M
+    tau = silhouette_px * max(z_box, 1e-3) / fx
+    if no_face or z_box >= bg_eff:
+        w = 0.0
+    else:
+        x = best_m / tau
+        x = -50.0 if x < -50.0 else (50.0 if x > 50.0 else x)
+        w = 1.0 / (1.0 + np.exp(-x))
     depth = w * z_box + (1 - w) * bg_eff
     # The nearest face's plane, extended past its edges: the box's own pixels outside a slightly
     # wrong silhouette lie on it, which tells them apart from occluders (the hand) in front.
-    plane = np.where(no_face, np.inf, z_box)
-    if not jacobian:
-        return depth, w, plane
-    J = np.zeros((N, 6))
-    for f, (n, nd, p, q, sil_axis, sil_sign) in enumerate(cache):
-        sel = (best_face == f) & (w > 0)
-        if not np.any(sel):
-            continue
-        nds, ps = nd[sel], p[sel]
-        lever = ps - pos
-        cross_n = cross(lever, n)
+    plane = np.inf if no_face else z_box
+    j0 = j1 = j2 = j3 = j4 = j5 = 0.0
+    if jacobian and not no_face and w > 0:
+        n0, n1, n2 = normal[best_f, 0], normal[best_f, 1], normal[best_f, 2]
+        l0, l1, l2 = best_p0 - pos[0], best_p1 - pos[1], best_p2 - pos[2]
+        c0 = l1 * n2 - l2 * n1  # (p - c) x n
+        c1 = l2 * n0 - l0 * n2
+        c2 = l0 * n1 - l1 * n0
         # m = half_b + sign * q_b on the nearest silhouette edge, q_b = R_b . (p - c):
         # dq_b = dw . (R_b x (p - c)) + (R_b . d) dz - R_b . dt.
-        Rb = rot[:, sil_axis[sel]].T
-        sgn = sil_sign[sel]
-        Rb_d = np.einsum("ij,ij->i", Rb, d[sel])
-        cross_Rb = cross(Rb, lever)
-        ws, zs, ts = w[sel], z_box[sel], tau[sel]
-        gain = (zs - bg_eff[sel]) * ws * (1 - ws) / ts
+        r0, r1, r2 = rot[0, best_axis], rot[1, best_axis], rot[2, best_axis]
+        sgn = best_sign
+        rb_d = r0 * d0 + r1 * d1 + r2 * d2
+        e0 = r1 * l2 - r2 * l1  # R_b x (p - c)
+        e1 = r2 * l0 - r0 * l2
+        e2 = r0 * l1 - r1 * l0
+        gain = (z_box - bg_eff) * w * (1 - w) / tau
         # d(m / tau) with tau proportional to the depth: (dm - m dz / z) / tau.
-        mz = np.where(np.isfinite(best_m[sel]), best_m[sel], 0.0) / zs
-        # One column at a time (translation k, rotation 3 + k); per element the same operations as
+        mz = (best_m if np.isfinite(best_m) else 0.0) / z_box
         # J_t = w dz_dt + gain (dm_dt - mz dz_dt), dz_dt = n / nd, dm_dt = sgn ((R_b . d) dz_dt - R_b),
         # J_w = w dz_dw + gain (dm_dw - mz dz_dw), dz_dw = ((p - c) x n) / nd,
         # dm_dw = sgn (R_b x (p - c) + (R_b . d) dz_dw).
-        Jf = np.empty((nds.shape[0], 6))
-        for k in range(3):
-            dz_dt = n[k] / nds
-            dz_dw = cross_n[:, k] / nds
-            dm_dt = sgn * (Rb_d * dz_dt - Rb[:, k])
-            dm_dw = sgn * (cross_Rb[:, k] + Rb_d * dz_dw)
-            Jf[:, k] = ws * dz_dt + gain * (dm_dt - mz * dz_dt)
-            Jf[:, 3 + k] = ws * dz_dw + gain * (dm_dw - mz * dz_dw)
-        J[sel] = Jf
+        dz_dt = n0 / best_nd
+        dz_dw = c0 / best_nd
+        j0 = w * dz_dt + gain * (sgn * (rb_d * dz_dt - r0) - mz * dz_dt)
+        j3 = w * dz_dw + gain * (sgn * (e0 + rb_d * dz_dw) - mz * dz_dw)
+        dz_dt = n1 / best_nd
+        dz_dw = c1 / best_nd
+        j1 = w * dz_dt + gain * (sgn * (rb_d * dz_dt - r1) - mz * dz_dt)
+        j4 = w * dz_dw + gain * (sgn * (e1 + rb_d * dz_dw) - mz * dz_dw)
+        dz_dt = n2 / best_nd
+        dz_dw = c2 / best_nd
+        j2 = w * dz_dt + gain * (sgn * (rb_d * dz_dt - r2) - mz * dz_dt)
+        j5 = w * dz_dw + gain * (sgn * (e2 + rb_d * dz_dw) - mz * dz_dw)
+    return depth, w, plane, j0, j1, j2, j3, j4, j5
+
+
+@_jit
+def _box_depth_kernel(o, d, bg, pos, rot, half, fx, silhouette_px, jacobian):  # pragma: no cover - compiled
+    """Depth, soft coverage, plane depth (N,) and the Jacobian (N, 6) (or (0, 6) without ``jacobian``)."""
+    N = d.shape[0]
+    dist, normal = _box_faces(o, pos, rot, half)
+    depth = np.empty(N)
+    w = np.empty(N)
+    plane = np.empty(N)
+    J = np.zeros((N if jacobian else 0, 6))
+    for i in range(N):
+        z, wi, pl, j0, j1, j2, j3, j4, j5 = _box_pixel(o, d[i, 0], d[i, 1], d[i, 2], bg[i], pos, rot, half, dist,
+                                                       normal, fx, silhouette_px, jacobian)
+        depth[i], w[i], plane[i] = z, wi, pl
+        if jacobian:
+            J[i, 0], J[i, 1], J[i, 2], J[i, 3], J[i, 4], J[i, 5] = j0, j1, j2, j3, j4, j5
     return depth, w, plane, J
+
+
+@_jit
+def _box_normal_equations(o, d, bg, z_obs, pos, rot, half, fx, silhouette_px, sigma, robust_k,
+                          occluder_k):  # pragma: no cover - compiled
+    """One Gauss-Newton iteration's normal equations in one pass over the pixels, in pixel order:
+    ``A = J^T W J`` (6, 6) and ``g = J^T W r`` (6,) with the Cauchy weights W of the residuals
+    r = z_obs - depth, zero for invalid (z_obs <= 0) and occluded pixels; the same sums as
+    ``gram(J, w)`` and ``tmv(J, w * r)``."""
+    N = d.shape[0]
+    dist, normal = _box_faces(o, pos, rot, half)
+    A = np.zeros((6, 6))
+    g = np.zeros(6)
+    Jn = np.empty(6)
+    k = robust_k * sigma
+    occ = -occluder_k * sigma
+    for i in range(N):
+        zo = z_obs[i]
+        if not zo > 0:
+            continue  # invalid pixel: zero weight
+        zp, _, pl, Jn[0], Jn[1], Jn[2], Jn[3], Jn[4], Jn[5] = _box_pixel(
+            o, d[i, 0], d[i, 1], d[i, 2], bg[i], pos, rot, half, dist, normal, fx, silhouette_px, True)
+        if zo - min(zp, pl) < occ:
+            continue  # in front of the prediction and the nearest face's plane: occluded
+        r = zo - zp
+        t = r / k
+        wn = 1.0 / (1.0 + t * t)
+        wr = wn * r
+        for a in range(6):
+            v = wn * Jn[a]
+            if v != 0.0:
+                for b in range(a, 6):
+                    A[a, b] += v * Jn[b]
+            g[a] += Jn[a] * wr
+    for a in range(6):
+        for b in range(a):
+            A[a, b] = A[b, a]
+    return A, g
 
 
 class BoxTracker:
@@ -290,11 +405,6 @@ class BoxTracker:
         return (vv * W + uu).reshape(-1)
 
     # -- fitting ------------------------------------------------------------------------------
-    def _weights(self, r: np.ndarray, occluded: np.ndarray, valid: np.ndarray, sigma: float) -> np.ndarray:
-        c = self.config
-        w = 1.0 / (1.0 + (r / (c.robust_k * sigma)) ** 2)
-        return np.where(valid & ~occluded, w, 0.0)
-
     def _occluded(self, z_obs: np.ndarray, zp: np.ndarray, plane: np.ndarray, sigma: float) -> np.ndarray:
         """Pixels in front of both the prediction and the nearest face's extended plane."""
         return z_obs - np.minimum(zp, plane) < -self.config.occluder_k * sigma
@@ -315,13 +425,14 @@ class BoxTracker:
         c = self.config
         valid = z_obs > 0
         pos, rot = np.array(pos, dtype=float), np.array(rot, dtype=float)
-        rays = (self.rays.origin, self.rays.ray[index], self.rays.table_depth[index])  # the same every iteration
+        # The same every iteration: the region's rays, and the kernels' float64 arguments.
+        rays = _box_rays(self.rays.origin, self.rays.ray[index], self.rays.table_depth[index])
+        zo, half = _f64(z_obs), _f64(self.half)
+        fx, sil = float(self.fx), float(c.silhouette_px)
+        sigma, robust_k, occluder_k = float(sigma), float(c.robust_k), float(c.occluder_k)
         for _ in range(c.iterations):
-            zp, cover, plane, J = _box_depth(*rays, pos, rot, self.half, self.fx, c.silhouette_px, True)
-            r = z_obs - zp
-            w = self._weights(r, self._occluded(z_obs, zp, plane, sigma), valid, sigma)
-            A = gram(J, w)
-            g = tmv(J, w * r)
+            # J^T W J and J^T W r of the reweighted residuals, without materialising J (N, 6).
+            A, g = _box_normal_equations(*rays, zo, _f64(pos), _f64(rot), half, fx, sil, sigma, robust_k, occluder_k)
             if prior is not None:
                 pp, Rp = prior
                 lt, lr = (sigma / c.prior_pos_m) ** 2, (sigma / c.prior_rot_rad) ** 2
@@ -337,7 +448,7 @@ class BoxTracker:
             rot = project_to_so3(mm(exp_so3(step[3:]), rot))
             if norm(step[:3]) < 5e-5 and norm(step[3:]) < 5e-4:
                 break
-        zp, cover, plane = _box_depth(*rays, pos, rot, self.half, self.fx, c.silhouette_px, False)
+        zp, cover, plane, _ = _box_depth_kernel(*rays, _f64(pos), _f64(rot), half, fx, sil, False)
         r = z_obs - zp
         on_box = valid & (cover > 0.5)
         seen = on_box & ~self._occluded(z_obs, zp, plane, sigma)

@@ -1,0 +1,150 @@
+"""Compiled kernels of the articulated hand: forward kinematics and point rows of the normal equations.
+
+The hand's state is the palm pose (translation, rotation about the palm origin in the world
+frame) and n hinge angles; a point x rigidly attached to segment s moves by
+
+    dx = dt + dw x (x - palm) + sum_j dq_j a_j x (x - pivot_j)
+
+over the hinges j that move s (on s or an ancestor). A residual along a direction e has the row
+``e . dx`` per state coordinate. The fit's normal equations ``A += w J^T J``, ``g -= w J^T r``
+are accumulated here row by row without forming J (the same order of operations on every
+machine: scalar loops, no BLAS, no fast-math).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+
+@_jit
+def pose_chain(palm_pos, palm_rot, hinge, parent, offset_pos, offset_rot, joint_start, joint_ids, joint_axis):  # pragma: no cover - compiled
+    """Segment poses and hinge frames of a kinematic tree (segments ordered parents first).
+
+    Args:
+        palm_pos: Root position, shape (3,), [m].
+        palm_rot: Root rotation, shape (3, 3).
+        hinge: Rotation of every hinge about its own axis, shape (n, 3, 3).
+        parent: Parent of every segment (-1 for the root), shape (B,).
+        offset_pos: Segment origin in its parent's frame, shape (B, 3), [m].
+        offset_rot: Segment rotation in its parent's frame, shape (B, 3, 3).
+        joint_start: Hinges of segment b are ``joint_ids[joint_start[b]:joint_start[b + 1]]``,
+            in the order they compose, shape (B + 1,).
+        joint_ids: Hinge indices, shape (n,).
+        joint_axis: Hinge axes in their segment's frame, shape (n, 3).
+
+    Returns:
+        ``(pos (B, 3), rot (B, 3, 3), axis (n, 3), pivot (n, 3))``.
+    """
+    B, n = parent.shape[0], joint_axis.shape[0]
+    pos = np.empty((B, 3))
+    rot = np.empty((B, 3, 3))
+    axis = np.empty((n, 3))
+    pivot = np.empty((n, 3))
+    R = np.empty((3, 3))
+    tmp = np.empty((3, 3))
+    for b in range(B):
+        p = parent[b]
+        if p < 0:
+            for i in range(3):
+                pos[b, i] = palm_pos[i]
+                for k in range(3):
+                    R[i, k] = palm_rot[i, k]
+        else:
+            for i in range(3):
+                s = 0.0
+                for k in range(3):
+                    s += rot[p, i, k] * offset_pos[b, k]
+                pos[b, i] = pos[p, i] + s
+                for k in range(3):
+                    s = 0.0
+                    for m in range(3):
+                        s += rot[p, i, m] * offset_rot[b, m, k]
+                    R[i, k] = s
+        for q in range(joint_start[b], joint_start[b + 1]):
+            j = joint_ids[q]
+            for i in range(3):
+                s = 0.0
+                for k in range(3):
+                    s += R[i, k] * joint_axis[j, k]
+                axis[j, i] = s
+                pivot[j, i] = pos[b, i]
+            for i in range(3):
+                for k in range(3):
+                    s = 0.0
+                    for m in range(3):
+                        s += R[i, m] * hinge[j, m, k]
+                    tmp[i, k] = s
+            for i in range(3):
+                for k in range(3):
+                    R[i, k] = tmp[i, k]
+        for i in range(3):
+            for k in range(3):
+                rot[b, i, k] = R[i, k]
+    return pos, rot, axis, pivot
+
+
+@_jit
+def add_point_rows(A, g, x, segment, direction, factor, r, w, palm, moves, axis, pivot):  # pragma: no cover - compiled
+    """Adds the rows of points attached to segments to normal equations, in place.
+
+    The row of point p is ``factor[p] * d(direction[p] . x[p]) / d(state)``; its residual
+    ``r[p]`` and weight ``w[p]`` give ``A += w J^T J`` (upper triangle only: call
+    :func:`mirror_upper` once when every term is in) and ``g -= w J^T r``.
+
+    Args:
+        A: Normal matrix, shape (6 + n, 6 + n), updated in place.
+        g: Right-hand side, shape (6 + n,), updated in place.
+        x: World points, shape (P, 3), [m].
+        segment: Segment carrying each point, shape (P,).
+        direction: A world direction per point, shape (P, 3).
+        factor: Scale of each row, shape (P,).
+        r: Residuals, shape (P,).
+        w: Weights, shape (P,); rows of weight 0 are skipped.
+        palm: Palm origin, shape (3,), [m].
+        moves: ``moves[s, j]``: hinge j moves segment s, shape (B, n).
+        axis: World axis of every hinge, shape (n, 3).
+        pivot: World pivot of every hinge, shape (n, 3), [m].
+    """
+    P, n = x.shape[0], axis.shape[0]
+    D = 6 + n
+    row = np.empty(D)
+    for p in range(P):
+        wp = w[p]
+        if wp == 0.0:
+            continue
+        f = factor[p]
+        d0, d1, d2 = direction[p, 0], direction[p, 1], direction[p, 2]
+        l0, l1, l2 = x[p, 0] - palm[0], x[p, 1] - palm[1], x[p, 2] - palm[2]
+        row[0], row[1], row[2] = f * d0, f * d1, f * d2
+        row[3] = f * (l1 * d2 - l2 * d1)
+        row[4] = f * (l2 * d0 - l0 * d2)
+        row[5] = f * (l0 * d1 - l1 * d0)
+        s = segment[p]
+        for j in range(n):
+            if moves[s, j]:
+                m0, m1, m2 = x[p, 0] - pivot[j, 0], x[p, 1] - pivot[j, 1], x[p, 2] - pivot[j, 2]
+                row[6 + j] = f * (axis[j, 0] * (m1 * d2 - m2 * d1) + axis[j, 1] * (m2 * d0 - m0 * d2)
+                                  + axis[j, 2] * (m0 * d1 - m1 * d0))
+            else:
+                row[6 + j] = 0.0
+        wr = wp * r[p]
+        for i in range(D):
+            ri = row[i]
+            if ri == 0.0:
+                continue
+            wi = wp * ri
+            for k in range(i, D):
+                A[i, k] += wi * row[k]
+            g[i] -= ri * wr
+
+
+@_jit
+def mirror_upper(A):  # pragma: no cover - compiled
+    """Copies the upper triangle of a square matrix onto its lower triangle, in place."""
+    D = A.shape[0]
+    for i in range(D):
+        for k in range(i):
+            A[i, k] = A[k, i]

@@ -1,0 +1,220 @@
+"""Capsule geometry of the hand tracker, compiled: ray casting and nearest surface points.
+
+A capsule is the set of points within ``radius`` of the segment from ``a`` to ``b``. The two
+queries the hand tracker asks thousands of times per frame are compiled with numba, one pixel or
+point at a time in a fixed order of operations (no BLAS, no fast-math: the same bits on every
+BLAS kernel):
+
+* :func:`ray_capsules`: the first capsule a camera ray meets (cylinder, then the two end
+  spheres), with the hit point and the outward surface normal;
+* :func:`closest_on_capsules`: the nearest capsule surface of a point, with the signed distance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+
+_TINY_LENGTH_M = 1e-12  # a capsule axis shorter than this is a sphere
+_PARALLEL = 1e-12  # rays closer than this to parallel with the axis miss the cylinder wall
+_BOUND_MARGIN_M = 1e-9  # slack of the bounding-sphere test (rounding of the exact tests)
+
+
+def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray, *,
+                 surface: bool = True):
+    """First intersection of camera rays with a set of capsules.
+
+    Args:
+        origin: Camera centre, shape (3,), [m].
+        rays: Ray directions with unit optical-axis component, shape (N, 3), so that the ray
+            parameter of a hit is its depth.
+        a, b: Capsule end points, shape (G, 3), [m].
+        radius: Capsule radii, shape (G,), [m].
+        surface: Also compute the hit points and normals (None otherwise).
+
+    Returns:
+        ``(depth (N,), geom (N,), point (N, 3), normal (N, 3))``: depth of the first hit (+inf for
+        none), the capsule hit (-1 for none), the hit point and the outward unit surface normal.
+    """
+    origin = np.ascontiguousarray(origin, dtype=np.float64)
+    rays = np.ascontiguousarray(rays, dtype=np.float64)
+    a = np.ascontiguousarray(a, dtype=np.float64)
+    b = np.ascontiguousarray(b, dtype=np.float64)
+    radius = np.ascontiguousarray(np.broadcast_to(radius, (a.shape[0],)), dtype=np.float64)
+    depth, geom, x, nrm = _ray_capsules(origin, rays, a, b, radius, surface)
+    if not surface:
+        return depth, geom, None, None
+    return depth, geom, x, nrm
+
+
+@_jit
+def _ray_capsules(origin, rays, a, b, radius, surface):  # pragma: no cover - compiled
+    N, G = rays.shape[0], a.shape[0]
+    # Per capsule: unit axis u, length L, w = origin - a, w.u, w.w, origin - b and its square,
+    # r^2, and a bounding sphere (centre, radius^2) for a cheap rejection.
+    u = np.empty((G, 3))
+    L = np.empty(G)
+    w = np.empty((G, 3))
+    wu = np.empty(G)
+    ww = np.empty(G)
+    wb = np.empty((G, 3))
+    wbwb = np.empty(G)
+    r2 = np.empty(G)
+    bc = np.empty((G, 3))
+    br2 = np.empty(G)
+    for g in range(G):
+        l2 = 0.0
+        for k in range(3):
+            l2 += (b[g, k] - a[g, k]) * (b[g, k] - a[g, k])
+        L[g] = max(math.sqrt(l2), _TINY_LENGTH_M)
+        wu[g] = 0.0
+        ww[g] = 0.0
+        wbwb[g] = 0.0
+        for k in range(3):
+            u[g, k] = (b[g, k] - a[g, k]) / L[g]
+            w[g, k] = origin[k] - a[g, k]
+            wb[g, k] = origin[k] - b[g, k]
+            bc[g, k] = 0.5 * (a[g, k] + b[g, k])
+        for k in range(3):
+            wu[g] += w[g, k] * u[g, k]
+            ww[g] += w[g, k] * w[g, k]
+            wbwb[g] += wb[g, k] * wb[g, k]
+        r2[g] = radius[g] * radius[g]
+        R = 0.5 * L[g] + radius[g] + _BOUND_MARGIN_M
+        br2[g] = R * R
+    depth = np.full(N, np.inf)
+    geom = np.full(N, -1, dtype=np.int64)
+    x = np.zeros((N, 3))
+    nrm = np.zeros((N, 3))
+    for n in range(N):
+        d0, d1, d2 = rays[n, 0], rays[n, 1], rays[n, 2]
+        dd = d0 * d0 + d1 * d1 + d2 * d2
+        best = np.inf
+        best_g = -1
+        for g in range(G):
+            # Bounding sphere: the squared distance of its centre from the ray's line.
+            c0, c1, c2 = bc[g, 0] - origin[0], bc[g, 1] - origin[1], bc[g, 2] - origin[2]
+            cd = c0 * d0 + c1 * d1 + c2 * d2
+            if c0 * c0 + c1 * c1 + c2 * c2 - cd * cd / dd > br2[g]:
+                continue
+            t_g = np.inf
+            du = d0 * u[g, 0] + d1 * u[g, 1] + d2 * u[g, 2]
+            wd = d0 * w[g, 0] + d1 * w[g, 1] + d2 * w[g, 2]
+            # Cylinder: |w_p + t d_p|^2 = r^2 with the components perpendicular to the axis.
+            A = dd - du * du
+            B = 2.0 * (wd - wu[g] * du)
+            C = ww[g] - wu[g] * wu[g] - r2[g]
+            disc = B * B - 4.0 * A * C
+            if disc >= 0.0 and A > _PARALLEL:
+                t = (-B - math.sqrt(disc)) / (2.0 * A)
+                s = wu[g] + t * du  # the hit's position along the axis
+                if t > 0.0 and s >= 0.0 and s <= L[g]:
+                    t_g = t
+            # The end spheres.
+            Be = 2.0 * wd
+            disc = Be * Be - 4.0 * dd * (ww[g] - r2[g])
+            if disc >= 0.0:
+                t = (-Be - math.sqrt(disc)) / (2.0 * dd)
+                if t > 0.0 and t < t_g:
+                    t_g = t
+            Be = 2.0 * (d0 * wb[g, 0] + d1 * wb[g, 1] + d2 * wb[g, 2])
+            disc = Be * Be - 4.0 * dd * (wbwb[g] - r2[g])
+            if disc >= 0.0:
+                t = (-Be - math.sqrt(disc)) / (2.0 * dd)
+                if t > 0.0 and t < t_g:
+                    t_g = t
+            if t_g < best:
+                best = t_g
+                best_g = g
+        if best_g < 0:
+            continue
+        depth[n] = best
+        geom[n] = best_g
+        if not surface:
+            continue
+        g = best_g
+        sax = 0.0
+        for k in range(3):
+            x[n, k] = origin[k] + best * rays[n, k]
+            sax += (x[n, k] - a[g, k]) * u[g, k]
+        sax = min(max(sax, 0.0), L[g])
+        m = 0.0
+        for k in range(3):
+            nrm[n, k] = x[n, k] - (a[g, k] + sax * u[g, k])
+            m += nrm[n, k] * nrm[n, k]
+        m = max(math.sqrt(m), _TINY_LENGTH_M)
+        for k in range(3):
+            nrm[n, k] /= m
+    return depth, geom, x, nrm
+
+
+def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius: np.ndarray):
+    """Nearest capsule of every point and the signed distance to its surface.
+
+    Args:
+        points: Shape (P, 3), [m].
+        a, b: Capsule end points, shape (G, 3), [m].
+        radius: Capsule radii, shape (G,), [m].
+
+    Returns:
+        ``(geom (P,), distance (P,), axis_point (P, 3), normal (P, 3))``: the nearest capsule, the
+        signed distance to its surface (negative inside), the closest point on its axis and the
+        unit outward direction from that point towards the observed point ((0, 0, 1) for a point
+        on the axis).
+    """
+    return _closest_on_capsules(np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(a, dtype=np.float64),
+                                np.ascontiguousarray(b, dtype=np.float64),
+                                np.ascontiguousarray(np.broadcast_to(radius, (a.shape[0],)), dtype=np.float64))
+
+
+@_jit
+def _closest_on_capsules(points, a, b, radius):  # pragma: no cover - compiled
+    P, G = points.shape[0], a.shape[0]
+    geom = np.zeros(P, dtype=np.int64)
+    dist = np.full(P, np.inf)
+    cp = np.zeros((P, 3))
+    normal = np.zeros((P, 3))
+    ab = np.empty((G, 3))
+    L2 = np.empty(G)
+    for g in range(G):
+        s = 0.0
+        for k in range(3):
+            ab[g, k] = b[g, k] - a[g, k]
+            s += ab[g, k] * ab[g, k]
+        L2[g] = max(s, _TINY_LENGTH_M)
+    c = np.empty(3)
+    for p in range(P):
+        best = np.inf
+        best_g = 0
+        for g in range(G):
+            t = 0.0
+            for k in range(3):
+                t += (points[p, k] - a[g, k]) * ab[g, k]
+            t = min(max(t / L2[g], 0.0), 1.0)
+            s = 0.0
+            for k in range(3):
+                c[k] = a[g, k] + t * ab[g, k]
+                s += (points[p, k] - c[k]) * (points[p, k] - c[k])
+            dg = math.sqrt(s) - radius[g]
+            if dg < best:
+                best = dg
+                best_g = g
+                for k in range(3):
+                    cp[p, k] = c[k]
+        geom[p] = best_g
+        dist[p] = best
+        m = 0.0
+        for k in range(3):
+            normal[p, k] = points[p, k] - cp[p, k]
+            m += normal[p, k] * normal[p, k]
+        m = math.sqrt(m)
+        if m > 1e-9:
+            for k in range(3):
+                normal[p, k] /= m
+        else:
+            normal[p, 0], normal[p, 1], normal[p, 2] = 0.0, 0.0, 1.0
+    return geom, dist, cp, normal
