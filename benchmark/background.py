@@ -8,7 +8,10 @@ chain, on the machine's other core:
   it does not compete for the interpreter lock; the child sees the parent's memory as it was at
   the fork (no copying or pickling of the depth video);
 * :meth:`Background.thread`: work that releases the interpreter lock (zlib compression of the
-  episode archive) in a thread.
+  episode archive) in a thread;
+* :meth:`Background.preload`: modules the children will need (matplotlib), imported in a thread
+  while the caller works in compiled code, so that each child does not import them again. A fork
+  waits for the preload to end (a child must not inherit a half-done import).
 
 :meth:`Background.wait` joins everything and raises if any of it failed, so a command that
 finishes has all its files; :meth:`Background.cancel` stops the rest after a failure.
@@ -47,12 +50,32 @@ class Background:
     def __init__(self, enabled: bool = True):
         self.enabled = bool(enabled) and "fork" in multiprocessing.get_all_start_methods()
         self._jobs: list = []  # (name, Process | Thread, errors list or None)
+        self._preload: threading.Thread | None = None
+
+    def preload(self, *modules: str) -> None:
+        """Imports ``modules`` in a thread (errors are left to the child that imports them again)."""
+        if not self.enabled or self._preload is not None:
+            return
+
+        def target():
+            import importlib
+
+            for name in modules:
+                try:
+                    importlib.import_module(name)
+                except Exception:  # the child's own import reports it
+                    return
+
+        self._preload = threading.Thread(target=target, name="preload", daemon=True)
+        self._preload.start()
 
     def process(self, name: str, fn, *args, **kwargs) -> None:
         """Runs ``fn(*args, **kwargs)`` in a forked child process (its return value is dropped)."""
         if not self.enabled:
             fn(*args, **kwargs)
             return
+        if self._preload is not None:
+            self._preload.join()
         p = multiprocessing.get_context("fork").Process(target=_child, args=(fn, args, kwargs), name=name, daemon=True)
         p.start()
         self._jobs.append((name, p, None))
@@ -81,6 +104,8 @@ class Background:
             BenchmarkError: Naming the jobs that failed (a child's traceback is on stderr).
         """
         failed = []
+        if self._preload is not None:
+            self._preload.join()
         jobs, self._jobs = self._jobs, []
         for name, job, errors in jobs:
             job.join()
@@ -93,6 +118,8 @@ class Background:
 
     def cancel(self) -> None:
         """Stops the child processes and waits for the threads (after a failure or an interrupt)."""
+        if self._preload is not None:
+            self._preload.join()
         jobs, self._jobs = self._jobs, []
         for _, job, errors in jobs:
             if errors is None and job.is_alive():

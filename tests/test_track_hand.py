@@ -8,7 +8,9 @@ from fsv import InputError, ObjectModel
 from fsv.hand import forward_kinematics
 from fsv.linalg import rows_mt
 from fsv.track.camera import CameraRays
-from fsv.track.hand import HandKinematics, HandState, HandTracker, box_signed_distance, ray_capsules
+from fsv.track.capsules import ray_capsules
+from fsv.track.hand import HandKinematics, HandState, HandTracker
+from fsv.track.hand_system import box_signed_distance
 from fsv.track.object import predict_box_depth
 from fsv.rotation import exp_so3
 from raycast import look_at_calibration, render_depth
@@ -135,7 +137,7 @@ def test_ray_capsules_match_an_independent_ray_caster():
     np.testing.assert_array_equal(np.isfinite(depth), hit)
     np.testing.assert_allclose(depth[hit], ref[hit], atol=1e-5)  # float32 reference
     # hit points lie on their capsule's surface, normals are unit and face the camera
-    from fsv.track.hand import closest_on_capsules
+    from fsv.track.capsules import closest_on_capsules
     g, d, _, _ = closest_on_capsules(x[hit], a, b, HAND.geom_radius)
     assert np.abs(d).max() < 1e-9
     np.testing.assert_allclose(np.linalg.norm(nrm[hit], axis=1), 1.0)

@@ -763,6 +763,7 @@ def run_cli_stage(run) -> None:
     depth = run.episode.depth
     paths = preview_paths(run.out, gif=not run.args.no_gif)
     run.background.process("depth preview", write_preview, depth.depth_m, depth.fps, run.out, gif=not run.args.no_gif)
+    run.background.preload("matplotlib.pyplot")  # for the later stages' pictures, while the next stage tracks
     T, H, W = depth.depth_m.shape
     block = {
         "frames": T,

@@ -102,6 +102,7 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
 
     T = depth.num_frames
     idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
@@ -130,26 +131,25 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         if truth is not None:
             corners = truth.box_pos[i] + (signs * half) @ truth.box_rot[i].T
             uv = _project(calib, corners)
-            for a, b in _BOX_EDGES:
-                ax.plot(uv[[a, b], 0], uv[[a, b], 1], color="white", lw=1.0, ls="--", alpha=0.8)
+            ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors="white", linewidths=1.0,
+                                             linestyles="--", alpha=0.8))
             ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, truth.hand_qpos[i]))
-            for a, b in ends:
-                uv = _project(calib, np.stack([a, b]))
-                ax.plot(uv[:, 0], uv[:, 1], color="white", lw=2.5, alpha=0.3, solid_capstyle="round")
+            uv = _project(calib, ends.reshape(-1, 3)).reshape(-1, 2, 2)
+            ax.add_collection(LineCollection(uv, colors="white", linewidths=2.5, alpha=0.3, capstyle="round"))
             act_t = np.asarray(truth.contact_active[i], bool)
             if act_t.any():
                 uv = _project(calib, truth.box_pos[i] + truth.contact_point[i, act_t] @ truth.box_rot[i].T)
                 ax.scatter(uv[:, 0], uv[:, 1], marker="+", s=40, c="magenta", zorder=3, linewidths=1.0)
         corners = tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T
         uv = _project(calib, corners)
-        for a, b in _BOX_EDGES:
-            ax.plot(uv[[a, b], 0], uv[[a, b], 1], color="lime", lw=1.2)
+        ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors="lime", linewidths=1.2))
         if hand_qpos is not None:
             ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, hand_qpos[i]))
-            for (a, b), r in zip(ends, hand_model.geom_radius):
-                uv = _project(calib, np.stack([a, b]))
-                px = r * calib.K[0, 0] / max(1e-3, float(((a + b) / 2 - calib.T_world_cam[:3, 3]) @ calib.T_world_cam[:3, 2]))
-                ax.plot(uv[:, 0], uv[:, 1], color="orange", lw=max(1.0, 1.4 * px), alpha=0.55, solid_capstyle="round")
+            depth_mid = ((ends[:, 0] + ends[:, 1]) / 2 - calib.T_world_cam[:3, 3]) @ calib.T_world_cam[:3, 2]
+            px = hand_model.geom_radius * calib.K[0, 0] / np.maximum(1e-3, depth_mid)  # capsule radius in pixels
+            uv = _project(calib, ends.reshape(-1, 3)).reshape(-1, 2, 2)
+            ax.add_collection(LineCollection(uv, colors="orange", linewidths=np.maximum(1.0, 1.4 * px), alpha=0.55,
+                                             capstyle="round"))
         if tips_all is not None:
             tips = _project(calib, tips_all[i])
             seen = getattr(tracking, "observed", np.ones(tips_all.shape[:2], bool))[i]

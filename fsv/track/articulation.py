@@ -87,6 +87,38 @@ def pose_chain(palm_pos, palm_rot, hinge, parent, offset_pos, offset_rot, joint_
 
 
 @_jit
+def point_row(row, x0, x1, x2, s, d0, d1, d2, f, palm, moves, axis, pivot):  # pragma: no cover - compiled
+    """Writes ``f * d(direction . x) / d(state)`` of the point x on segment s into ``row`` (6 + n,)."""
+    l0, l1, l2 = x0 - palm[0], x1 - palm[1], x2 - palm[2]
+    row[0], row[1], row[2] = f * d0, f * d1, f * d2
+    row[3] = f * (l1 * d2 - l2 * d1)
+    row[4] = f * (l2 * d0 - l0 * d2)
+    row[5] = f * (l0 * d1 - l1 * d0)
+    for j in range(axis.shape[0]):
+        if moves[s, j]:
+            m0, m1, m2 = x0 - pivot[j, 0], x1 - pivot[j, 1], x2 - pivot[j, 2]
+            row[6 + j] = f * (axis[j, 0] * (m1 * d2 - m2 * d1) + axis[j, 1] * (m2 * d0 - m0 * d2)
+                              + axis[j, 2] * (m0 * d1 - m1 * d0))
+        else:
+            row[6 + j] = 0.0
+
+
+@_jit
+def add_row(A, g, row, w, r):  # pragma: no cover - compiled
+    """``A += w row row^T`` (upper triangle) and ``g -= w row r``."""
+    D = row.shape[0]
+    wr = w * r
+    for i in range(D):
+        ri = row[i]
+        if ri == 0.0:
+            continue
+        wi = w * ri
+        for k in range(i, D):
+            A[i, k] += wi * row[k]
+        g[i] -= ri * wr
+
+
+@_jit
 def add_point_rows(A, g, x, segment, direction, factor, r, w, palm, moves, axis, pivot):  # pragma: no cover - compiled
     """Adds the rows of points attached to segments to normal equations, in place.
 
@@ -108,37 +140,13 @@ def add_point_rows(A, g, x, segment, direction, factor, r, w, palm, moves, axis,
         axis: World axis of every hinge, shape (n, 3).
         pivot: World pivot of every hinge, shape (n, 3), [m].
     """
-    P, n = x.shape[0], axis.shape[0]
-    D = 6 + n
-    row = np.empty(D)
-    for p in range(P):
-        wp = w[p]
-        if wp == 0.0:
+    row = np.empty(6 + axis.shape[0])
+    for p in range(x.shape[0]):
+        if w[p] == 0.0:
             continue
-        f = factor[p]
-        d0, d1, d2 = direction[p, 0], direction[p, 1], direction[p, 2]
-        l0, l1, l2 = x[p, 0] - palm[0], x[p, 1] - palm[1], x[p, 2] - palm[2]
-        row[0], row[1], row[2] = f * d0, f * d1, f * d2
-        row[3] = f * (l1 * d2 - l2 * d1)
-        row[4] = f * (l2 * d0 - l0 * d2)
-        row[5] = f * (l0 * d1 - l1 * d0)
-        s = segment[p]
-        for j in range(n):
-            if moves[s, j]:
-                m0, m1, m2 = x[p, 0] - pivot[j, 0], x[p, 1] - pivot[j, 1], x[p, 2] - pivot[j, 2]
-                row[6 + j] = f * (axis[j, 0] * (m1 * d2 - m2 * d1) + axis[j, 1] * (m2 * d0 - m0 * d2)
-                                  + axis[j, 2] * (m0 * d1 - m1 * d0))
-            else:
-                row[6 + j] = 0.0
-        wr = wp * r[p]
-        for i in range(D):
-            ri = row[i]
-            if ri == 0.0:
-                continue
-            wi = wp * ri
-            for k in range(i, D):
-                A[i, k] += wi * row[k]
-            g[i] -= ri * wr
+        point_row(row, x[p, 0], x[p, 1], x[p, 2], segment[p], direction[p, 0], direction[p, 1], direction[p, 2],
+                  factor[p], palm, moves, axis, pivot)
+        add_row(A, g, row, w[p], r[p])
 
 
 @_jit

@@ -52,10 +52,11 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
 
 
 @_jit
-def _ray_capsules(origin, rays, a, b, radius, surface):  # pragma: no cover - compiled
-    N, G = rays.shape[0], a.shape[0]
-    # Per capsule: unit axis u, length L, w = origin - a, w.u, w.w, origin - b and its square,
-    # r^2, and a bounding sphere (centre, radius^2) for a cheap rejection.
+def capsule_constants(origin, a, b, radius):  # pragma: no cover - compiled
+    """Per-capsule constants of :func:`cast_ray` for rays from ``origin``: unit axis u (G, 3),
+    length L (G,), w = origin - a (G, 3), w.u, w.w, wb = origin - b (G, 3), wb.wb, r^2, and a
+    bounding sphere (centre (G, 3), squared radius (G,))."""
+    G = a.shape[0]
     u = np.empty((G, 3))
     L = np.empty(G)
     w = np.empty((G, 3))
@@ -86,69 +87,90 @@ def _ray_capsules(origin, rays, a, b, radius, surface):  # pragma: no cover - co
         r2[g] = radius[g] * radius[g]
         R = 0.5 * L[g] + radius[g] + _BOUND_MARGIN_M
         br2[g] = R * R
+    return u, L, w, wu, ww, wb, wbwb, r2, bc, br2
+
+
+@_jit
+def cast_ray(origin, d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, bc, br2):  # pragma: no cover - compiled
+    """First capsule met by the ray ``origin + t (d0, d1, d2)``: ``(t, g)``, (inf, -1) for none.
+
+    The capsule constants are :func:`capsule_constants`'."""
+    dd = d0 * d0 + d1 * d1 + d2 * d2
+    best = np.inf
+    best_g = -1
+    for g in range(L.shape[0]):
+        # Bounding sphere: the squared distance of its centre from the ray's line.
+        c0, c1, c2 = bc[g, 0] - origin[0], bc[g, 1] - origin[1], bc[g, 2] - origin[2]
+        cd = c0 * d0 + c1 * d1 + c2 * d2
+        if c0 * c0 + c1 * c1 + c2 * c2 - cd * cd / dd > br2[g]:
+            continue
+        t_g = np.inf
+        du = d0 * u[g, 0] + d1 * u[g, 1] + d2 * u[g, 2]
+        wd = d0 * w[g, 0] + d1 * w[g, 1] + d2 * w[g, 2]
+        # Cylinder: |w_p + t d_p|^2 = r^2 with the components perpendicular to the axis.
+        A = dd - du * du
+        B = 2.0 * (wd - wu[g] * du)
+        C = ww[g] - wu[g] * wu[g] - r2[g]
+        disc = B * B - 4.0 * A * C
+        if disc >= 0.0 and A > _PARALLEL:
+            t = (-B - math.sqrt(disc)) / (2.0 * A)
+            s = wu[g] + t * du  # the hit's position along the axis
+            if t > 0.0 and s >= 0.0 and s <= L[g]:
+                t_g = t
+        # The end spheres.
+        Be = 2.0 * wd
+        disc = Be * Be - 4.0 * dd * (ww[g] - r2[g])
+        if disc >= 0.0:
+            t = (-Be - math.sqrt(disc)) / (2.0 * dd)
+            if t > 0.0 and t < t_g:
+                t_g = t
+        Be = 2.0 * (d0 * wb[g, 0] + d1 * wb[g, 1] + d2 * wb[g, 2])
+        disc = Be * Be - 4.0 * dd * (wbwb[g] - r2[g])
+        if disc >= 0.0:
+            t = (-Be - math.sqrt(disc)) / (2.0 * dd)
+            if t > 0.0 and t < t_g:
+                t_g = t
+        if t_g < best:
+            best = t_g
+            best_g = g
+    return best, best_g
+
+
+@_jit
+def hit_normal(x, a, u, L, g, out):  # pragma: no cover - compiled
+    """Outward unit normal of capsule g at its surface point x (3,), written to ``out`` (3,)."""
+    sax = 0.0
+    for k in range(3):
+        sax += (x[k] - a[g, k]) * u[g, k]
+    sax = min(max(sax, 0.0), L[g])
+    m = 0.0
+    for k in range(3):
+        out[k] = x[k] - (a[g, k] + sax * u[g, k])
+        m += out[k] * out[k]
+    m = max(math.sqrt(m), _TINY_LENGTH_M)
+    for k in range(3):
+        out[k] /= m
+
+
+@_jit
+def _ray_capsules(origin, rays, a, b, radius, surface):  # pragma: no cover - compiled
+    N = rays.shape[0]
+    u, L, w, wu, ww, wb, wbwb, r2, bc, br2 = capsule_constants(origin, a, b, radius)
     depth = np.full(N, np.inf)
     geom = np.full(N, -1, dtype=np.int64)
     x = np.zeros((N, 3))
     nrm = np.zeros((N, 3))
     for n in range(N):
-        d0, d1, d2 = rays[n, 0], rays[n, 1], rays[n, 2]
-        dd = d0 * d0 + d1 * d1 + d2 * d2
-        best = np.inf
-        best_g = -1
-        for g in range(G):
-            # Bounding sphere: the squared distance of its centre from the ray's line.
-            c0, c1, c2 = bc[g, 0] - origin[0], bc[g, 1] - origin[1], bc[g, 2] - origin[2]
-            cd = c0 * d0 + c1 * d1 + c2 * d2
-            if c0 * c0 + c1 * c1 + c2 * c2 - cd * cd / dd > br2[g]:
-                continue
-            t_g = np.inf
-            du = d0 * u[g, 0] + d1 * u[g, 1] + d2 * u[g, 2]
-            wd = d0 * w[g, 0] + d1 * w[g, 1] + d2 * w[g, 2]
-            # Cylinder: |w_p + t d_p|^2 = r^2 with the components perpendicular to the axis.
-            A = dd - du * du
-            B = 2.0 * (wd - wu[g] * du)
-            C = ww[g] - wu[g] * wu[g] - r2[g]
-            disc = B * B - 4.0 * A * C
-            if disc >= 0.0 and A > _PARALLEL:
-                t = (-B - math.sqrt(disc)) / (2.0 * A)
-                s = wu[g] + t * du  # the hit's position along the axis
-                if t > 0.0 and s >= 0.0 and s <= L[g]:
-                    t_g = t
-            # The end spheres.
-            Be = 2.0 * wd
-            disc = Be * Be - 4.0 * dd * (ww[g] - r2[g])
-            if disc >= 0.0:
-                t = (-Be - math.sqrt(disc)) / (2.0 * dd)
-                if t > 0.0 and t < t_g:
-                    t_g = t
-            Be = 2.0 * (d0 * wb[g, 0] + d1 * wb[g, 1] + d2 * wb[g, 2])
-            disc = Be * Be - 4.0 * dd * (wbwb[g] - r2[g])
-            if disc >= 0.0:
-                t = (-Be - math.sqrt(disc)) / (2.0 * dd)
-                if t > 0.0 and t < t_g:
-                    t_g = t
-            if t_g < best:
-                best = t_g
-                best_g = g
-        if best_g < 0:
+        best, g = cast_ray(origin, rays[n, 0], rays[n, 1], rays[n, 2], u, L, w, wu, ww, wb, wbwb, r2, bc, br2)
+        if g < 0:
             continue
         depth[n] = best
-        geom[n] = best_g
+        geom[n] = g
         if not surface:
             continue
-        g = best_g
-        sax = 0.0
         for k in range(3):
             x[n, k] = origin[k] + best * rays[n, k]
-            sax += (x[n, k] - a[g, k]) * u[g, k]
-        sax = min(max(sax, 0.0), L[g])
-        m = 0.0
-        for k in range(3):
-            nrm[n, k] = x[n, k] - (a[g, k] + sax * u[g, k])
-            m += nrm[n, k] * nrm[n, k]
-        m = max(math.sqrt(m), _TINY_LENGTH_M)
-        for k in range(3):
-            nrm[n, k] /= m
+        hit_normal(x[n], a, u, L, g, nrm[n])
     return depth, geom, x, nrm
 
 
@@ -172,12 +194,35 @@ def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius
 
 
 @_jit
-def _closest_on_capsules(points, a, b, radius):  # pragma: no cover - compiled
-    P, G = points.shape[0], a.shape[0]
-    geom = np.zeros(P, dtype=np.int64)
-    dist = np.full(P, np.inf)
-    cp = np.zeros((P, 3))
-    normal = np.zeros((P, 3))
+def closest_capsule(p0, p1, p2, a, ab, L2, radius, cp, normal):  # pragma: no cover - compiled
+    """Nearest capsule surface of the point (p0, p1, p2): ``(g, signed distance)``; the closest
+    axis point and the outward unit direction towards the point ((0, 0, 1) on the axis) are
+    written to ``cp`` (3,) and ``normal`` (3,). ``ab = b - a`` and ``L2 = max(|ab|^2, tiny)``."""
+    best = np.inf
+    best_g = 0
+    for g in range(a.shape[0]):
+        t = (p0 - a[g, 0]) * ab[g, 0] + (p1 - a[g, 1]) * ab[g, 1] + (p2 - a[g, 2]) * ab[g, 2]
+        t = min(max(t / L2[g], 0.0), 1.0)
+        c0, c1, c2 = a[g, 0] + t * ab[g, 0], a[g, 1] + t * ab[g, 1], a[g, 2] + t * ab[g, 2]
+        dg = math.sqrt((p0 - c0) * (p0 - c0) + (p1 - c1) * (p1 - c1) + (p2 - c2) * (p2 - c2)) - radius[g]
+        if dg < best:
+            best = dg
+            best_g = g
+            cp[0], cp[1], cp[2] = c0, c1, c2
+    normal[0], normal[1], normal[2] = p0 - cp[0], p1 - cp[1], p2 - cp[2]
+    m = math.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+    if m > 1e-9:
+        for k in range(3):
+            normal[k] /= m
+    else:
+        normal[0], normal[1], normal[2] = 0.0, 0.0, 1.0
+    return best_g, best
+
+
+@_jit
+def capsule_axes(a, b):  # pragma: no cover - compiled
+    """``(ab = b - a (G, 3), L2 = max(|ab|^2, tiny) (G,))`` of :func:`closest_capsule`."""
+    G = a.shape[0]
     ab = np.empty((G, 3))
     L2 = np.empty(G)
     for g in range(G):
@@ -186,35 +231,17 @@ def _closest_on_capsules(points, a, b, radius):  # pragma: no cover - compiled
             ab[g, k] = b[g, k] - a[g, k]
             s += ab[g, k] * ab[g, k]
         L2[g] = max(s, _TINY_LENGTH_M)
-    c = np.empty(3)
+    return ab, L2
+
+
+@_jit
+def _closest_on_capsules(points, a, b, radius):  # pragma: no cover - compiled
+    P = points.shape[0]
+    geom = np.zeros(P, dtype=np.int64)
+    dist = np.full(P, np.inf)
+    cp = np.zeros((P, 3))
+    normal = np.zeros((P, 3))
+    ab, L2 = capsule_axes(a, b)
     for p in range(P):
-        best = np.inf
-        best_g = 0
-        for g in range(G):
-            t = 0.0
-            for k in range(3):
-                t += (points[p, k] - a[g, k]) * ab[g, k]
-            t = min(max(t / L2[g], 0.0), 1.0)
-            s = 0.0
-            for k in range(3):
-                c[k] = a[g, k] + t * ab[g, k]
-                s += (points[p, k] - c[k]) * (points[p, k] - c[k])
-            dg = math.sqrt(s) - radius[g]
-            if dg < best:
-                best = dg
-                best_g = g
-                for k in range(3):
-                    cp[p, k] = c[k]
-        geom[p] = best_g
-        dist[p] = best
-        m = 0.0
-        for k in range(3):
-            normal[p, k] = points[p, k] - cp[p, k]
-            m += normal[p, k] * normal[p, k]
-        m = math.sqrt(m)
-        if m > 1e-9:
-            for k in range(3):
-                normal[p, k] /= m
-        else:
-            normal[p, 0], normal[p, 1], normal[p, 2] = 0.0, 0.0, 1.0
+        geom[p], dist[p] = closest_capsule(points[p, 0], points[p, 1], points[p, 2], a, ab, L2, radius, cp[p], normal[p])
     return geom, dist, cp, normal

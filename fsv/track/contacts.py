@@ -33,7 +33,7 @@ import numpy as np
 from fsv.errors import InputError
 from fsv.linalg import vm
 from fsv.models import ObjectModel
-from fsv.track.hand import box_signed_distance
+from fsv.track.hand_system import box_signed_distance
 from fsv.types import Contacts, Poses
 
 

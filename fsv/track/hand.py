@@ -38,12 +38,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
-from fsv.linalg import dot, gram, mm, norm, rows_mt, solve, tmv, vm
+from fsv.linalg import dot, mm, norm, solve
 from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
-from fsv.track.articulation import add_point_rows, mirror_upper, pose_chain
+from fsv.track.articulation import mirror_upper, pose_chain
 from fsv.track.camera import CameraRays
-from fsv.track.capsules import closest_on_capsules, ray_capsules
+from fsv.track.capsules import ray_capsules
+from fsv.track.hand_system import hand_normal_equations
 from fsv.rotation import cross, exp_so3, log_so3, project_to_so3, rot_from_skew, skew_stack
 from fsv.types import Calibration
 
@@ -75,6 +76,16 @@ class HandState:
         object.__setattr__(self, "palm_pos", pos)
         object.__setattr__(self, "palm_rot", project_to_so3(rot))
         object.__setattr__(self, "joints", q)
+
+    @classmethod
+    def _from_fit(cls, palm_pos: np.ndarray, palm_rot: np.ndarray, joints: np.ndarray) -> "HandState":
+        """A state the tracker computed (finite arrays of the right shapes; ``palm_rot`` is
+        re-orthonormalised), without the checks of user input."""
+        st = object.__new__(cls)
+        object.__setattr__(st, "palm_pos", palm_pos)
+        object.__setattr__(st, "palm_rot", project_to_so3(palm_rot))
+        object.__setattr__(st, "joints", joints)
+        return st
 
 
 @dataclass(frozen=True)
@@ -269,32 +280,6 @@ class HandKinematics:
         return J
 
 
-def box_signed_distance(points_obj: np.ndarray, half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Signed distance to a box centred at the origin and its gradient (object frame).
-
-    Args:
-        points_obj: Shape (P, 3), [m].
-        half: Half edge lengths, shape (3,), [m].
-
-    Returns:
-        ``(distance (P,), gradient (P, 3))``: negative inside; the gradient is the outward unit
-        direction of steepest increase.
-    """
-    q = np.abs(points_obj) - half
-    outside = np.maximum(q, 0.0)
-    out_len = np.linalg.norm(outside, axis=1)
-    inside = np.minimum(q.max(axis=1), 0.0)
-    dist = out_len + inside
-    sgn = np.sign(points_obj)
-    sgn[sgn == 0] = 1.0
-    grad_out = sgn * outside / np.maximum(out_len, 1e-12)[:, None]
-    ax = np.argmax(q, axis=1)
-    grad_in = np.zeros_like(points_obj)
-    grad_in[np.arange(points_obj.shape[0]), ax] = sgn[np.arange(points_obj.shape[0]), ax]
-    grad = np.where((out_len > 0)[:, None], grad_out, grad_in)
-    return dist, grad
-
-
 class HandTracker:
     """Tracks the articulated hand frame by frame.
 
@@ -332,8 +317,15 @@ class HandTracker:
         fromto = hand_model.geom_fromto
         s = np.array([0.0, 0.5, 1.0])
         self.pen_local = (fromto[:, None, :3] * (1 - s)[None, :, None] + fromto[:, None, 3:] * s[None, :, None]).reshape(-1, 3)
-        self.pen_segment = np.repeat(hand_model.geom_segment, 3)
-        self.pen_radius = np.repeat(hand_model.geom_radius, 3)
+        self.pen_segment = np.repeat(hand_model.geom_segment, 3).astype(np.int64)
+        self.pen_radius = np.repeat(hand_model.geom_radius, 3).astype(np.float64)
+        # The model's arrays as the compiled normal equations take them.
+        self._geom_segment = np.ascontiguousarray(hand_model.geom_segment, dtype=np.int64)
+        self._geom_fromto = np.ascontiguousarray(hand_model.geom_fromto, dtype=np.float64)
+        self._geom_radius = np.ascontiguousarray(hand_model.geom_radius, dtype=np.float64)
+        self._tip_segment = np.ascontiguousarray(hand_model.fingertip_segment, dtype=np.int64)
+        self._tip_offset = np.ascontiguousarray(hand_model.fingertip_offset, dtype=np.float64)
+        self._tip_radius = np.ascontiguousarray(hand_model.fingertip_radius, dtype=np.float64)
 
     def predict(self) -> HandState:
         """Constant-velocity prediction of the palm; joints keep their last values."""
@@ -342,7 +334,7 @@ class HandTracker:
             return last
         prev = self.history[-2]
         rot = mm(exp_so3(log_so3(mm(last.palm_rot, prev.palm_rot.T))), last.palm_rot)
-        return HandState(2 * last.palm_pos - prev.palm_pos, rot, last.joints)
+        return HandState._from_fit(2 * last.palm_pos - prev.palm_pos, rot, last.joints)
 
     def _candidates(self, depth_m, scene_depth, state: HandState, sigma: float):
         """Flat indices of the pixels near the predicted hand that lie in front of the scene, and
@@ -375,98 +367,39 @@ class HandTracker:
             idx = idx[:: int(np.ceil(idx.size / self.config.max_points))]
         return idx, scene
 
-    def _system(self, st: HandState, rays, z_obs, pts, free, prior: HandState, box_pos, box_rot, sigma: float):
+    def _system(self, st: HandState, rays, z_obs, free, prior: HandState, box_pos, box_rot, sigma: float):
         """Normal equations (A, g), robust cost and explained fraction of a configuration.
 
-        ``free`` is ``(rays (M, 3), depth (M,))`` of the pixels that see the scene."""
+        The residuals (see the module docstring and :func:`fsv.track.hand_system.hand_normal_equations`):
+
+        * hand candidates: where the camera ray hits a capsule (in front of the observation by less
+          than 3 sigma) observed minus predicted depth along the ray, else the signed distance of
+          the observed point to its nearest capsule (candidates farther than ``assign_max_m`` pull
+          nothing); Cauchy weights;
+        * free space: pixels that see the box or the table where the model puts a capsule on
+          their ray, observed minus predicted depth;
+        * no interpenetration with the box, grasp closure of hidden fingers near it;
+        * temporal smoothness about the prediction (the occlusion prior for unseen fingers).
+
+        ``rays`` (N, 3) and ``z_obs`` (N,) are the candidates' rays and depths; ``free`` is
+        ``(rays (M, 3), depth (M,))`` of the pixels that see the scene."""
         c = self.config
         n = self.model.num_joints
-        pose = self.kin.pose(st)
-        a, b = self.kin.capsules(pose[0], pose[1])
-        A = np.zeros((6 + n, 6 + n))
-        g = np.zeros(6 + n)
-        cost = 0.0
-        explained = 0.0
-        k = c.cauchy_k * sigma
-
-        palm, _, axis, pivot = pose
-        moves, geom_seg, radius = self.kin.moves, self.model.geom_segment, self.model.geom_radius
-
-        def add(x, seg, direction, factor, r, w):
-            add_point_rows(A, g, x, seg, direction, factor, r, w, palm[0], moves, axis, pivot)
-
-        if z_obs.size:
-            # Where a capsule is hit, the residual is along the ray (observed minus predicted
-            # depth): only the visible front surface explains a pixel, so depth noise cannot
-            # pull points onto the far side of a thin finger.
-            zh, geom, x, nrm = ray_capsules(self.rays.origin, rays, a, b, radius)
-            r = z_obs - zh
-            front = (geom >= 0) & (r > -3 * sigma)
-            if np.any(front):
-                nf = nrm[front]
-                rf = r[front]
-                nd = np.einsum("ni,ni->n", nf, rays[front])
-                add(x[front], geom_seg[geom[front]], nf, -1.0 / nd, rf, 1.0 / (1.0 + (rf / k) ** 2))
-                cost += 0.5 * k**2 * float(np.sum(np.log1p((rf / k) ** 2)))
-            explained = float(np.sum(front & (np.abs(r) < 2 * sigma)))
-            # Elsewhere (outside the model's silhouette, or well in front of it), ICP: the point
-            # pulls its nearest capsule surface.
-            rest = ~front
-            if np.any(rest):
-                gi, dist, cp, n2 = closest_on_capsules(pts[rest], a, b, radius)
-                use = dist < c.assign_max_m
-                explained += float(np.sum(use & (np.abs(dist) < 2 * sigma)))
-                add(cp, geom_seg[gi], n2, np.full(dist.shape[0], -1.0), dist,
-                    np.where(use, 1.0 / (1.0 + (dist / k) ** 2), 0.0))
-                d_c = np.minimum(np.abs(dist), c.assign_max_m)
-                cost += 0.5 * k**2 * float(np.sum(np.log1p((d_c / k) ** 2)))
-            explained /= z_obs.size
-        # Free space: where a pixel sees the box or the table but the model puts a capsule on its
-        # ray, observed minus predicted depth (positive: the capsule is in front of what is seen).
-        f_rays, f_z = free
-        if f_z.size:
-            zh, geom, x, nrm = ray_capsules(self.rays.origin, f_rays, a, b, radius)
-            hit = geom >= 0
-            if np.any(hit):
-                nd = np.einsum("ni,ni->n", nrm[hit], f_rays[hit])
-                rf = f_z[hit] - zh[hit]
-                add(x[hit], geom_seg[geom[hit]], nrm[hit], -1.0 / nd, rf, 1.0 / (1.0 + (rf / k) ** 2))
-                cost += 0.5 * k**2 * float(np.sum(np.log1p((rf / k) ** 2)))
-        # No interpenetration with the box: capsule samples at least their radius outside.
-        xs = pose[0][self.pen_segment] + np.einsum("pij,pj->pi", pose[1][self.pen_segment], self.pen_local)
-        sd, grad = box_signed_distance(vm(xs - box_pos, box_rot), self.half)
-        pen = self.pen_radius - sd
-        hit = pen > 0
-        if np.any(hit):
-            wp = (sigma / c.penetration_m) ** 2
-            nh = int(hit.sum())
-            add(xs[hit], self.pen_segment[hit], rows_mt(grad[hit], box_rot), np.full(nh, -1.0), pen[hit],
-                np.full(nh, wp))
-            cost += 0.5 * wp * float(np.sum(pen[hit] ** 2))
-        # Grasp closure for hidden fingers: a finger the camera cannot see whose pad is near the
-        # box flexes until the pad meets its surface (fingers wrap the object they hold).
-        if np.any(self.hidden):
-            tips = self.kin.fingertips(pose[0], pose[1])
-            sd_t, grad_t = box_signed_distance(vm(tips - box_pos, box_rot), self.half)
-            gap = sd_t - self.model.fingertip_radius
-            close = self.hidden & (gap > 0) & (gap < c.closure_range_m)
-            if np.any(close):
-                seg = self.model.fingertip_segment[close]
-                Jc = self.kin.point_jacobian(tips[close], seg, rows_mt(grad_t[close], box_rot), pose)
-                # Only the finger's flexion closes it: the palm stays where the depth puts it and
-                # the abduction keeps its last observed value.
-                Jc[:, :6] = 0.0
-                Jc[:, 6:] *= self.flexion[None, :]
-                wc = (sigma / c.closure_m) ** 2
-                A += gram(Jc, np.full(Jc.shape[0], wc))  # its lower triangle is overwritten below
-                g -= tmv(Jc, wc * gap[close])
-                cost += 0.5 * wc * float(np.sum(gap[close] ** 2))
+        pos, rot, axis, pivot = self.kin.pose(st)
+        A, g, cost, explained = hand_normal_equations(
+            pos, rot, axis, pivot, self.kin.moves, self._geom_segment, self._geom_fromto, self._geom_radius,
+            self.rays.origin, rays, z_obs, free[0], free[1], float(sigma), float(c.cauchy_k), float(c.assign_max_m),
+            self.pen_local, self.pen_segment, self.pen_radius, float(c.penetration_m),
+            np.ascontiguousarray(box_pos, dtype=np.float64), np.ascontiguousarray(box_rot, dtype=np.float64),
+            self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius, self.flexion,
+            float(c.closure_m), float(c.closure_range_m))
         # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
         for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, st.palm_pos - prior.palm_pos),
                              (slice(3, 6), c.smooth_rot_rad, log_so3(mm(st.palm_rot, prior.palm_rot.T))),
                              (slice(6, 6 + n), c.smooth_joint_rad, st.joints - prior.joints)):
             ws = (sigma / sd_) ** 2
-            A[sl, sl] += ws * np.eye(res.shape[0])
+            idx = np.arange(sl.start, sl.stop)
+            A[idx, idx] += ws
             g[sl] -= ws * res
             cost += 0.5 * ws * float(dot(res, res))
         mirror_upper(A)
@@ -476,17 +409,16 @@ class HandTracker:
         """Levenberg-Marquardt from ``state``: a step is taken only if it lowers the robust cost."""
         c = self.config
         rays = self.rays.ray[idx]
-        pts = self.rays.origin + z_obs[:, None] * rays
         n = self.model.num_joints
-        args = (rays, z_obs, pts, free, prior, box_pos, box_rot, sigma)
+        args = (rays, z_obs, free, prior, box_pos, box_rot, sigma)
         A, g, cost, explained = self._system(state, *args)
         lam = 1e-3
         for _ in range(c.iterations):
             step = solve(A + lam * np.diag(np.diag(A)) + 1e-12 * np.eye(6 + n), g)
             step[:3] = np.clip(step[:3], -0.02, 0.02)
             step[3:] = np.clip(step[3:], -0.3, 0.3)
-            cand = HandState(state.palm_pos + step[:3], mm(exp_so3(step[3:6]), state.palm_rot),
-                             np.clip(state.joints + step[6:], self.lo, self.hi))
+            cand = HandState._from_fit(state.palm_pos + step[:3], mm(exp_so3(step[3:6]), state.palm_rot),
+                                       np.clip(state.joints + step[6:], self.lo, self.hi))
             A2, g2, cost2, expl2 = self._system(cand, *args)
             if cost2 < cost:
                 state, A, g, cost, explained = cand, A2, g2, cost2, expl2
@@ -565,8 +497,8 @@ class HandTracker:
         """Particle search over the palm pose when the fit explains too few points."""
         best, best_e, best_cost, reinit = state, explained, cost, False
         for _ in range(self.config.particles):
-            cand = HandState(state.palm_pos + self.rng.normal(0.0, 0.02, 3),
-                             mm(exp_so3(self.rng.normal(0.0, 0.2, 3)), state.palm_rot), state.joints)
+            cand = HandState._from_fit(state.palm_pos + self.rng.normal(0.0, 0.02, 3),
+                                       mm(exp_so3(self.rng.normal(0.0, 0.2, 3)), state.palm_rot), state.joints)
             fit, e, cst = self._solve(idx, z_obs, free, cand, prior, box_pos, box_rot, sigma)
             if cst < best_cost:
                 best, best_e, best_cost, reinit = fit, e, cst, True
