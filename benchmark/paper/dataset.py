@@ -27,7 +27,9 @@ Layout of a dataset folder::
     dataset.json              spec, sources, format version and the world's fingerprint (a resumed
                               run must match them), and the
                               provenance of the run that made it (``resumed_with``: of later runs)
-    episodes/<id>.parquet     one table per episode (one row per kept frame), written atomically
+    episodes/<id>.parquet     one table per episode (one row per kept frame), written atomically;
+                              its bytes depend only on the episode (the same from a pool or Ray)
+    episodes/<id>.seconds.json  how long it took to build (for the manifest's ``seconds``)
     manifest.parquet          one row per episode (counts, timing, status, SHA-256 of the file's
                               bytes), rebuilt from the files
 
@@ -482,8 +484,12 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
 
     def done(table: pa.Table) -> None:
         meta = json.loads(table.schema.metadata[b"fsv"])
+        seconds = meta.pop("seconds", None)  # timing stays out of the file: the same bytes from any engine
         rel = os.path.join("episodes", meta["episode"] + ".parquet")
-        written[rel] = _write_sealed(table, os.path.join(out, rel))
+        written[rel] = _write_sealed(table.replace_schema_metadata({b"fsv": json.dumps(meta).encode()}),
+                                     os.path.join(out, rel))
+        if seconds is not None:
+            write_text(os.path.join(out, "episodes", meta["episode"] + TIMING_SUFFIX), json.dumps({"seconds": seconds}))
         claims.release(meta["episode"])
         bar.update(1)
 
@@ -700,6 +706,20 @@ def _run_one_job(job) -> pa.Table:
     return _run_one(*job)
 
 
+TIMING_SUFFIX = ".seconds.json"
+"""Beside ``episodes/<id>.parquet``: the seconds its build took (not in the table, whose bytes depend
+only on the episode: a local pool and a Ray cluster write the same files)."""
+
+
+def _build_seconds(parquet_path: str) -> float:
+    """The build time recorded beside an episode file (NaN if none or unreadable)."""
+    try:
+        with open(parquet_path[: -len(".parquet")] + TIMING_SUFFIX) as fh:
+            return float(json.load(fh)["seconds"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return float("nan")
+
+
 MANIFEST_COLUMNS = (
     "episode", "file", "sha256", "task", "user", "grasp", "mass", "seed", "status", "frames", "rows",
     "dropped_contacts", "dropped_gap", "dropped_solver", "seconds", "kinematics", "contacts",
@@ -732,7 +752,7 @@ def write_manifest(out, checked: dict | None = None) -> pd.DataFrame:
             grasp=sc["grasp"], mass=sc["mass"], seed=sc["seed"], status=meta["status"],
             frames=meta.get("frames", 0), rows=meta.get("rows", 0), dropped_contacts=meta.get("dropped_contacts", 0),
             dropped_gap=meta.get("dropped_gap", 0), dropped_solver=meta.get("dropped_solver", 0),
-            seconds=meta.get("seconds", float("nan")), kinematics=meta["kinematics"], contacts=meta["contacts"],
+            seconds=_build_seconds(path), kinematics=meta["kinematics"], contacts=meta["contacts"],
         ))
     manifest = pd.DataFrame(rows, columns=list(MANIFEST_COLUMNS))
     table = pa.Table.from_pandas(manifest, preserve_index=False)
