@@ -187,7 +187,7 @@ def build_parser() -> argparse.ArgumentParser:
         stage.add_arguments(p)
     from benchmark.suites.evaluate import add_method_arguments
 
-    add_method_arguments(p, oracle=False)
+    add_method_arguments(p, oracle=False, internal_model=False)
     return p
 
 

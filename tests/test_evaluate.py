@@ -135,6 +135,7 @@ def test_a_broken_external_tracker_exits_1_naming_the_failed_gates(tiny, tmp_pat
     (["--tracker", "external_stages:Nope"], "--tracker 'external_stages:Nope': external_stages has no attribute 'Nope'"),
     (["--differentiator", "median"], "--differentiator 'median': accepted: algebraic, central, gaussian, or module:attribute"),
     (["--oracle", "forces"], "--oracle 'forces': accepted: contacts, kinematics"),
+    (["--internal-model", "missing.npz"], "--internal-model missing.npz: no internal-force model"),
 ])
 def test_a_bad_method_exits_2_before_any_work(tiny, tmp_path, capsys, argv, needle):
     out = tmp_path / "out"

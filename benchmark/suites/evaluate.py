@@ -274,8 +274,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_method_arguments(p)
 
 
-def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True) -> None:
-    """``--method``, ``--tracker``, ``--differentiator``, ``--forces``, ``--internal`` [, ``--oracle``]."""
+def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, internal_model: bool = True) -> None:
+    """``--method``, ``--tracker``, ``--differentiator``, ``--forces``, ``--internal``, ``--internal-model`` [, ``--oracle``]."""
     from benchmark.method import DIFFERENTIATORS, ORACLE_STAGES
 
     g = p.add_argument_group("the method (default: the reference; replace a stage by module:attribute)")
@@ -288,6 +288,9 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True) -> Non
                    help="(kinematics, contacts, object_model, gravity) -> ForceSolution")
     g.add_argument("--internal", default=None, metavar="none|MODULE:ATTR",
                    help="(kinematics, contacts, object_model, gravity) -> (ForceSolution, predicted); none: nominal forces only")
+    if internal_model:  # the main command's learning stage has its own
+        g.add_argument("--internal-model", default=None, metavar="FILE",
+                       help="a model file of `fsv-bench train` for the reference internal-force stage (default: the shipped one)")
     if oracle:
         g.add_argument("--oracle", default="", metavar="LIST",
                        help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
@@ -298,8 +301,8 @@ def spec_from_args(args: argparse.Namespace):
     from benchmark.method import MethodSpec
 
     spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=args.differentiator,
-                      forces=args.forces, internal=args.internal,
-                      oracle=tuple(o for o in args.oracle.split(",") if o))
+                      forces=args.forces, internal=args.internal, internal_model=getattr(args, "internal_model", None),
+                      oracle=tuple(o for o in getattr(args, "oracle", "").split(",") if o))
     spec.check()
     return spec
 
