@@ -34,6 +34,7 @@ from benchmark.episode import Episode
 from benchmark.errors import BenchmarkError, RenderError
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from fsv import Calibration, DepthVideo
+from benchmark.background import background_of
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
@@ -762,8 +763,8 @@ def run_cli_stage(run) -> None:
     run.episode = render(run.episode)
     depth = run.episode.depth
     paths = preview_paths(run.out, gif=not run.args.no_gif)
-    run.background.process("depth preview", write_preview, depth.depth_m, depth.fps, run.out, gif=not run.args.no_gif)
-    run.background.preload("matplotlib.pyplot")  # for the later stages' pictures, while the next stage tracks
+    background_of(run).process("depth preview", write_preview, depth.depth_m, depth.fps, run.out, gif=not run.args.no_gif)
+    background_of(run).preload("matplotlib.pyplot")  # for the later stages' pictures, while the next stage tracks
     T, H, W = depth.depth_m.shape
     block = {
         "frames": T,

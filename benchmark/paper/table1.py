@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmark.background import background_of
 from benchmark.atomic import write_bytes
 from benchmark.errors import ScenarioError
 from benchmark.world.motion import CALIBRATION_SEEDS, CHOICES, DECLARED, TUNING, observed_poses
@@ -349,7 +350,7 @@ def run_stage(run) -> None:
         table, kins = score_table1(ep.truth, run.tracking.box, poses_label="tracked poses (fsv.track, from depth)")
     else:
         table, kins = score_table1(ep.truth, observed_poses(ep))
-    paths = write_outputs(table, ep.truth, kins, run.out, background=run.background)
+    paths = write_outputs(table, ep.truth, kins, run.out, background=background_of(run))
     run.summary["kinematics"] = table.summary()
     oracle = choice == "oracle"
     run.summary["kinematics_info"] = {

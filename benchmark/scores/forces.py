@@ -31,6 +31,7 @@ from benchmark.atomic import save_figure
 from benchmark.world.truth import Truth
 from fsv import Contacts, Kinematics, ObjectModel
 from fsv.forces import FALLBACKS, SOLVED, ForceSettings, ForceSolution, FrameStatus, nominal_forces, to_world_frame
+from benchmark.background import background_of
 
 PAPER_SENSITIVITY_N = {"mean": 0.216, "std": 1.548}
 
@@ -321,7 +322,7 @@ def run_stage(run) -> None:
     tag = f"ORACLE {', '.join(labels['oracle'])}" if labels["oracle"] else "no oracle input"
     run.out.mkdir(parents=True, exist_ok=True)
     plot = run.out / "forces_fig5.png"
-    run.background.process("Fig. 5", plot_fig5, sol, ep.truth, kin.rot, plot, learned=run.estimate.forces,
+    background_of(run).process("Fig. 5", plot_fig5, sol, ep.truth, kin.rot, plot, learned=run.estimate.forces,
                            title=f"forces — kinematics: {labels['kinematics']}; contacts: {labels['contacts']} [{tag}]")
     block["plot"] = plot.name
     run.summary["forces"] = block

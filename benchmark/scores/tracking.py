@@ -30,6 +30,7 @@ from fsv.hand import capsule_endpoints, forward_kinematics_qpos
 from fsv.rotation import angle_between
 from fsv.track.tracker import Tracking
 from fsv.types import Contacts
+from benchmark.background import background_of
 
 def score_tracking(tracking: Tracking, truth: Truth, contacts: Contacts | None = None) -> dict:
     """The tracker's scores against the truth (see the module docstring).
@@ -237,7 +238,7 @@ def run_stage(run) -> None:
     scores = score_tracking(tracking, ep.truth)
     run.out.mkdir(parents=True, exist_ok=True)
     overlay = run.out / "tracking_overlay.png"
-    run.background.process("tracking overlay", plot_overlay, ep.depth, ep.calib, tracking, ep.object_model,
+    background_of(run).process("tracking overlay", plot_overlay, ep.depth, ep.calib, tracking, ep.object_model,
                            ep.hand_model, overlay, truth=ep.truth)
     T = len(ep.truth.t)
     block = {
