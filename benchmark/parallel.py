@@ -18,6 +18,19 @@ class RayUnavailable(ValueError):
     """A Ray address was given but Ray is not installed."""
 
 
+ONE_CORE_ENV = {"LP_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
+"""Environment of a local worker process: one core's work each. Mesa's software rasteriser
+(llvmpipe) would otherwise start a thread per core in every worker, and the workers would compete
+for the cores the pool divides among them (a rendered frame is the same bits at any thread count)."""
+
+
+def one_core_worker() -> None:
+    """Pool initializer: limits this worker's native thread pools to one thread (:data:`ONE_CORE_ENV`)."""
+    import os
+
+    os.environ.update(ONE_CORE_ENV)
+
+
 def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | None = None) -> Iterator[tuple]:
     """Yields ``(index, fn(jobs[index]))`` for every job, in the order they finish.
 
@@ -37,7 +50,7 @@ def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | N
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
         ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=one_core_worker) as pool:
             futures = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
             for f in as_completed(futures):
                 yield futures[f], f.result()

@@ -609,8 +609,13 @@ class _Claims:
 
 
 def _exit_with_parent(parent_pid: int) -> None:
-    """Worker initializer: end the worker if this process (its parent) dies, e.g. on SIGKILL."""
+    """Worker initializer: one core's work (:func:`benchmark.parallel.one_core_worker`), and the
+    worker ends if this process (its parent) dies, e.g. on SIGKILL."""
     import threading
+
+    from benchmark.parallel import one_core_worker
+
+    one_core_worker()
 
     def watch():
         while os.getppid() == parent_pid:

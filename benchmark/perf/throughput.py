@@ -6,7 +6,10 @@
 Generation: the grid ``lift`` x seeds 0..N-1 of ``--duration`` s with tracked contacts (simulate,
 render, track, forces, tactile), from scratch, in this process and with 2 worker processes.
 Evaluation: ``--suite`` with the reference method from an empty episode cache, 1 then 2 workers.
-Episodes per core-minute = episodes / (wall minutes x workers). The extrapolation takes the
+Every worker, and this process in the 1-worker runs, is limited to one thread of Mesa's
+software rasteriser and of the native libraries (``benchmark.parallel.ONE_CORE_ENV``), so that
+a worker is one core. Episodes per core-minute = episodes / (wall minutes x workers). The
+extrapolation takes the
 1-worker generation cost per second of manipulation, times 3.2 h (11 520 s, the TPAMI extension's
 dataset), divided by 64 cores at the measured 2-worker efficiency (a cluster of 2-core-like nodes,
 no other overhead). The machine is shared: state its load beside the numbers.
@@ -72,7 +75,11 @@ def main(argv=None) -> dict:
     p.add_argument("--duration", type=float, default=5.0, help="generation episode length in seconds")
     p.add_argument("--suite", default="smoke", help="suite evaluated")
     args = p.parse_args(argv)
+    from benchmark.parallel import ONE_CORE_ENV
     from benchmark.suites import get_suite
+
+    # One worker is one core: the in-process run too (before anything renders), like the pool's workers.
+    os.environ.update(ONE_CORE_ENV)
 
     suite = get_suite(args.suite)
     load = os.getloadavg()
