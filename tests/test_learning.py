@@ -22,6 +22,6 @@ def test_learning_block_on_a_short_lift(episode_factory):
     block = score_episode(ep, sol, kin, con)
     assert block["scored"] > 100 and block["solver_failures"] == 0
     assert block["residual_rel_max"] <= 1e-6  # the learned forces explain the motion
-    assert 0 < block["rel_err_pct_mean"] < 30  # measured 16.6 % (oracle contacts and kinematics, 3 s lift)
+    assert 0 < block["rel_err_pct_mean"] < 30  # measured 15.5 % (seeds 1-2: 16.4, 13.9; oracle contacts and kinematics, 3 s lift)
     held = ep.truth.contact_active.sum(axis=1) >= 2
     assert np.all(pred[held][ep.truth.contact_active[held]] >= 0)  # internal grip, never a pull

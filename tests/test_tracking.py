@@ -13,15 +13,17 @@ from fsv.track.tracker import Tracking
 
 
 def test_box_gates_hold_on_lift_with_1cm_noise(tracked_lift):
-    """Measured 0.57 mm and 0.58 deg (medians); gates 1.5 mm and 1.5 deg."""
+    """Measured 1.40 mm and 1.18 deg (medians; seeds 1-2: 1.41 / 1.30 and 1.41 / 1.38; the tracker
+    gives the same bits under every OpenBLAS kernel); gates 2 mm and 2 deg, as on the smoke suite
+    (the ds325's multipath and flying pixels cost ~0.8 mm)."""
     ep, est = tracked_lift
     s = score_tracking(est.tracking, ep.truth)
-    assert s["box_pos_err_mm_median"] <= 1.5, s
-    assert s["box_rot_err_deg_median"] <= 1.5, s
+    assert s["box_pos_err_mm_median"] <= 2.0, s
+    assert s["box_rot_err_deg_median"] <= 2.0, s
 
 
 def test_end_to_end_net_force_error_on_the_short_lift(tracked_lift):
-    """Measured 0.409 N RMS on this 2.5 s human-speed lift (seeds 1-2: 0.387, 0.495 N; identical
+    """Measured 0.408 N RMS on this 2.5 s human-speed lift (seeds 1-2: 0.389, 0.496 N; identical
     under every OpenBLAS kernel); gate 0.8 N. The statistics over 10 s lifts are gated below."""
     ep, est = tracked_lift
     assert est.oracle == ()  # tracked contacts, kinematics from tracked poses
@@ -30,11 +32,11 @@ def test_end_to_end_net_force_error_on_the_short_lift(tracked_lift):
 
 
 def test_the_hand_is_tracked_where_the_camera_sees_it(tracked_lift):
-    """Measured: palm 9.3 mm, observed fingertips 5.2 mm (medians; seeds 1-2: palm 2.0 / 1.3 mm,
-    fingertips 4.3 / 3.8 mm; gates 15 and 10 mm)."""
+    """Measured: palm 1.6 mm, observed fingertips 3.6 mm (medians; seeds 1-2: palm 1.6 / 3.0 mm,
+    fingertips 3.5 / 4.9 mm; gates 8 and 10 mm)."""
     ep, est = tracked_lift
     palm_err = np.linalg.norm(est.tracking.hand_qpos[:, :3] - ep.truth.hand_qpos[:, :3], axis=1)
-    assert np.median(palm_err) < 0.015, np.median(palm_err)
+    assert np.median(palm_err) < 0.008, np.median(palm_err)
     seen = est.tracking.observed
     tip_err = np.linalg.norm(est.tracking.fingertips - ep.truth.fingertip_pos, axis=-1)
     assert seen.sum() > 50 and np.median(tip_err[seen]) < 0.010, np.median(tip_err[seen])
@@ -117,9 +119,9 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
 @pytest.mark.accuracy
 def test_tracking_gates_hold_as_statistics_over_four_default_lifts(tracked_lifts):
     """The contact and box gates of ``benchmark.scores.tracking.GATES`` as statistics over the 10 s lifts of
-    seeds 1-4 (never used for tuning), ds325 sensor. Measured: contact std 3.36 / 1.86 / 2.41 / 2.43 mm,
-    median 2.42 mm; mean -0.71 / +0.40 / +0.62 / +0.89 mm; recall 0.977-0.998; precision 0.999 / 0.991 /
-    0.899 / 0.918; box 1.25-1.37 mm (median 1.35), 1.05-1.47 deg (median 1.32). The box gates are 2 mm
+    seeds 1-4 (never used for tuning), ds325 sensor. Measured: contact std 1.44 / 2.08 / 1.69 / 1.35 mm,
+    median 1.56 mm; mean +0.38 / +0.37 / +0.39 / +0.29 mm; recall 0.997 each; precision 0.999 / 0.999 /
+    0.993 / 0.984; box 1.31-1.42 mm (median 1.40), 1.07-1.50 deg (median 1.37). The box gates are 2 mm
     and 2 deg, as on the smoke suite: the sensor's multipath and flying pixels cost ~0.8 mm."""
     scores = [t for _, _, t, _, _ in tracked_lifts]
 
@@ -136,9 +138,9 @@ def test_tracking_gates_hold_as_statistics_over_four_default_lifts(tracked_lifts
 @pytest.mark.accuracy
 def test_net_force_from_depth_over_four_default_lifts(tracked_lifts):
     """Net force of the nominal forces against the truth's resultant, whole method from depth.
-    Measured RMS 0.488 / 0.178 / 0.133 / 0.151 N, median 0.165 N (gate 0.3 N on the median, 1 N on
+    Measured RMS 0.301 / 0.179 / 0.134 / 0.150 N, median 0.165 N (gate 0.3 N on the median, 1 N on
     the worst). Least-violation frames (the programs were infeasible on the tracked contacts):
-    8 / 0 / 0 / 0 of 287 each, 8 of 1148 in all (gate 40)."""
+    0 of 1148 (gate 40; 8 with the tracker before it was compiled)."""
     rms = [f["net_force_err_n_rms"] for _, _, _, f, _ in tracked_lifts]
     assert np.median(rms) <= 0.3 and max(rms) <= 1.0, rms
     least_violation = [f["solver_failures"] for _, _, _, f, _ in tracked_lifts]
@@ -148,7 +150,7 @@ def test_net_force_from_depth_over_four_default_lifts(tracked_lifts):
 @pytest.mark.accuracy
 def test_learned_forces_from_depth_over_four_default_lifts(tracked_lifts):
     """The shipped model on tracked contacts and kinematics: the relative error of Table 2 per
-    episode. Measured 16.6 / 18.5 / 22.4 / 16.0 %, median 17.5 % (gate 35 %; the paper's Table 2:
+    episode. Measured 13.8 / 16.1 / 16.4 / 17.1 %, median 16.3 % (gate 35 %; the paper's Table 2:
     9.7-10.9 % on its own cohort; the shipped model is trained on four users of different grip)."""
     err = [b["rel_err_pct_mean"] for _, _, _, _, b in tracked_lifts]
     assert np.median(err) <= 35.0, err
