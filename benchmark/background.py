@@ -31,6 +31,8 @@ from benchmark.errors import BenchmarkError
 def _child(fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
     try:
         fn(*args, **kwargs)
+    except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: the parent reports it
+        os._exit(130)
     except BaseException:
         traceback.print_exc(file=sys.stderr)
         sys.stderr.flush()

@@ -1,0 +1,81 @@
+"""benchmark.background: jobs beside the caller, their failures reported at the end."""
+
+import os
+import time
+import types
+
+import pytest
+
+from benchmark.background import Background, background_of
+from benchmark.errors import BenchmarkError
+
+
+def _write(path, text):
+    with open(path, "w") as fh:
+        fh.write(text)
+
+
+def _fail(message):
+    raise ValueError(message)
+
+
+def test_a_forked_child_and_a_thread_both_finish_before_wait_returns(tmp_path):
+    bg = Background()
+    assert bg.enabled
+    bg.process("child", _write, tmp_path / "a.txt", "from the child")
+    bg.thread("thread", _write, tmp_path / "b.txt", "from the thread")
+    bg.wait()
+    assert (tmp_path / "a.txt").read_text() == "from the child"
+    assert (tmp_path / "b.txt").read_text() == "from the thread"
+
+
+def test_the_child_sees_the_parents_memory_as_it_was_at_the_fork(tmp_path):
+    data = {"value": 1}
+    bg = Background()
+    bg.process("child", lambda: _write(tmp_path / "v.txt", str(data["value"])))  # no pickling: a closure works
+    data["value"] = 2  # after the fork: not seen by the child
+    bg.wait()
+    assert (tmp_path / "v.txt").read_text() == "1"
+
+
+def test_failures_are_named_when_waiting(tmp_path, capfd):
+    bg = Background()
+    bg.process("picture", _fail, "no picture")
+    bg.thread("archive", _fail, "no archive")
+    bg.process("fine", _write, tmp_path / "ok.txt", "ok")
+    with pytest.raises(BenchmarkError, match=r"picture \(exit code 1\).*archive \(ValueError: no archive\)"):
+        bg.wait()
+    assert "no picture" in capfd.readouterr().err  # the child's traceback
+    assert (tmp_path / "ok.txt").read_text() == "ok"  # the others still ran
+    bg.wait()  # nothing left
+
+
+def test_disabled_runs_every_job_at_once_and_raises_at_once(tmp_path):
+    bg = Background(enabled=False)
+    bg.process("child", _write, tmp_path / "a.txt", "a")
+    assert (tmp_path / "a.txt").read_text() == "a"
+    with pytest.raises(ValueError, match="now"):
+        bg.thread("thread", _fail, "now")
+
+
+def test_cancel_stops_a_running_child():
+    bg = Background()
+    bg.process("sleeper", time.sleep, 60)
+    t0 = time.perf_counter()
+    bg.cancel()
+    assert time.perf_counter() - t0 < 10
+    bg.wait()  # cancelled jobs are forgotten
+
+
+def test_a_preloaded_module_is_imported_before_the_fork(tmp_path):
+    bg = Background()
+    bg.preload("json", "no_such_module_here")  # a failing import is left to the child
+    bg.process("child", lambda: _write(tmp_path / "pid.txt", str(os.getpid())))
+    bg.wait()
+    assert int((tmp_path / "pid.txt").read_text()) != os.getpid()
+
+
+def test_background_of_a_run_without_one_works_at_once():
+    bg = Background()
+    assert background_of(types.SimpleNamespace(background=bg)) is bg
+    assert background_of(types.SimpleNamespace()).enabled is False
