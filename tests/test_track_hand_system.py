@@ -7,7 +7,7 @@ from benchmark.world.hand import hand_model
 from fsv import ObjectModel
 from fsv.linalg import gram, rows_mt, tmv, vm
 from fsv.rotation import exp_so3
-from fsv.track.articulation import add_point_rows, mirror_upper
+from fsv.track.articulation import add_row, mirror_upper, point_row
 from fsv.track.camera import CameraRays
 from fsv.track.capsules import closest_on_capsules, ray_capsules
 from fsv.track.hand import HandKinematics, HandState, HandTracker, HandTrackerConfig
@@ -140,7 +140,10 @@ def test_point_rows_equal_gram_of_the_point_jacobian():
     J = factor[:, None] * kin.point_jacobian(x, seg, direction, pose)
     D = 6 + HAND.num_joints
     A, g = np.zeros((D, D)), np.zeros(D)
-    add_point_rows(A, g, x, seg.astype(np.int64), direction, factor, r, w, pose[0][0], kin.moves, pose[2], pose[3])
+    row = np.empty(D)
+    for p in range(P):
+        point_row(row, *x[p], int(seg[p]), *direction[p], factor[p], pose[0][0], kin.moves, pose[2], pose[3])
+        add_row(A, g, row, w[p], r[p])
     mirror_upper(A)
     np.testing.assert_allclose(A, gram(J, w), rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(g, -tmv(J, w * r), rtol=1e-12, atol=1e-14)

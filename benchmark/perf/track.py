@@ -111,8 +111,8 @@ def main(argv=None) -> int:
         core = sorted(os.sched_getaffinity(0))[0]
         runs = {name: [] for name in versions}
         for r in range(args.rounds):
-            for name, parent in versions.items():
-                out = tmp / f"pos-{len(runs[name])}-{abs(hash(name))}.npy"
+            for v, (name, parent) in enumerate(versions.items()):
+                out = tmp / f"box-pos-round{r}-version{v}.npy"
                 res = run_worker(job, parent, core, out)
                 res["box_err_mm"] = float(np.median(np.linalg.norm(np.load(out) - ep.truth.box_pos, axis=1)) * 1e3)
                 runs[name].append(res)

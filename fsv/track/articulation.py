@@ -7,8 +7,8 @@ frame) and n hinge angles; a point x rigidly attached to segment s moves by
 
 over the hinges j that move s (on s or an ancestor). A residual along a direction e has the row
 ``e . dx`` per state coordinate. The fit's normal equations ``A += w J^T J``, ``g -= w J^T r``
-are accumulated here row by row without forming J (the same order of operations on every
-machine: scalar loops, no BLAS, no fast-math).
+are accumulated row by row without forming J (:func:`point_row`, :func:`add_row`; the same
+order of operations on every machine: scalar loops, no BLAS, no fast-math).
 """
 
 from __future__ import annotations
@@ -116,37 +116,6 @@ def add_row(A, g, row, w, r):  # pragma: no cover - compiled
         for k in range(i, D):
             A[i, k] += wi * row[k]
         g[i] -= ri * wr
-
-
-@_jit
-def add_point_rows(A, g, x, segment, direction, factor, r, w, palm, moves, axis, pivot):  # pragma: no cover - compiled
-    """Adds the rows of points attached to segments to normal equations, in place.
-
-    The row of point p is ``factor[p] * d(direction[p] . x[p]) / d(state)``; its residual
-    ``r[p]`` and weight ``w[p]`` give ``A += w J^T J`` (upper triangle only: call
-    :func:`mirror_upper` once when every term is in) and ``g -= w J^T r``.
-
-    Args:
-        A: Normal matrix, shape (6 + n, 6 + n), updated in place.
-        g: Right-hand side, shape (6 + n,), updated in place.
-        x: World points, shape (P, 3), [m].
-        segment: Segment carrying each point, shape (P,).
-        direction: A world direction per point, shape (P, 3).
-        factor: Scale of each row, shape (P,).
-        r: Residuals, shape (P,).
-        w: Weights, shape (P,); rows of weight 0 are skipped.
-        palm: Palm origin, shape (3,), [m].
-        moves: ``moves[s, j]``: hinge j moves segment s, shape (B, n).
-        axis: World axis of every hinge, shape (n, 3).
-        pivot: World pivot of every hinge, shape (n, 3), [m].
-    """
-    row = np.empty(6 + axis.shape[0])
-    for p in range(x.shape[0]):
-        if w[p] == 0.0:
-            continue
-        point_row(row, x[p, 0], x[p, 1], x[p, 2], segment[p], direction[p, 0], direction[p, 1], direction[p, 2],
-                  factor[p], palm, moves, axis, pivot)
-        add_row(A, g, row, w[p], r[p])
 
 
 @_jit

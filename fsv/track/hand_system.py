@@ -70,6 +70,21 @@ def _box_signed_distance(points, half):  # pragma: no cover - compiled
 
 
 @_jit
+def _segment_point_in_box(pos, rot, s, local, box_pos, box_rot, x):  # pragma: no cover - compiled
+    """The point ``local`` (3,) of segment s: written to ``x`` (3,) in the world; returned in the
+    box's frame, ``(q0, q1, q2) = (x - box_pos) @ box_rot``."""
+    for i in range(3):
+        v = 0.0
+        for j in range(3):
+            v += rot[s, i, j] * local[j]
+        x[i] = pos[s, i] + v
+    q0 = (x[0] - box_pos[0]) * box_rot[0, 0] + (x[1] - box_pos[1]) * box_rot[1, 0] + (x[2] - box_pos[2]) * box_rot[2, 0]
+    q1 = (x[0] - box_pos[0]) * box_rot[0, 1] + (x[1] - box_pos[1]) * box_rot[1, 1] + (x[2] - box_pos[2]) * box_rot[2, 1]
+    q2 = (x[0] - box_pos[0]) * box_rot[0, 2] + (x[1] - box_pos[1]) * box_rot[1, 2] + (x[2] - box_pos[2]) * box_rot[2, 2]
+    return q0, q1, q2
+
+
+@_jit
 def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromto, radius,
                           origin, rays, z_obs, free_rays, free_z, sigma, cauchy_k, assign_max_m,
                           pen_local, pen_segment, pen_radius, penetration_m, box_pos, box_rot, half,
@@ -180,14 +195,7 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
     wp = (sigma / penetration_m) ** 2
     for p in range(pen_segment.shape[0]):
         s = pen_segment[p]
-        for i in range(3):
-            v = 0.0
-            for j in range(3):
-                v += rot[s, i, j] * pen_local[p, j]
-            x[i] = pos[s, i] + v
-        q0 = (x[0] - box_pos[0]) * box_rot[0, 0] + (x[1] - box_pos[1]) * box_rot[1, 0] + (x[2] - box_pos[2]) * box_rot[2, 0]
-        q1 = (x[0] - box_pos[0]) * box_rot[0, 1] + (x[1] - box_pos[1]) * box_rot[1, 1] + (x[2] - box_pos[2]) * box_rot[2, 1]
-        q2 = (x[0] - box_pos[0]) * box_rot[0, 2] + (x[1] - box_pos[1]) * box_rot[1, 2] + (x[2] - box_pos[2]) * box_rot[2, 2]
+        q0, q1, q2 = _segment_point_in_box(pos, rot, s, pen_local[p], box_pos, box_rot, x)
         pen = pen_radius[p] - box_sdf(q0, q1, q2, half, grad)
         if pen <= 0.0:
             continue
@@ -203,14 +211,7 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
         if not hidden[f]:
             continue
         s = tip_segment[f]
-        for i in range(3):
-            v = 0.0
-            for j in range(3):
-                v += rot[s, i, j] * tip_offset[f, j]
-            x[i] = pos[s, i] + v
-        q0 = (x[0] - box_pos[0]) * box_rot[0, 0] + (x[1] - box_pos[1]) * box_rot[1, 0] + (x[2] - box_pos[2]) * box_rot[2, 0]
-        q1 = (x[0] - box_pos[0]) * box_rot[0, 1] + (x[1] - box_pos[1]) * box_rot[1, 1] + (x[2] - box_pos[2]) * box_rot[2, 1]
-        q2 = (x[0] - box_pos[0]) * box_rot[0, 2] + (x[1] - box_pos[1]) * box_rot[1, 2] + (x[2] - box_pos[2]) * box_rot[2, 2]
+        q0, q1, q2 = _segment_point_in_box(pos, rot, s, tip_offset[f], box_pos, box_rot, x)
         gap = box_sdf(q0, q1, q2, half, grad) - tip_radius[f]
         if not (gap > 0.0 and gap < closure_range_m):
             continue
