@@ -205,6 +205,11 @@ class Contacts:
         slide_dir: Unit sliding direction of the finger relative to the object surface, object
             frame, shape (T, K, 3); zero where not sliding. Kinetic friction on the object
             points along +slide_dir (the finger drags the surface along with it).
+        gap: Distance from the finger's pad to the object's surface, shape (T, K), [m]; NaN where
+            unknown (the default). Where a finger is not active but its gap is finite, ``point``
+            and ``normal`` hold the pad's projection onto the surface: a candidate contact the force
+            programs may add when the active contacts cannot explain the motion
+            (``fsv.forces.ForceSettings.repair_gap_m``).
     """
 
     finger_names: tuple
@@ -213,6 +218,7 @@ class Contacts:
     point: np.ndarray
     normal: np.ndarray
     slide_dir: np.ndarray
+    gap: np.ndarray = None
 
     def __post_init__(self):
         names = tuple(str(n) for n in self.finger_names)
@@ -224,7 +230,11 @@ class Contacts:
             normal=as_array("Contacts.normal", self.normal, (None, K, 3)),
             slide_dir=as_array("Contacts.slide_dir", self.slide_dir, (None, K, 3)),
         )
+        gap = np.full(fields["active"].shape, np.nan) if self.gap is None else self.gap
+        fields["gap"] = as_array("Contacts.gap", gap, (None, K))
         same_length("Contacts", **fields)
+        if np.any(np.isinf(fields["gap"])):
+            raise InputError("Contacts.gap must be finite or NaN (unknown), it holds inf")
         if np.any(fields["sliding"] & ~fields["active"]):
             raise InputError("Contacts.sliding is set for a finger that is not active")
         object.__setattr__(self, "finger_names", names)

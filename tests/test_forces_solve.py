@@ -314,3 +314,57 @@ def test_a_violation_within_the_solvers_precision_counts_as_solved():
     assert sol.status[0] == FrameStatus.OPTIMAL and np.allclose(sol.force, strict.force)
     model, contacts, kin = _single_contact((0.8 * 1.01, -1.0, 0.0))  # 1 % outside: a real violation
     assert nominal_forces(kin, contacts, model).status[0] == FrameStatus.LEAST_VIOLATION
+
+
+def _pinch_with_a_candidate(gap_m):
+    """A finger at the +y face and a second one 'near' the -y face (inactive, its pad ``gap_m`` away);
+    the motion needs a squeeze's friction: 3 N along +z with no net y force."""
+    model = box_model()
+    h = model.half_extents
+    point = np.array([[[0.0, h[1], 0.0], [0.0, -h[1], 0.0]]])
+    normal = np.array([[[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]]])
+    contacts = Contacts(finger_names=["index", "thumb"], active=[[True, False]], sliding=[[False, False]],
+                        point=point, normal=normal, slide_dir=np.zeros((1, 2, 3)), gap=[[0.0, gap_m]])
+    force = np.array([[[0.0, -3.0, 1.5], [0.0, 3.0, 1.5]]])
+    kin = kinematics_for(np.random.default_rng(0), force, point, model, rot=np.eye(3)[None])
+    return model, contacts, kin
+
+
+def test_an_infeasible_frame_takes_a_finger_near_the_surface_as_a_contact():
+    # One finger cannot lift the box (it would need friction without pressing); the finger the
+    # tracker saw 20 mm from the opposite face can: the frame is solved exactly with it added.
+    model, contacts, kin = _pinch_with_a_candidate(0.02)
+    sol = nominal_forces(kin, contacts, model)
+    assert sol.status[0] == FrameStatus.CONTACTS_ADDED and sol.active[0].tolist() == [True, True]
+    assert _rel_residual(sol)[0] <= REL
+    _check_cones(sol, model.friction)
+    nom, _, _ = oracle("nominal", sol.required[0], sol.contacts_used(contacts), 0, model)
+    assert np.abs(sol.force[0] - nom).max() <= 1e-4
+    used = sol.contacts_used(contacts)
+    assert used.active[0].tolist() == [True, True] and np.allclose(used.point[0, 1], contacts.point[0, 1])
+    # The same frame with the candidate beyond the repair distance, with the repair off, or with
+    # an unknown gap: least violation, and the given contacts are passed on unchanged.
+    for c, settings_ in ((_pinch_with_a_candidate(0.05)[1], None), (contacts, ForceSettings(repair_gap_m=0.0)),
+                         (Contacts(contacts.finger_names, contacts.active, contacts.sliding, contacts.point,
+                                   contacts.normal, contacts.slide_dir), None)):
+        far = nominal_forces(kin, c, model, settings=settings_)
+        assert far.status[0] == FrameStatus.LEAST_VIOLATION and far.active[0].tolist() == [True, False]
+        assert far.contacts_used(c) is c
+
+
+def test_the_learned_stage_sees_the_contacts_the_force_stage_added():
+    # reconstruction with the contacts passed on is exact; with the tracked ones it is not
+    model, contacts, kin = _pinch_with_a_candidate(0.02)
+    used = nominal_forces(kin, contacts, model).contacts_used(contacts)
+    target = np.array([[2.0, 2.0]])
+    assert reconstruct_forces(kin, used, model, target).status[0] == FrameStatus.OPTIMAL
+    no_repair = ForceSettings(repair_gap_m=0.0)
+    assert reconstruct_forces(kin, contacts, model, target, settings=no_repair).status[0] == FrameStatus.LEAST_VIOLATION
+
+
+def test_contacts_used_checks_the_fingers():
+    model, contacts, kin = _pinch_with_a_candidate(0.02)
+    sol = nominal_forces(kin, contacts, model)
+    other = Contacts(["a", "b"], contacts.active, contacts.sliding, contacts.point, contacts.normal, contacts.slide_dir)
+    with pytest.raises(InputError, match="fingers"):
+        sol.contacts_used(other)

@@ -34,6 +34,9 @@ def test_contact_hysteresis_and_object_frame_point():
     assert c.active[:, 0].tolist() == [False, True, True, True, False, True]
     np.testing.assert_allclose(c.point[1, 0], [HALF[0], 0.01, 0.005], atol=1e-12)
     np.testing.assert_allclose(c.normal[1, 0], [-1, 0, 0])
+    # every frame's pad gap is passed on, and a finger off the surface keeps its projection there
+    np.testing.assert_allclose(c.gap[:, 0], gaps, atol=1e-12)
+    np.testing.assert_allclose(c.point[0, 0], [HALF[0], 0.01, 0.005], atol=1e-12)
 
 
 def test_sliding_direction_follows_the_finger_over_the_surface():
@@ -44,8 +47,42 @@ def test_sliding_direction_follows_the_finger_over_the_surface():
     c = detect_contacts(np.concatenate([tips, tips2], 1), np.array([r, r]), np.ones((T, 2), bool), box_poses(T),
                         MODEL, ("a", "b"), ContactConfig(slide_window=2))
     assert c.active.all()
-    assert c.sliding[2:-2, 0].all() and not c.sliding[:, 1].any()
+    # it starts to slide on the third frame whose speed exceeds 0.05 m/s (frames 2, 3, 4)
+    assert not c.sliding[:4, 0].any() and c.sliding[4:-2, 0].all() and not c.sliding[:, 1].any()
     np.testing.assert_allclose(c.slide_dir[5, 0], [0, 1, 0], atol=1e-9)
+    one = detect_contacts(np.concatenate([tips, tips2], 1), np.array([r, r]), np.ones((T, 2), bool), box_poses(T),
+                          MODEL, ("a", "b"), ContactConfig(slide_window=2, slide_frames=1))
+    assert one.sliding[2:-2, 0].all() and not one.sliding[:, 1].any()
+    # the held finger's point is the same on every frame; the sliding one's moves with it
+    assert np.ptp(c.point[:, 1], axis=0).max() == 0 and np.ptp(c.point[4:-2, 0, 1]) > 0.03
+
+
+def _speeds(v_m_s, r=0.008):
+    """A finger on the top face moving along +y at the given speed per frame."""
+    y = np.concatenate([[0.0], np.cumsum(np.asarray(v_m_s) / 30)]) - 0.03
+    return np.stack([[0.1, 0.2 + yy, 0.03 + HALF[2] + r] for yy in y])[:, None, :]
+
+
+def test_sliding_starts_on_evidence_and_stops_below_the_lower_speed():
+    cfg = ContactConfig(slide_window=1, median_frames=0)
+    # 0.1 m/s, then 0.04 m/s (between the stop and start speeds), then 0.01 m/s
+    v = [0.1] * 10 + [0.04] * 10 + [0.01] * 10
+    tips = _speeds(v)
+    T = len(tips)
+    c = detect_contacts(tips, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",), cfg)
+    s = c.sliding[:, 0]
+    assert s[5:19].all(), "slides on, through the slower stretch"
+    assert not s[22:].any(), "stops once below slide_stop_m_s"
+    no_hyst = detect_contacts(tips, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",),
+                              ContactConfig(slide_window=1, median_frames=0, slide_stop_m_s=0.05))
+    assert not no_hyst.sliding[12:, 0].any()
+    # a one-frame jump of 6 mm (0.09 m/s on the two centred differences that see it) is not a slide
+    jump = _speeds([0.0] * 8 + [0.18] + [0.0] * 8)
+    T = len(jump)
+    c = detect_contacts(jump, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",), cfg)
+    assert not c.sliding.any()
+    assert detect_contacts(jump, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",),
+                           ContactConfig(slide_window=1, median_frames=0, slide_frames=1)).sliding.any()
 
 
 def test_an_unseen_finger_keeps_its_last_observed_contact_point():
@@ -64,6 +101,10 @@ def test_an_unseen_finger_keeps_its_last_observed_contact_point():
 def test_bad_inputs_are_named():
     with pytest.raises(InputError, match="on_m"):
         ContactConfig(on_m=0.02, off_m=0.01)
+    with pytest.raises(InputError, match="slide_stop_m_s"):
+        ContactConfig(slide_stop_m_s=0.06)
+    with pytest.raises(InputError, match="slide_frames"):
+        ContactConfig(slide_frames=0)
     with pytest.raises(InputError, match="opposition_range_m"):
         ContactConfig(opposition_range_m=0.0)
     with pytest.raises(InputError, match="finger_share"):
@@ -101,7 +142,7 @@ def test_a_hidden_opposing_digit_sits_at_the_fingers_centre_of_pressure():
     # without the prior the thumb, 2 cm off its face, touches nothing; too far, the prior leaves it
     off = detect_contacts(tips, rad, observed, poses, MODEL, names, ContactConfig(opposition_prior=False))
     assert not off.active[:, 0].any()
-    far = detect_contacts(*_grasp(T, thumb_gap=0.08)[:4], MODEL, names)
+    far = detect_contacts(*_grasp(T, thumb_gap=0.12)[:4], MODEL, names)  # beyond opposition_range_m (0.10)
     assert not far.active[:, 0].any() and far.active[:, 1:].all()
     # a seen thumb is placed by its own fingertip, not by the prior
     seen = observed.copy()
@@ -116,8 +157,9 @@ def test_contact_points_are_medians_over_the_contact():
     x[10] += 0.03  # one wild frame
     tips = np.stack([[0.1 + xx, 0.2 + HALF[1] + r, 0.03] for xx in x])[:, None, :]
     raw = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("index",),
-                          ContactConfig(median_frames=0))
-    med = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("index",))
+                          ContactConfig(median_frames=0, hold_points=False))
+    med = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("index",),
+                          ContactConfig(hold_points=False))
     assert med.active.all()
     err_raw, err_med = np.abs(raw.point[:, 0, 0] - 0.01), np.abs(med.point[:, 0, 0] - 0.01)
     assert err_raw[10] > 0.025 and err_med[10] < 0.01
@@ -125,3 +167,8 @@ def test_contact_points_are_medians_over_the_contact():
     np.testing.assert_allclose(med.point[:, 0, 1], HALF[1])  # still on the face
     np.testing.assert_allclose(med.point[5, 0, 0], np.median(raw.point[0:11, 0, 0]))
     np.testing.assert_allclose(med.point[[0, -1], 0], raw.point[[0, -1], 0])  # the window shrinks at the ends
+    # held (the default): one point for the whole hold, the median of the running medians
+    held = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("index",))
+    assert not held.sliding.any()
+    np.testing.assert_allclose(held.point[:, 0], np.tile(np.median(med.point[:, 0], axis=0), (T, 1)), atol=1e-15)
+    assert abs(held.point[0, 0, 0] - 0.01) < 0.004

@@ -54,6 +54,18 @@ def test_contacts_sliding_requires_active():
         Contacts(("thumb",), active=[[False]], sliding=[[True]], point=z, normal=z, slide_dir=z)
 
 
+def test_contacts_gap_defaults_to_unknown_and_rejects_inf():
+    z = np.zeros((2, 1, 3))
+    c = Contacts(("thumb",), active=[[False], [True]], sliding=[[False], [False]], point=z, normal=z, slide_dir=z)
+    assert c.gap.shape == (2, 1) and np.isnan(c.gap).all()
+    g = Contacts(("thumb",), [[False], [True]], [[False], [False]], z, z, z, gap=[[0.01], [np.nan]])
+    assert g.gap[0, 0] == 0.01 and not g.gap.flags.writeable
+    with pytest.raises(InputError, match="Contacts.gap"):
+        Contacts(("thumb",), [[False], [True]], [[False], [False]], z, z, z, gap=[[np.inf], [0.0]])
+    with pytest.raises(InputError, match="Contacts.gap must have shape"):
+        Contacts(("thumb",), [[False], [True]], [[False], [False]], z, z, z, gap=[0.0, 0.0])
+
+
 def test_object_model_inertia_of_paper_box():
     I = ObjectModel.solid_box_inertia([0.171, 0.111, 0.06], 0.45)
     m = ObjectModel(size_m=[0.171, 0.111, 0.06], mass_kg=0.45, inertia=I, friction=0.8)

@@ -34,8 +34,8 @@ files written by other programs; when present they are checked.
     nominal/env_wrench (T, 6)     float  table force and torque about the COM, object frame   optional
     nominal/status     (T,)       int8   0 solved, 1 least violation, 2 no contacts,
                                          3 no kinematics, 4 failed, 5 solved with static
-                                         friction, 6 above the physical bound
-                                         (fsv.forces.FrameStatus)                         optional
+                                         friction, 6 above the physical bound, 7 solved
+                                         with contacts added (fsv.forces.FrameStatus)     optional
     forces/force, forces/env_wrench, forces/status   the method's final forces, as nominal/*  optional
     hand/fingertips    (T, K, 3)  float  fingertip pad centres in the world, [m]          optional
 

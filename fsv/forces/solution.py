@@ -9,6 +9,7 @@ import numpy as np
 
 from fsv._check import as_array, same_length
 from fsv.errors import InputError
+from fsv.types import Contacts
 
 
 class FrameStatus(IntEnum):
@@ -27,6 +28,9 @@ class FrameStatus(IntEnum):
         solved with those contacts held by static friction (their Coulomb cones) instead.
     IMPLAUSIBLE: solved, but the finger forces exceed the physical bound of the frame
         (:func:`fsv.forces.force_bound`); they are not passed on: NaN.
+    CONTACTS_ADDED: infeasible with the given contacts (kinetic and static friction); solved with
+        the fingers near the surface added as static contacts (``ForceSettings.repair_gap_m``,
+        ``Contacts.gap``); ``active`` includes them.
     """
 
     OPTIMAL = 0
@@ -36,9 +40,10 @@ class FrameStatus(IntEnum):
     FAILED = 4
     STATIC_FRICTION = 5
     IMPLAUSIBLE = 6
+    CONTACTS_ADDED = 7
 
 
-SOLVED = (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION)
+SOLVED = (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION, FrameStatus.CONTACTS_ADDED)
 """Statuses whose forces satisfy the cones and Newton–Euler exactly."""
 
 FALLBACKS = (FrameStatus.LEAST_VIOLATION, FrameStatus.FAILED, FrameStatus.IMPLAUSIBLE)
@@ -183,6 +188,27 @@ class ForceSolution:
             axis=1,
         )
         return fingers + self.env_internal_wrench
+
+    def contacts_used(self, given: Contacts) -> Contacts:
+        """The contacts these forces were computed on: ``given`` (the contacts passed to the
+        program) with the fingers the program added (:attr:`FrameStatus.CONTACTS_ADDED` frames) made
+        active, static, at the points and normals it used. ``given`` itself when none was added.
+
+        Args:
+            given: The contacts the program was given, the same T frames and K fingers.
+
+        Returns:
+            The contacts the next stage should use.
+        """
+        if given.finger_names != self.finger_names or len(given) != len(self):
+            raise InputError(f"contacts_used needs the program's {len(self)} frames and fingers {self.finger_names}, "
+                             f"got {len(given)} frames and {given.finger_names}")
+        added = self.active & ~given.active
+        if not added.any():
+            return given
+        return Contacts(given.finger_names, given.active | added, given.sliding,
+                        np.where(added[..., None], self.point, given.point),
+                        np.where(added[..., None], self.normal, given.normal), given.slide_dir, given.gap)
 
     def count(self, status: FrameStatus) -> int:
         """Number of frames with the given status."""
