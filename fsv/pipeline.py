@@ -40,7 +40,8 @@ def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectMode
         object_model: The known box.
         hand_model: The known hand.
         init: First-frame initialisation of the box and the hand.
-        differentiator: Kinematics differentiator; default ``AlgebraicConfig()`` (offline).
+        differentiator: Kinematics differentiator; default the reference method's
+            (``fsv.method.reference.TRACKED_POSES``, offline).
         tracker_config: Parameters of the tracking stages.
         contacts: Oracle ablation: contacts replacing the tracked ones (labelled in ``oracle``).
         kinematics: Oracle ablation: kinematics replacing the estimated ones.
@@ -55,7 +56,7 @@ def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectMode
     """
     method = make_method(
         tracker=ReferenceTracker(tracker_config or TrackerConfig()),
-        differentiator=StencilDifferentiator(differentiator or AlgebraicConfig()),
+        differentiator=StencilDifferentiator() if differentiator is None else StencilDifferentiator(differentiator),
         forces=None if forces else False,
         internal=LearnedInternalForces(internal_model) if forces and internal_model is not None else False,
     )
