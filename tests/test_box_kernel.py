@@ -124,13 +124,18 @@ def _reference_box_depth(o, d, bg, pos, rot, half, fx, silhouette_px, jacobian, 
     return out
 
 
-def _reference_normal_equations(o, d, bg, z_obs, pos, rot, half, fx, silhouette_px, sigma, robust_k, occluder_k):
-    """The NumPy IRLS step of ``BoxTracker.fit`` before numba: materialised J, Cauchy weights."""
+def _reference_normal_equations(o, d, bg, z_obs, pos, rot, half, fx, silhouette_px, sigma, robust_k, occluder_k,
+                                flying_k):
+    """The NumPy IRLS step of ``BoxTracker.fit`` before numba: materialised J, Cauchy weights;
+    flying pixels (between the face's plane and the table or 1 m behind it) weigh nothing."""
     zp, _, plane, J = _reference_box_depth(o, d, bg, pos, rot, half, fx, silhouette_px, True)
     r = z_obs - zp
     occluded = z_obs - np.minimum(zp, plane) < -occluder_k * sigma
+    back = np.where(np.isfinite(bg), bg, plane + 1.0)
+    m = flying_k * sigma
+    flying = (m > 0) & np.isfinite(plane) & (plane + m < z_obs) & (z_obs < back - m)
     w = 1.0 / (1.0 + (r / (robust_k * sigma)) ** 2)
-    w = np.where((z_obs > 0) & ~occluded, w, 0.0)
+    w = np.where((z_obs > 0) & ~occluded & ~flying, w, 0.0)
     return gram(J, w), tmv(J, w * r), J, w, r
 
 
@@ -249,8 +254,9 @@ def test_jacobian_matches_central_differences_away_from_edges(k):
     _assert_rows_close(J[on], Jn[on], 1e-5, floor=1e-3)
 
 
+@pytest.mark.parametrize("flying_k", [0.0, 3.0])
 @pytest.mark.parametrize("k", range(len(POSES)))
-def test_fused_normal_equations_equal_gram_and_tmv(k):
+def test_fused_normal_equations_equal_gram_and_tmv(k, flying_k):
     pos, rot = POSES[k]
     rng = np.random.default_rng(k)
     sigma, robust_k, occluder_k, silhouette_px = 0.01, 1.5, 3.0, 0.5
@@ -265,11 +271,17 @@ def test_fused_normal_equations_equal_gram_and_tmv(k):
     front = rng.random(idx.size) < 0.05
     z_obs[front] -= 0.1
     z_obs[np.isinf(z_obs)] = 0.0
+    # flying pixels: halfway between the box's edge and the table behind it
+    _, _, plane_true = _box_depth(o, d, bg, pos, rot, HALF, FX, silhouette_px, False)
+    fly = (rng.random(idx.size) < 0.05) & np.isfinite(plane_true) & np.isfinite(bg) & (bg - plane_true > 0.1)
+    z_obs[fly] = 0.5 * (plane_true[fly] + bg[fly])
     A_ref, g_ref, J, w, r = _reference_normal_equations(o, d, bg, z_obs, pos, rot, HALF, FX, silhouette_px, sigma,
-                                                        robust_k, occluder_k)
+                                                        robust_k, occluder_k, flying_k)
+    if flying_k and fly.any():
+        assert (w[fly] == 0).all()
     assert (w[(J != 0).any(1)] == 0).sum() > 50 and (w > 0.5).sum() > 500  # occluded/invalid and inliers
     A, g = _box_normal_equations(o, d, bg, np.ascontiguousarray(z_obs), pos, rot, HALF, FX, silhouette_px, sigma,
-                                 robust_k, occluder_k)
+                                 robust_k, occluder_k, flying_k)
     assert np.array_equal(A, A.T)
     np.testing.assert_allclose(A, A_ref, rtol=0, atol=1e-10 * np.abs(A_ref).max())
     np.testing.assert_allclose(g, g_ref, rtol=0, atol=1e-10 * np.abs(g_ref).max())
@@ -277,7 +289,10 @@ def test_fused_normal_equations_equal_gram_and_tmv(k):
     _, _, plane, Jk = _box_depth(o, d, bg, pos, rot, HALF, FX, silhouette_px, True)
     zk = _box_depth(o, d, bg, pos, rot, HALF, FX, silhouette_px, False)[0]
     rk = z_obs - zk
-    wk = np.where((z_obs > 0) & ~(z_obs - np.minimum(zk, plane) < -occluder_k * sigma),
+    m = flying_k * sigma
+    back = np.where(np.isfinite(bg), bg, plane + 1.0)
+    flying_k_mask = (m > 0) & np.isfinite(plane) & (plane + m < z_obs) & (z_obs < back - m)
+    wk = np.where((z_obs > 0) & ~(z_obs - np.minimum(zk, plane) < -occluder_k * sigma) & ~flying_k_mask,
                   1.0 / (1.0 + (rk / (robust_k * sigma)) ** 2), 0.0)
     np.testing.assert_allclose(A, gram(Jk, wk), rtol=0, atol=1e-12 * np.abs(A_ref).max())
     np.testing.assert_allclose(g, tmv(Jk, wk * rk), rtol=0, atol=1e-12 * np.abs(g_ref).max())

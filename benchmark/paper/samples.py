@@ -38,11 +38,11 @@ def sample_mask(kin: Kinematics, con: Contacts, feats, truth, min_fingers: int =
     return usable, usable & (gap <= max_gap_n), gap
 
 
-DATASET_FORCE_SETTINGS = ForceSettings(static_retry=False, feasibility_tol=0.0)
+DATASET_FORCE_SETTINGS = ForceSettings(static_retry=False, feasibility_tol=0.0, repair_gap_m=0.0)
 """Settings of the decomposition that makes the training targets: a frame whose program with the
-tracked sliding flags is infeasible is dropped as unsolved, without the static-friction retry or the
-feasibility tolerance of the method's own programs (the committed datasets and the shipped model
-were made this way)."""
+tracked contacts and sliding flags is infeasible is dropped as unsolved, without the static-friction
+retry, the contacts added from nearby fingers or the feasibility tolerance of the method's own
+programs: a training sample's features and targets come from the same contacts."""
 
 MAX_EXCESS_N = 1.5
 """Default of the plausibility rule (:func:`nominal_excess_n`), [N]: the paper's 1.5 N threshold."""
