@@ -177,6 +177,18 @@ def test_the_paper_suites_hold_the_paper_protocols_episodes():
            {(u, g, m, s) for u in (0, 4) for g in (0, 1) for m in (1, 4) for s in range(6)}
 
 
+def test_dev_is_the_standard_design_on_seeds_no_reported_suite_uses():
+    std, dev = SUITES["standard"].scenarios, SUITES["dev"].scenarios
+    design = lambda scs: [(sc.task, sc.user, sc.grasp, sc.duration_s, sc.noise_m, sc.sensor) for sc in scs]
+    assert design(dev) == design(std) and len(dev) == 48
+    assert [sc.seed for sc in dev] == list(range(500, 548))
+    reported = {sc.seed for name in ("standard", "smoke", "table1", "table2") for sc in SUITES[name].scenarios}
+    assert not reported & {sc.seed for sc in dev}
+    assert [sc.mass for sc in dev] != [sc.mass for sc in std]  # drawn by its own generator
+    assert SUITES["dev"].gates == SUITES["standard"].gates
+    assert [sc.seed for sc in std] == list(range(300, 348))  # the headline's seeds did not move
+
+
 def test_a_local_ray_cluster_gives_the_scores_of_the_local_run(tiny, ray_cluster, tmp_path):
     from benchmark.suites.evaluate import evaluate
 

@@ -15,14 +15,14 @@ SMOKE = Suite(
         Scenario(task="release", user=1, grasp=1, mass=0, seed=14, duration_s=4.0),
     ),
     gates=(  # measured by the reference method on this machine (human-speed world, ds325 sensor, compiled tracker)
-        Gate("box_pos_err_mm", "<=", 2.0, measured="median 1.40 mm (1.28-1.47)"),
-        Gate("contact_err_mm_std", "<=", 5.0, measured="median 3.67 mm (1.36-8.38; release the worst)"),
-        Gate("contact_recall", ">=", 0.85, measured="median 0.98 (0.87-0.99; release the worst)"),
-        Gate("contact_precision", ">=", 0.85, measured="median 0.96 (0.87-1.00)"),
-        Gate("acc_err_rms", "<=", 1.0, measured="median 0.56 m/s^2 (0.36-0.74)"),
-        Gate("net_force_err_n_rms", "<=", 1.0, measured="median 0.45 N (0.18-0.66)"),
-        Gate("least_violation_frac", "<=", 0.25, statistic="mean", measured="mean 0.019 (release 0.075, others 0)"),
-        Gate("learned_rel_err_pct", "<=", 35.0, measured="median 20.4 % (12.7-23.2)"),
+        Gate("box_pos_err_mm", "<=", 2.0, measured="median 1.20 mm (1.16-1.43)"),
+        Gate("contact_err_mm_std", "<=", 5.0, measured="median 3.50 mm (2.23-4.77; rotate the worst)"),
+        Gate("contact_recall", ">=", 0.85, measured="median 0.96 (0.86-0.99; release the worst)"),
+        Gate("contact_precision", ">=", 0.85, measured="median 0.94 (0.73-0.99; release the worst)"),
+        Gate("acc_err_rms", "<=", 1.0, measured="median 0.36 m/s^2 (0.30-0.61)"),
+        Gate("net_force_err_n_rms", "<=", 1.0, measured="median 0.30 N (0.15-0.31)"),
+        Gate("least_violation_frac", "<=", 0.25, statistic="mean", measured="mean 0.002 (place 0.009, others 0)"),
+        Gate("learned_rel_err_pct", "<=", 35.0, measured="median 17.6 % (14.3-36.7; rotate the worst)"),
     ),
     description=(
         "For CI: four 4 s episodes, one per task family (lift, place, rotate, release), each with "
