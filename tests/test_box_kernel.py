@@ -319,3 +319,14 @@ def test_fit_follows_the_numpy_gauss_newton(with_prior, monkeypatch):
     np.testing.assert_allclose(p_new, p_ref, rtol=0, atol=1e-9)
     np.testing.assert_allclose(R_new, R_ref, rtol=0, atol=1e-9)
     assert np.linalg.norm(p_new - pos) < 0.002 and frac > 0.8
+
+
+def test_flying_pixels_lie_between_the_face_plane_and_the_background():
+    from fsv.track.object import _flying_pixels
+
+    inf = np.inf
+    z = np.array([1.20, 1.01, 1.49, 1.50, 1.50, 1.20])
+    plane = np.array([1.0, 1.0, 1.0, 1.0, inf, 1.0])
+    bg = np.array([1.5, 1.5, 1.5, inf, 1.6, 1.5])  # inf: the ray misses the table (background 1 m behind)
+    assert _flying_pixels(z, plane, bg, 0.03).tolist() == [True, False, False, True, False, True]
+    assert not _flying_pixels(z, plane, bg, 0.0).any()  # flying_k = 0: kept

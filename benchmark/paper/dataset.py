@@ -111,7 +111,8 @@ class DatasetSpec:
             kinematics are differentiated from (``benchmark.scores.pose_error``).
         kinematics: Kinematics behind the features and the decomposition: a differentiator of
             ``benchmark.world.motion`` ("algebraic", "central", "gaussian") on the observed poses, or
-            "oracle" (the truth).
+            "oracle" (the truth). On tracked poses "algebraic" is the reference method's
+            (``fsv.method.reference.TRACKED_POSES``).
         contacts: Source of the contacts (see the module docstring): "tracker" (render and track
             each episode: the method's contacts and poses), "error-model" (the truth's with the
             paper's contact-point errors) or "oracle" (the truth).
@@ -226,12 +227,15 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     from benchmark.world.simulate import simulate
     from benchmark.world.tactile import tactile_normal_forces
     from fsv.forces import FrameStatus, decompose_forces
+    from fsv.method.reference import TRACKED_POSES
 
     ep, tracking = simulate(scenario), None
     if spec.contacts == "tracker":
         ep, tracking = track_episode(ep)
     tr, model = ep.truth, ep.object_model
-    kin = episode_kinematics(ep, spec.kinematics, poses=None if tracking is None else tracking.box)
+    # tracked poses are differentiated as the reference method does (its window, not Table 1's)
+    config = TRACKED_POSES if (tracking is not None and spec.kinematics == "algebraic") else None
+    kin = episode_kinematics(ep, spec.kinematics, config, poses=None if tracking is None else tracking.box)
     con = episode_contacts(ep, spec.contacts, tracking)
     feats = grasp_features(kin, con, model, gravity=tr.gravity)
     # unbounded range: the firm synthetic users exceed the FSG020's 20 N on the thumb

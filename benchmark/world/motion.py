@@ -78,9 +78,7 @@ def episode_kinematics(episode, choice: str = "algebraic", config=None, poses: P
         episode: A ``benchmark.Episode`` (only ``.truth`` and ``.scenario`` are used).
         choice: One of ``CHOICES``.
         config: Differentiator config overriding ``DECLARED[choice]`` (not for "oracle").
-        poses: Observed poses overriding ``observed_poses(episode)`` (e.g. tracked ones). Tracked
-            poses are differentiated as the reference method does: "algebraic" then means
-            ``fsv.method.reference.TRACKED_POSES`` unless ``config`` says otherwise.
+        poses: Observed poses overriding ``observed_poses(episode)`` (e.g. tracked ones).
 
     Returns:
         Kinematics; ``method`` names the choice ("oracle" for the truth).
@@ -94,10 +92,7 @@ def episode_kinematics(episode, choice: str = "algebraic", config=None, poses: P
         if config is not None:
             raise ScenarioError("the oracle kinematics take no differentiator config")
         return oracle_kinematics(episode.truth)
-    if config is None:
-        from fsv.method.reference import TRACKED_POSES
-
-        config = TRACKED_POSES if (poses is not None and choice == "algebraic") else DECLARED[choice]
+    config = DECLARED[choice] if config is None else config
     if config.name != choice:
         raise ScenarioError(f"config {type(config).__name__} does not match kinematics choice {choice!r}")
     poses = observed_poses(episode) if poses is None else poses

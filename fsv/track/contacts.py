@@ -58,11 +58,6 @@ class ContactConfig:
         hold_points: While a contact is held (active and not sliding), its point is the median of
             its points over the whole hold, and its normal that point's face normal: a finger that
             does not slide does not move over the surface.
-
-    The sliding hysteresis (3 frames to start, stop below half the start speed) and the held points
-    were chosen together on the ``dev`` suite against one-frame decisions and moving points: the
-    median contact error std went from 2.97 to 2.36 mm and least-violation frames from 0.78 % to
-    0.65 %, with the net force unchanged (0.303 N) and the learned forces at 21.8 % (22.2 %).
         occlusion_prior: Keep an unseen finger's contact and its last observed point.
         opposition_prior: Place a hidden opposing digit at the fingers' centre of pressure on the
             opposite face (module docstring).
@@ -76,6 +71,11 @@ class ContactConfig:
             fingers not named weigh the mean of the named ones.
         median_frames: Each contact point is the median of its points over this many frames on
             each side (within the same contact), against tracking jitter; 0 = off.
+
+    The sliding hysteresis (3 frames to start, stop below half the start speed) and the held points
+    were chosen together on the ``dev`` suite against one-frame decisions and moving points: the
+    median contact error std went from 2.97 to 2.36 mm and least-violation frames from 0.78 % to
+    0.65 %, with the net force unchanged (0.303 N) and the learned forces at 21.8 % (22.2 %).
     """
 
     on_m: float = 0.006

@@ -165,14 +165,6 @@ def _f64(x) -> np.ndarray:
     return np.ascontiguousarray(x, dtype=np.float64)
 
 
-def _flying_pixels(z_obs, plane, background, margin: float) -> np.ndarray:
-    """:func:`_flying` over arrays, for the particle search's cost: (N,) -> (N,) bool."""
-    if not margin > 0:
-        return np.zeros(np.shape(z_obs), bool)
-    back = np.where(np.isfinite(background), background, plane + _FAR_M)
-    return np.isfinite(plane) & (plane + margin < z_obs) & (z_obs < back - margin)
-
-
 def _box_rays(o, d, bg):
     """The compiled kernels' ray arguments: origin (3,), rays (N, 3) and table depths (N,), float64, C order."""
     return _f64(o), _f64(d), _f64(bg)
@@ -327,6 +319,26 @@ def _box_depth_kernel(o, d, bg, pos, rot, half, fx, silhouette_px, jacobian):  #
     return depth, w, plane, J
 
 
+@_jit_inline
+def _flying(z_obs, plane, background, margin):  # pragma: no cover - compiled
+    """A flying pixel: behind the nearest face's extended plane ``plane`` and in front of the
+    background (the table's depth, or ``_FAR_M`` behind the plane where the ray misses the table),
+    by more than ``margin`` from both; never with ``margin`` 0 or without a plane."""
+    if not (margin > 0.0 and math.isfinite(plane)):
+        return False
+    back = background if math.isfinite(background) else plane + _FAR_M
+    return plane + margin < z_obs < back - margin
+
+
+@_jit
+def _flying_pixels(z_obs, plane, background, margin):  # pragma: no cover - compiled
+    """:func:`_flying` per pixel, for the particle search's cost: (N,) -> (N,) bool."""
+    out = np.zeros(z_obs.shape[0], dtype=np.bool_)
+    for i in range(z_obs.shape[0]):
+        out[i] = _flying(z_obs[i], plane[i], background[i], margin)
+    return out
+
+
 @_jit
 def _box_normal_equations(o, d, bg, z_obs, pos, rot, half, fx, silhouette_px, sigma, robust_k,
                           occluder_k, flying_k):  # pragma: no cover - compiled
@@ -365,17 +377,6 @@ def _box_normal_equations(o, d, bg, z_obs, pos, rot, half, fx, silhouette_px, si
         for b in range(a):
             A[a, b] = A[b, a]
     return A, g
-
-
-@numba.njit(cache=True)
-def _flying(z_obs, plane, background, margin):  # pragma: no cover - compiled
-    """A flying pixel: behind the nearest face's extended plane ``plane`` and in front of the
-    background (the table's depth, or ``_FAR_M`` behind the plane where the ray misses the table),
-    by more than ``margin`` from both; never with ``margin`` 0 or without a plane."""
-    if not (margin > 0.0 and math.isfinite(plane)):
-        return False
-    back = background if math.isfinite(background) else plane + _FAR_M
-    return plane + margin < z_obs < back - margin
 
 
 class BoxTracker:
@@ -453,7 +454,8 @@ class BoxTracker:
         rho = 0.5 * k**2 * np.log1p((r / k) ** 2)
         occluded = self._occluded(z_obs, zp, plane, sigma)
         rho = np.where(occluded, 0.5 * k**2 * np.log1p((self.config.occluder_k * sigma / k) ** 2), rho)
-        flying = _flying_pixels(z_obs, plane, self.rays.table_depth[index], self.config.flying_k * sigma)
+        flying = _flying_pixels(_f64(z_obs), _f64(plane), _f64(self.rays.table_depth[index]),
+                                float(self.config.flying_k * sigma))
         rho = np.where(flying & ~occluded, 0.0, rho)
         return float(np.sum(rho[valid]))
 
