@@ -122,6 +122,8 @@ def test_bad_inputs_are_named():
         HandTrackerConfig(free_space_points=-1)
     with pytest.raises(InputError, match="free_space_margin_m"):
         HandTrackerConfig(free_space_margin_m=0.0)
+    with pytest.raises(InputError, match="finger_hypotheses"):
+        HandTrackerConfig(finger_hypotheses=-1)
 
 
 def test_ray_capsules_match_an_independent_ray_caster():
@@ -266,3 +268,67 @@ def test_point_jacobian_hinge_columns_equal_the_broadcast_formula_bit_for_bit():
     assert np.count_nonzero(ref) > P
     assert J[:, 6:].tobytes() == ref.tobytes()
     assert J[:, 3:6].tobytes() == np.cross(x - pose[0][0], direction).tobytes()
+
+
+FINGER_JOINTS = {"index": [4, 5, 6, 7], "middle": [8, 9, 10, 11], "ring": [12, 13, 14, 15], "little": [16, 17, 18, 19]}
+
+
+def test_finger_hypotheses_are_inits_neighbour_copies_and_swaps():
+    st = hover_state()
+    q = st.joints.copy()
+    q[FINGER_JOINTS["ring"]] = [0.1, 0.2, 0.3, 0.4]
+    init = HandState(st.palm_pos, st.palm_rot, np.clip(q + 0.05, *HAND.joint_range.T))
+    tracker = HandTracker(CALIB, HAND, BOX, init)
+    hyps = dict(tracker.finger_hypotheses(q))
+    assert set(hyps) == {"init:thumb", "init:index", "init:middle", "init:ring", "init:little",
+                         "copy:middle->index", "copy:index->middle", "copy:ring->middle", "copy:middle->ring",
+                         "copy:little->ring", "copy:ring->little", "swap:index-middle", "swap:middle-ring",
+                         "swap:ring-little"}  # the thumb's hinges are never copied or swapped
+    ring, little = FINGER_JOINTS["ring"], FINGER_JOINTS["little"]
+    swapped = hyps["swap:ring-little"]
+    np.testing.assert_array_equal(swapped[ring], q[little])
+    np.testing.assert_array_equal(swapped[little], q[ring])
+    others = np.setdiff1d(np.arange(HAND.num_joints), ring + little)
+    np.testing.assert_array_equal(swapped[others], q[others])
+    np.testing.assert_array_equal(hyps["copy:ring->middle"][FINGER_JOINTS["middle"]], q[ring])
+    np.testing.assert_array_equal(hyps["init:ring"][ring], init.joints[ring])
+    np.testing.assert_array_equal(np.delete(hyps["init:ring"], ring), np.delete(q, ring))
+    # a hypothesis equal to the fit is left out
+    assert "init:ring" not in dict(tracker.finger_hypotheses(init.joints))
+
+
+@pytest.mark.parametrize("pair", [("index", "middle"), ("middle", "ring"), ("ring", "little")])
+def test_finger_search_recovers_neighbours_the_local_fit_swapped(pair):
+    """One finger extended, its neighbour flexed; the tracker starts with the two swapped. The
+    local fit stays in that minimum (measured: the swapped fingertips 90-122 mm off after 8
+    frames); with every hypothesis competing in every frame both are found (0.8-4.7 mm)."""
+    from fsv.track.hand import HandTrackerConfig
+
+    rng = np.random.default_rng(3)
+    kin = HandKinematics(HAND)
+    st = hover_state()
+    a_, b_ = FINGER_JOINTS[pair[0]], FINGER_JOINTS[pair[1]]
+    q = st.joints.copy()
+    q[a_], q[b_] = [0.0, 0.05, 0.05, 0.05], [0.0, 1.3, 1.4, 0.9]
+    truth = HandState(st.palm_pos, st.palm_rot, np.clip(q, *HAND.joint_range.T))
+    bp, bR = np.array([0.0, 0.0, 0.03]), np.eye(3)
+    p, r, _, _ = kin.pose(truth)
+    a, b = kin.capsules(p, r)
+    tips_true = kin.fingertips(p, r)
+    rays = CameraRays.from_calibration(CALIB)
+
+    def scene(index):
+        return predict_box_depth(rays, index, bp, bR, SIZE / 2, CALIB.K[0, 0])[0]
+    q0 = truth.joints.copy()
+    q0[a_], q0[b_] = truth.joints[b_], truth.joints[a_]
+    frames = [render_depth(CALIB, bp, bR, SIZE / 2, list(zip(a, b, HAND.geom_radius)), 0.01, rng) for _ in range(8)]
+    k = [HAND.finger_names.index(f) for f in pair]
+    err = {}
+    for m in (0, 99):
+        tracker = HandTracker(CALIB, HAND, BOX, HandState(truth.palm_pos, truth.palm_rot, q0),
+                              config=HandTrackerConfig(finger_hypotheses=m))
+        for frame in frames:
+            fit = tracker.update(frame, scene, bp, bR, 0.01)
+        err[m] = np.linalg.norm(fit.fingertips - tips_true, axis=1)[k]
+    assert np.all(err[0] > 0.06), err
+    assert np.all(err[99] < 0.008), err
