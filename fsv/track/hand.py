@@ -131,7 +131,8 @@ class HandTrackerConfig:
             frame (:meth:`HandTracker._finger_search`), taken in turn from all of them; 0 = off.
             3 chosen on the ``dev`` suite among 0 / 2 / 3 / 4: median contact error std 2.67 /
             1.88 / 1.67 / 1.75 mm, episodes above 4 mm 8 / 3 / 0 / 1, least-violation frames
-            0.18 / 0.27 / 0.04 / 0.13 %; the tracker's time per frame grows about 1.8 times with 3.
+            0.18 / 0.27 / 0.04 / 0.13 %. With 3 the tracker takes about twice as long per frame
+            (``python -m benchmark.perf.track``).
     """
 
     iterations: int = 5
