@@ -58,6 +58,7 @@ def make_analytic_truth(duration_s=4.0, fps=30.0, K=4):
         contact_active=np.zeros((T, K), bool), contact_sliding=np.zeros((T, K), bool),
         contact_point=zk, contact_normal=zk, contact_force=zk, env_force=z3, env_torque=z3,
         fingertip_pos=zk, hand_qpos=np.zeros((T, 12)), mass=0.3, inertia=np.eye(3) * 1e-3, gravity=g,
+        net_wrench_mean=np.concatenate([0.3 * (acc - g), z3], axis=1),  # a smooth motion: its instantaneous force
     )
 
 

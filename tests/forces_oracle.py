@@ -225,6 +225,13 @@ def grasp_truth(seed: int, T: int = 20, K: int = 4, model: ObjectModel | None = 
         contact_active=contacts.active, contact_sliding=contacts.sliding, contact_point=contacts.point,
         contact_normal=contacts.normal, contact_force=force, env_force=np.zeros((T, 3)),
         env_torque=np.zeros((T, 3)), fingertip_pos=zk, hand_qpos=np.zeros((T, 12)), mass=model.mass_kg,
-        inertia=model.inertia, gravity=GRAVITY,
+        inertia=model.inertia, gravity=GRAVITY, net_wrench_mean=_resultant(R, contacts.point, force),
     )
     return truth, model
+
+
+def _resultant(R: np.ndarray, point: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """The fingers' resultant wrench in the world frame, (T, 6): the frame mean of a truth made without time steps."""
+    f = np.einsum("tij,tkj->tki", R, force)
+    r = np.einsum("tij,tkj->tki", R, point)
+    return np.concatenate([f.sum(axis=1), np.cross(r, f).sum(axis=1)], axis=1)

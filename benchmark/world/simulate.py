@@ -33,6 +33,7 @@ from benchmark.world.scenario import Scenario
 from benchmark.world.tasks import TASKS, Motion
 from benchmark.world.truth import Truth
 from benchmark.world.assets import World, box_spec, build_world, validate
+from fsv.linalg import mv
 
 CONTROL_PERIOD_S = 0.004  # the synthetic human updates the finger torques at ~250 Hz
 SLIDING_SPEED_M_S = 0.005  # a pad slides when its tangential speed relative to the box exceeds this
@@ -153,6 +154,40 @@ class _Recorder:
         return a
 
 
+class _Momentum:
+    """The box's momenta at the boundaries of the frames' intervals, for the truth's frame means.
+
+    Frame k stands for the interval from the boundary before it to the boundary after it: half a
+    frame period on either side (the episode's first and last frames end at their own instants).
+    By Newton-Euler, the mean contact wrench on the box over an interval is the change of its
+    momenta across it divided by its length, less gravity: exact for the force (the integrator
+    steps the velocity by the acceleration it computed), to the step's order for the torque.
+    """
+
+    def __init__(self, world: World, n_frames: int):
+        self.w = world
+        self.step = np.zeros(n_frames + 1, np.int64)
+        self.lin = np.zeros((n_frames + 1, 3))  # linear velocity of the centre of mass, world frame, [m/s]
+        self.ang = np.zeros((n_frames + 1, 3))  # angular momentum about it, world frame, [kg m^2/s]
+
+    def record(self, i: int, step: int, data: mujoco.MjData) -> None:
+        """Boundary ``i`` (0: the first frame's instant, n_frames: the last's), reached at physics step ``step``."""
+        w, m = self.w, self.w.model
+        qa, da = w.box_qadr, w.box_dadr
+        R = _rot(data.qpos[qa + 3 : qa + 7][None])[0]
+        self.step[i] = step
+        self.lin[i] = data.qvel[da : da + 3]
+        self.ang[i] = mv(R, m.body_inertia[w.box_body] * data.qvel[da + 3 : da + 6])
+
+    def mean_wrench(self, timestep_s: float, gravity: np.ndarray) -> np.ndarray:
+        """Mean contact wrench on the box over each frame's interval, world frame, (T, 6): force [N]
+        and torque about the centre of mass [N m]."""
+        mass = float(self.w.model.body_mass[self.w.box_body])
+        span = (np.diff(self.step) * timestep_s)[:, None]
+        force = mass * np.diff(self.lin, axis=0) / span - mass * np.asarray(gravity, float)
+        return np.concatenate([force, np.diff(self.ang, axis=0) / span], axis=1)
+
+
 @dataclass(frozen=True)
 class SimStats:
     """How a simulation went.
@@ -218,6 +253,8 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
     d.time = 0.0
 
     rec = _Recorder(world, n_frames)
+    momentum = _Momentum(world, n_frames)
+    half = (spf + 1) // 2  # the boundary between frames k and k + 1 is this many steps after frame k
     bar = None
     if progress:
         from tqdm import tqdm
@@ -230,16 +267,23 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
         act(d, step)
         mujoco.mj_forward(m, d)
         rec.record(frame, d)
+        if frame == 0:
+            momentum.record(0, step, d)
         if not np.all(np.isfinite(d.qacc)):
             raise SimulationError(f"the simulation diverged at t = {step * m.opt.timestep:.3f} s ({scenario})")
         if bar is not None:
             bar.update(1)
         if frame == n_frames - 1:
+            momentum.record(n_frames, step, d)
             break
         step_fn(m, d)
+        if half == 1:
+            momentum.record(frame + 1, step + 1, d)
         for s in range(step + 1, step + spf):
             act(d, s)
             step_fn(m, d)
+            if s + 1 == step + half:
+                momentum.record(frame + 1, s + 1, d)
     wall = time.perf_counter() - t0
     if bar is not None:
         bar.close()
@@ -259,7 +303,8 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
         finger_names=np.array(world.hand.finger_names), contact_active=a["contact_active"],
         contact_sliding=a["contact_sliding"], contact_point=a["contact_point"], contact_normal=a["contact_normal"],
         contact_force=a["contact_force"], env_force=a["env_force"], env_torque=a["env_torque"],
-        fingertip_pos=a["fingertip_pos"], hand_qpos=a["hand_qpos"], mass=float(m.body_mass[world.box_body]),
+        fingertip_pos=a["fingertip_pos"], hand_qpos=a["hand_qpos"],
+        net_wrench_mean=momentum.mean_wrench(m.opt.timestep, g), mass=float(m.body_mass[world.box_body]),
         inertia=np.diag(m.body_inertia[world.box_body]), gravity=g, held=held,
     )
     ep = Episode(scenario=scenario, truth=truth, object_model=world.obj, hand_model=world.hand)

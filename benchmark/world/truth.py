@@ -36,6 +36,12 @@ class Truth:
         env_force: Force of the table on the box, world frame, (T, 3), [N].
         env_torque: Torque of the table on the box about the centre of mass, world frame, (T, 3), [N m].
         fingertip_pos: Fingertip centres, world frame, (T, K, 3), [m].
+        net_wrench_mean: Mean over frame k's interval (half a frame period on either side of t_k)
+            of the resultant contact wrench on the box, fingers and table, world frame: force [N]
+            and torque about the centre of mass [N m], (T, 6). What a camera at the frame rate can
+            resolve: the instantaneous forces also hold contact transients of a few milliseconds
+            that move the box by less than a frame can show. From the box's momenta at the
+            intervals' boundaries (``benchmark.world.simulate``).
         hand_qpos: Hand joint angles, (T, n), [rad].
         mass: Box mass, [kg].
         inertia: Box inertia about the centre of mass, box frame, (3, 3), [kg m^2].
@@ -63,6 +69,7 @@ class Truth:
     env_torque: np.ndarray
     fingertip_pos: np.ndarray
     hand_qpos: np.ndarray
+    net_wrench_mean: np.ndarray
     mass: float
     inertia: np.ndarray
     gravity: np.ndarray
@@ -76,7 +83,7 @@ class Truth:
             "box_acc": (T, 3), "box_alpha": (T, 3), "imu_acc": (T, 3), "imu_gyro": (T, 3),
             "contact_active": (T, K), "contact_sliding": (T, K), "contact_point": (T, K, 3),
             "contact_normal": (T, K, 3), "contact_force": (T, K, 3), "env_force": (T, 3),
-            "env_torque": (T, 3), "fingertip_pos": (T, K, 3), "inertia": (3, 3), "gravity": (3,),
+            "env_torque": (T, 3), "fingertip_pos": (T, K, 3), "net_wrench_mean": (T, 6), "inertia": (3, 3), "gravity": (3,),
         }
         for name, shape in want.items():
             got = np.shape(getattr(self, name))
