@@ -20,7 +20,7 @@ def inputs(rendered_lift_episode):
 def test_the_reference_is_composed_of_named_stages():
     m = make_method()
     assert m.labels == {"tracker": "reference tracker",
-                        "differentiator": "algebraic differentiation (L=9 frames, kappa=0.5, mu=0.5)",
+                        "differentiator": "algebraic differentiation (L=7 frames, kappa=0.5, mu=0.5)",
                         "forces": "nominal forces (eq. 4-6)", "internal": "learned internal forces (shipped model)"}
     assert make_method(internal=False).labels["internal"] == "none"
 
