@@ -8,6 +8,7 @@ COLUMNS = (
     ("contact_recall", "median", "recall"),
     ("acc_err_rms", "median", "acc RMS [m/s²]"),
     ("net_force_err_n_rms", "median", "net force [N]"),
+    ("net_force_err_n_rms_instant", "median", "net force, instant [N]"),
     ("least_violation_frac", "mean", "least-violation frames"),
     ("learned_rel_err_pct", "median", "learned [%]"),
     ("learned_mae_n", "median", "MAE [N]"),
