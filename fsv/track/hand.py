@@ -23,6 +23,9 @@ Extra residual rows keep the fit physical and coherent in time:
 * no hand-box interpenetration: capsule samples are pushed out of the tracked box;
 * grasp closure: a finger hidden from the camera whose pad is near the box flexes until the pad
   meets the surface (fingers wrap the object they hold);
+* grasp rigidity: while the box is held (at least two digits have touched it for a few frames),
+  each such digit's pad stays where it was on the box's surface, in the box's frame and along the
+  face, unless the depth says otherwise (established contacts do not slide without evidence);
 * joint limits: every step is projected onto the model's joint ranges.
 
 A step is taken only if it lowers the robust cost (Levenberg-Marquardt). When the hand moves, a
@@ -44,13 +47,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
-from fsv.linalg import dot, mm, norm, solve
+from fsv.linalg import dot, gram, mm, norm, rows_mt, solve, tmv
 from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
 from fsv.track.articulation import mirror_upper, pose_chain
 from fsv.track.camera import CameraRays
 from fsv.track.capsules import ray_capsules
-from fsv.track.hand_system import hand_normal_equations
+from fsv.track.hand_system import box_signed_distance, hand_normal_equations
 from fsv.rotation import cross, exp_so3, log_so3, project_to_so3, rot_from_skew, skew_stack
 from fsv.types import Calibration
 
@@ -133,6 +136,11 @@ class HandTrackerConfig:
             1.88 / 1.67 / 1.75 mm, episodes above 4 mm 8 / 3 / 0 / 1, least-violation frames
             0.18 / 0.27 / 0.04 / 0.13 %. With 3 the tracker takes about twice as long per frame
             (``python -m benchmark.perf.track``).
+        rigidity_m: Standard deviation of an established contact's slip along the box's face
+            from one frame to the next, [m] (the grasp-rigidity rows; the module docstring).
+        rigidity_gap_m: A pad within this of the box's surface touches it, [m].
+        rigidity_frames: Frames a digit must touch the box before its contact is established; the
+            rows apply while at least two digits are established (the box is held); 0 = off.
     """
 
     iterations: int = 5
@@ -153,16 +161,22 @@ class HandTrackerConfig:
     free_space_points: int = 400
     free_space_margin_m: float = 0.015
     finger_hypotheses: int = 3
+    rigidity_m: float = 0.004
+    rigidity_gap_m: float = 0.004
+    rigidity_frames: int = 3
 
     def __post_init__(self):
         for name in ("iterations", "max_points", "visible_min_points", "particles"):
             if int(getattr(self, name)) < 1:
                 raise InputError(f"HandTrackerConfig.{name} must be >= 1, got {getattr(self, name)!r}")
         for name in ("scene_k", "assign_max_m", "cauchy_k", "smooth_pos_m", "smooth_rot_rad",
-                     "smooth_joint_rad", "penetration_m", "closure_m", "closure_range_m", "free_space_margin_m"):
+                     "smooth_joint_rad", "penetration_m", "closure_m", "closure_range_m", "free_space_margin_m",
+                     "rigidity_m", "rigidity_gap_m"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v > 0):
                 raise InputError(f"HandTrackerConfig.{name} must be > 0, got {v!r}")
+        if int(self.rigidity_frames) < 0:
+            raise InputError(f"HandTrackerConfig.rigidity_frames must be >= 0, got {self.rigidity_frames!r}")
         if int(self.finger_hypotheses) < 0:
             raise InputError(f"HandTrackerConfig.finger_hypotheses must be >= 0, got {self.finger_hypotheses!r}")
         if int(self.free_space_points) < 0:
@@ -325,7 +339,14 @@ class HandTracker:
         lo, hi = hand_model.joint_range[:, 0], hand_model.joint_range[:, 1]
         self.lo, self.hi = lo, hi
         self.history = [HandState(init.palm_pos, init.palm_rot, np.clip(init.joints, lo, hi))]
-        self.hidden = np.zeros(len(hand_model.finger_names), dtype=bool)  # unseen in the last frame
+        K = len(hand_model.finger_names)
+        self.hidden = np.zeros(K, dtype=bool)  # unseen in the last frame
+        # Grasp rigidity: frames each digit has touched the box, and the established contacts'
+        # pads in the box's frame with their face's normal axis (the rows of the next frame).
+        self.touching = np.zeros(K, dtype=np.int64)
+        self.anchored = np.zeros(K, dtype=bool)
+        self.anchor = np.zeros((K, 3))
+        self.anchor_axis = np.zeros(K, dtype=np.int64)
         self.frame = 0
         # Every finger's hinges, proximal first, and the first-frame configuration (the re-seed of
         # the finger search).
@@ -414,6 +435,8 @@ class HandTracker:
             np.ascontiguousarray(box_pos, dtype=np.float64), np.ascontiguousarray(box_rot, dtype=np.float64),
             self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius, self.flexion,
             float(c.closure_m), float(c.closure_range_m))
+        if self.anchored.any():
+            cost += self._rigidity_rows(A, g, (pos, rot, axis, pivot), box_pos, box_rot, sigma)
         # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
         for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, st.palm_pos - prior.palm_pos),
                              (slice(3, 6), c.smooth_rot_rad, log_so3(mm(st.palm_rot, prior.palm_rot.T))),
@@ -425,6 +448,38 @@ class HandTracker:
             cost += 0.5 * ws * float(dot(res, res))
         mirror_upper(A)
         return A, g, cost, explained
+
+    def _rigidity_rows(self, A, g, pose, box_pos, box_rot, sigma: float) -> float:
+        """Adds the grasp-rigidity rows to ``A`` and ``g`` in place and returns their cost: for every
+        established contact, the pad's displacement from its anchor along the two axes of its face,
+        standard deviation ``rigidity_m``."""
+        k = np.flatnonzero(self.anchored)
+        seg = self.model.fingertip_segment[k]
+        tips = self.kin.fingertips(pose[0], pose[1])[k]
+        target = box_pos[None, :] + rows_mt(self.anchor[k], box_rot)
+        tangent = np.array([[a for a in range(3) if a != ax] for ax in self.anchor_axis[k]])  # (P, 2)
+        d = np.ascontiguousarray(box_rot.T[tangent.reshape(-1)])  # world directions, (2P, 3)
+        x = np.repeat(tips, 2, axis=0)
+        r = np.sum(d * (x - np.repeat(target, 2, axis=0)), axis=1)
+        J = self.kin.point_jacobian(x, np.repeat(seg, 2), d, pose)
+        ws = (sigma / self.config.rigidity_m) ** 2
+        A += ws * gram(J)
+        g -= ws * tmv(J, r)
+        return 0.5 * ws * float(dot(r, r))
+
+    def _update_rigidity(self, pose, box_pos, box_rot) -> None:
+        """Which digits touch the box after this frame's fit, and the anchors of the next frame."""
+        c = self.config
+        if not c.rigidity_frames:
+            return
+        u = rows_mt(self.kin.fingertips(pose[0], pose[1]) - box_pos[None, :], box_rot.T)  # box frame
+        dist, _ = box_signed_distance(u, self.half)
+        touch = dist - self.model.fingertip_radius <= c.rigidity_gap_m
+        self.touching = np.where(touch, self.touching + 1, 0)
+        established = self.touching >= c.rigidity_frames
+        self.anchored = established if int(established.sum()) >= 2 else np.zeros_like(established)
+        self.anchor = u
+        self.anchor_axis = np.argmax(np.abs(u) - self.half[None, :], axis=1)
 
     def _solve(self, idx, z_obs, free, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):
         """Levenberg-Marquardt from ``state``: a step is taken only if it lowers the robust cost."""
@@ -501,6 +556,7 @@ class HandTracker:
         tips = self.kin.fingertips(pose[0], pose[1])
         observed = self._observed(idx, z_obs, pose, sigma)
         self.hidden = ~observed
+        self._update_rigidity(pose, np.asarray(box_pos, dtype=float), np.asarray(box_rot, dtype=float))
         return HandFit(state=state, fingertips=tips, observed=observed, explained=explained, reinitialised=reinit)
 
     def _observed(self, idx, z_obs, pose, sigma) -> np.ndarray:
