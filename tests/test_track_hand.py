@@ -384,7 +384,11 @@ def test_grasp_rigidity_rows_are_the_gradient_of_their_cost():
         plus = HandState(st.palm_pos + d[:3], exp_so3(d[3:6]) @ st.palm_rot, st.joints + d[6:])
         minus = HandState(st.palm_pos - d[:3], exp_so3(-d[3:6]) @ st.palm_rot, st.joints - d[6:])
         assert abs(-(rows(plus)[0] - rows(minus)[0]) / (2 * h) - g[k]) < 1e-6 * max(1.0, abs(g[k]))
-    np.testing.assert_allclose(A, A.T, atol=1e-12)
+    # A's upper triangle is the Gauss-Newton matrix of the point Jacobians along the faces' axes.
+    tips = kin.fingertips(p, r)[:2]
+    d = np.repeat(R.T[[1, 2]][None], 2, axis=0).reshape(-1, 3)  # y and z of the box for each pad
+    J = kin.point_jacobian(np.repeat(tips, 2, axis=0), np.repeat(HAND.fingertip_segment[:2], 2), d, kin.pose(st))
+    np.testing.assert_allclose(np.triu(A), np.triu((0.01 / 0.004) ** 2 * J.T @ J), atol=1e-10)
     assert np.count_nonzero(g[6:]) > 0  # the thumb's and the index finger's hinges move the pads
 
 

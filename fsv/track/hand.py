@@ -47,13 +47,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from fsv.errors import InputError
-from fsv.linalg import dot, gram, mm, norm, rows_mt, solve, tmv
+from fsv.linalg import dot, mm, norm, rows_mt, solve
 from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
 from fsv.track.articulation import mirror_upper, pose_chain
 from fsv.track.camera import CameraRays
 from fsv.track.capsules import ray_capsules
-from fsv.track.hand_system import box_signed_distance, hand_normal_equations
+from fsv.track.hand_system import box_signed_distance, hand_normal_equations, rigidity_rows
 from fsv.rotation import cross, exp_so3, log_so3, project_to_so3, rot_from_skew, skew_stack
 from fsv.types import Calibration
 
@@ -450,22 +450,15 @@ class HandTracker:
         return A, g, cost, explained
 
     def _rigidity_rows(self, A, g, pose, box_pos, box_rot, sigma: float) -> float:
-        """Adds the grasp-rigidity rows to ``A`` and ``g`` in place and returns their cost: for every
-        established contact, the pad's displacement from its anchor along the two axes of its face,
-        standard deviation ``rigidity_m``."""
-        k = np.flatnonzero(self.anchored)
-        seg = self.model.fingertip_segment[k]
-        tips = self.kin.fingertips(pose[0], pose[1])[k]
-        target = box_pos[None, :] + rows_mt(self.anchor[k], box_rot)
-        tangent = np.array([[a for a in range(3) if a != ax] for ax in self.anchor_axis[k]])  # (P, 2)
-        d = np.ascontiguousarray(box_rot.T[tangent.reshape(-1)])  # world directions, (2P, 3)
-        x = np.repeat(tips, 2, axis=0)
-        r = np.sum(d * (x - np.repeat(target, 2, axis=0)), axis=1)
-        J = self.kin.point_jacobian(x, np.repeat(seg, 2), d, pose)
-        ws = (sigma / self.config.rigidity_m) ** 2
-        A += ws * gram(J)
-        g -= ws * tmv(J, r)
-        return 0.5 * ws * float(dot(r, r))
+        """Adds the grasp-rigidity rows to ``A`` (upper triangle) and ``g`` in place and returns their
+        cost: for every established contact, the pad's displacement from its anchor along the two
+        axes of its face, standard deviation ``rigidity_m``
+        (:func:`fsv.track.hand_system.rigidity_rows`)."""
+        pos, rot, axis, pivot = pose
+        return rigidity_rows(A, g, pos, rot, axis, pivot, self.kin.moves, self._tip_segment, self._tip_offset,
+                             np.flatnonzero(self.anchored), np.ascontiguousarray(self.anchor, dtype=np.float64),
+                             self.anchor_axis, np.ascontiguousarray(box_pos, dtype=np.float64),
+                             np.ascontiguousarray(box_rot, dtype=np.float64), (sigma / self.config.rigidity_m) ** 2)
 
     def _update_rigidity(self, pose, box_pos, box_rot) -> None:
         """Which digits touch the box after this frame's fit, and the anchors of the next frame."""

@@ -225,3 +225,30 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
         add_row(A, g, row, wc, gap)
         cost += 0.5 * wc * gap * gap
     return A, g, cost, explained
+
+
+@_jit
+def rigidity_rows(A, g, pos, rot, axis, pivot, moves, tip_segment, tip_offset, fingers, anchor, anchor_axis,
+                  box_pos, box_rot, w):  # pragma: no cover - compiled
+    """Adds the grasp-rigidity rows of :meth:`fsv.track.hand.HandTracker._rigidity_rows` to ``A``
+    (upper triangle) and ``g`` and returns their cost: for each finger index in ``fingers``, the
+    pad's displacement from ``box_pos + box_rot @ anchor[k]`` along the two box axes other than
+    ``anchor_axis[k]``, weight ``w``."""
+    row = np.zeros(A.shape[0])
+    cost = 0.0
+    for k in fingers:
+        s = tip_segment[k]
+        x = np.empty(3)
+        t = np.empty(3)
+        for i in range(3):
+            x[i] = pos[s, i] + rot[s, i, 0] * tip_offset[k, 0] + rot[s, i, 1] * tip_offset[k, 1] + rot[s, i, 2] * tip_offset[k, 2]
+            t[i] = box_pos[i] + box_rot[i, 0] * anchor[k, 0] + box_rot[i, 1] * anchor[k, 1] + box_rot[i, 2] * anchor[k, 2]
+        for a in range(3):
+            if a == anchor_axis[k]:
+                continue
+            d0, d1, d2 = box_rot[0, a], box_rot[1, a], box_rot[2, a]
+            r = d0 * (x[0] - t[0]) + d1 * (x[1] - t[1]) + d2 * (x[2] - t[2])
+            point_row(row, x[0], x[1], x[2], s, d0, d1, d2, 1.0, pos[0], moves, axis, pivot)
+            add_row(A, g, row, w, r)
+            cost += 0.5 * w * r * r
+    return cost
