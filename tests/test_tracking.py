@@ -13,7 +13,7 @@ from fsv.track.tracker import Tracking
 
 
 def test_box_gates_hold_on_lift_with_1cm_noise(tracked_lift):
-    """Measured 1.27 mm and 1.33 deg (medians; seeds 1-2: 0.99 / 0.91 and 1.19 / 1.33; the tracker
+    """Measured 1.30 mm and 1.23 deg (medians; seeds 1-2: 1.00 / 0.91 and 1.21 / 1.40; the tracker
     gives the same bits under the Haswell and Sandybridge OpenBLAS kernels); gates 2 mm and 2 deg,
     as on the smoke suite (the ds325's multipath and edge jitter cost ~0.5 mm)."""
     ep, est = tracked_lift
@@ -24,7 +24,7 @@ def test_box_gates_hold_on_lift_with_1cm_noise(tracked_lift):
 
 def test_end_to_end_net_force_error_on_the_short_lift(tracked_lift):
     """Measured 0.122 N RMS against the frame-mean truth on this 2.5 s human-speed lift (seeds 1-2:
-    0.150, 0.154 N; against the instant 0.345 / 0.206 / 0.391 N; identical under the Haswell and
+    0.152, 0.151 N; against the instant 0.345 / 0.207 / 0.390 N; identical under the Haswell and
     Sandybridge kernels); gate 0.4 N. The statistics over 10 s lifts are gated below."""
     ep, est = tracked_lift
     assert est.oracle == ()  # tracked contacts, kinematics from tracked poses
@@ -33,8 +33,8 @@ def test_end_to_end_net_force_error_on_the_short_lift(tracked_lift):
 
 
 def test_the_hand_is_tracked_where_the_camera_sees_it(tracked_lift):
-    """Measured: palm 2.2 mm, observed fingertips 4.1 mm (medians; seeds 1-2: palm 2.2 / 2.1 mm,
-    fingertips 4.2 / 4.2 mm; gates 8 and 10 mm)."""
+    """Measured: palm 1.8 mm, observed fingertips 3.4 mm (medians; seeds 1-2: palm 1.4 / 1.7 mm,
+    fingertips 3.3 / 3.4 mm; gates 8 and 10 mm)."""
     ep, est = tracked_lift
     palm_err = np.linalg.norm(est.tracking.hand_qpos[:, :3] - ep.truth.hand_qpos[:, :3], axis=1)
     assert np.median(palm_err) < 0.008, np.median(palm_err)
@@ -45,10 +45,10 @@ def test_the_hand_is_tracked_where_the_camera_sees_it(tracked_lift):
 
 def test_contacts_are_found_where_they_are_on_lift_with_1cm_noise(tracked_lift):
     """One short lift: the median contact point error (Euclidean) <= 4 mm, recall and precision
-    >= 0.85. Measured on this 2.5 s lift, seed 0: 1.87 mm, recall 0.992, precision 0.965 (seeds 1-2:
-    1.09 / 1.52 mm, precision 0.988 / 0.988; the same bits under the Haswell and Sandybridge kernels).
-    The per-axis spread and bias are not gated on a single lift: over seeds 0-2 the std is 1.11 /
-    5.09 / 2.02 mm and the mean +0.25 / -1.73 / +1.12 mm (a few frames of one contact carry them).
+    >= 0.85. Measured on this 2.5 s lift, seed 0: 2.31 mm, recall 0.996, precision 0.953 (seeds 1-2:
+    2.29 / 1.97 mm, precision 0.988 / 0.980; the same bits under the Haswell and Sandybridge kernels).
+    The per-axis spread and bias are not gated on a single lift: over seeds 0-2 the std is 1.92 /
+    2.33 / 1.28 mm and the mean -0.14 / -0.30 / +0.36 mm (a few frames of one contact carry them).
     The issue's 4 mm std and 0.9 recall and precision are gated as statistics over four 10 s lifts
     below."""
     ep, est = tracked_lift
@@ -125,18 +125,18 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
 @pytest.mark.accuracy
 def test_tracking_gates_hold_as_statistics_over_four_default_lifts(tracked_lifts):
     """The contact and box gates of ``benchmark.scores.tracking.GATES`` as statistics over the 10 s lifts of
-    seeds 1-4 (never used for tuning), ds325 sensor. Measured: contact std 1.08 / 1.91 / 1.36 / 3.01 mm,
-    median 1.63 mm; mean +0.28 / +0.56 / +0.55 / +0.34 mm; recall 0.983 / 0.993 / 0.998 / 0.975;
-    precision 0.992 / 0.995 / 0.979 / 0.976 (median 0.986); box 1.07-1.25 mm (median 1.22), 0.92-1.47
-    deg (median 1.44); the same under the Haswell and Sandybridge kernels. The box gates are 2 mm and
-    2 deg, as on the smoke suite."""
+    seeds 1-4 (never used for tuning), ds325 sensor. Measured: contact std 0.82 / 1.67 / 0.88 / 0.96 mm,
+    median 0.92 mm (gate 3 mm on the median; the issue's 4 mm per episode holds on all four); mean
+    +0.41 / +0.39 / +0.43 / +0.24 mm; recall 0.997 / 1.000 / 0.999 / 0.999; precision 0.999 / 0.996 /
+    0.997 / 0.996; box 1.03-1.26 mm (median 1.24), 0.96-1.50 deg (median 1.43); the same under the
+    Haswell and Sandybridge kernels. The box gates are 2 mm and 2 deg, as on the smoke suite."""
     scores = [t for _, _, t, _, _ in tracked_lifts]
 
     def med(key):
         return float(np.median([s[key] for s in scores]))
 
     assert all(s["contact_pairs"] > 800 for s in scores), [s["contact_pairs"] for s in scores]
-    assert med("contact_err_mm_std") <= 4.0, [s["contact_err_mm_std"] for s in scores]
+    assert med("contact_err_mm_std") <= 3.0 and max(s["contact_err_mm_std"] for s in scores) <= 4.0, scores
     assert abs(np.mean([s["contact_err_mm_mean"] for s in scores])) <= 2.0, [s["contact_err_mm_mean"] for s in scores]
     assert med("contact_recall") >= 0.9 and med("contact_precision") >= 0.9, scores
     assert med("box_pos_err_mm_median") <= 2.0 and med("box_rot_err_deg_median") <= 2.0, scores
@@ -145,8 +145,8 @@ def test_tracking_gates_hold_as_statistics_over_four_default_lifts(tracked_lifts
 @pytest.mark.accuracy
 def test_net_force_from_depth_over_four_default_lifts(tracked_lifts):
     """Net force of the nominal forces against the truth's frame-mean resultant, whole method from
-    depth. Measured RMS 0.078 / 0.072 / 0.056 / 0.066 N, median 0.069 N (gate 0.15 N on the median,
-    0.3 N on the worst; against the instantaneous resultant 0.264 / 0.129 / 0.132 / 0.123 N, which a
+    depth. Measured RMS 0.078 / 0.081 / 0.059 / 0.066 N, median 0.072 N (gate 0.15 N on the median,
+    0.3 N on the worst; against the instantaneous resultant 0.262 / 0.134 / 0.133 / 0.122 N, which a
     30 fps camera cannot resolve). Least-violation frames (the programs were infeasible on the tracked
     contacts): 0 of 1172 (gate 40)."""
     rms = [f["net_force_err_n_rms"] for _, _, _, f, _ in tracked_lifts]
@@ -158,7 +158,7 @@ def test_net_force_from_depth_over_four_default_lifts(tracked_lifts):
 @pytest.mark.accuracy
 def test_learned_forces_from_depth_over_four_default_lifts(tracked_lifts):
     """The shipped model on tracked contacts and kinematics: the relative error of Table 2 per
-    episode. Measured 12.9 / 20.7 / 17.2 / 20.7 %, median 19.0 % (gate 35 %; the paper's Table 2:
+    episode. Measured 13.7 / 19.0 / 17.4 / 17.7 %, median 17.6 % (gate 35 %; the paper's Table 2:
     9.7-10.9 % on its own cohort; the shipped model is trained on four users of different grip)."""
     err = [b["rel_err_pct_mean"] for _, _, _, _, b in tracked_lifts]
     assert np.median(err) <= 35.0, err
