@@ -10,7 +10,7 @@ from fsv.linalg import rows_mt
 from fsv.track.camera import CameraRays
 from fsv.track.capsules import ray_capsules
 from fsv.track.hand import HandKinematics, HandState, HandTracker
-from fsv.track.hand_system import box_signed_distance
+from fsv.track.hand_system import box_signed_distance, rigidity_rows
 from fsv.track.object import predict_box_depth
 from fsv.rotation import exp_so3
 from raycast import look_at_calibration, render_depth
@@ -364,14 +364,15 @@ def test_grasp_rigidity_rows_are_the_gradient_of_their_cost():
     kin = tracker.kin
     p, r, _, _ = kin.pose(st)
     u = (kin.fingertips(p, r) - c) @ R
-    tracker.anchored = np.array([True, True, False, False, False])
-    tracker.anchor = u + np.array([0.0, 0.004, -0.003])  # the pads slipped 4 and 3 mm from their anchors
-    tracker.anchor_axis = np.array([0, 0, 0, 0, 0])
+    anchor = u + np.array([0.0, 0.004, -0.003])  # the pads slipped 4 and 3 mm from their anchors
     n = 6 + HAND.num_joints
 
     def rows(s):
         A, g = np.zeros((n, n)), np.zeros(n)
-        return tracker._rigidity_rows(A, g, kin.pose(s), c, R, 0.01), A, g
+        cost = rigidity_rows(A, g, *kin.pose(s), kin.moves, HAND.fingertip_segment.astype(np.int64),
+                             HAND.fingertip_offset, np.array([0, 1]), anchor, np.zeros(5, np.int64), c, R,
+                             (0.01 / tracker.config.rigidity_m) ** 2)
+        return cost, A, g
 
     cost, A, g = rows(st)
     # Two pads, residual 5 mm each, standard deviation rigidity_m (4 mm), weight (sigma / sd)^2.
@@ -409,7 +410,7 @@ def test_grasp_rigidity_holds_established_pads_on_a_moving_box_the_camera_cannot
         for i in range(8):
             pos = c + max(0, i - 3) * 0.003 * R[:, 1]
             fit = tracker.update(empty, lambda index: np.full(index.shape, np.inf), pos, R, 0.01)
-            established.append(tracker.anchored[:2].tolist())
+            established.append([k in tracker.rigid for k in (0, 1)])
         u = (fit.fingertips[:2] - pos) @ R
         return established, u
 
@@ -431,11 +432,11 @@ def test_grasp_rigidity_needs_two_digits():
     st = hover_state(3)
     model, c, R = pinch_box(st)
     tracker = HandTracker(CALIB, HAND, model, st)
-    pose = tracker.kin.pose(st)
+    tips = tracker.kin.fingertips(*tracker.kin.pose(st)[:2])
     for _ in range(5):
-        tracker._update_rigidity(pose, c - 0.015 * R[:, 0] + 0.015 * R[:, 1], R)
-    assert tracker.touching.tolist()[:2] == [5, 0] and not tracker.anchored.any()
+        tracker._update_rigidity(tips, c - 0.015 * R[:, 0] + 0.015 * R[:, 1], R)
+    assert tracker.touching.tolist()[:2] == [5, 0] and tracker.rigid.size == 0
     for i in range(3):
-        tracker._update_rigidity(pose, c, R)
-    assert tracker.anchored[:2].all() and tracker.touching[1] == 3
+        tracker._update_rigidity(tips, c, R)
+    assert {0, 1} <= set(tracker.rigid.tolist()) and tracker.touching[1] == 3
     np.testing.assert_array_equal(tracker.anchor_axis[:2], [0, 0])  # the two x faces

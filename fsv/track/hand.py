@@ -345,10 +345,11 @@ class HandTracker:
         self.history = [HandState(init.palm_pos, init.palm_rot, np.clip(init.joints, lo, hi))]
         K = len(hand_model.finger_names)
         self.hidden = np.zeros(K, dtype=bool)  # unseen in the last frame
-        # Grasp rigidity: frames each digit has touched the box, and the established contacts'
-        # pads in the box's frame with their face's normal axis (the rows of the next frame).
+        # Grasp rigidity: frames each digit has touched the box; the digits with an established
+        # contact (indices) and every pad in the box's frame with its face's normal axis (the rows
+        # of the next frame).
         self.touching = np.zeros(K, dtype=np.int64)
-        self.anchored = np.zeros(K, dtype=bool)
+        self.rigid = np.zeros(0, dtype=np.int64)
         self.anchor = np.zeros((K, 3))
         self.anchor_axis = np.zeros(K, dtype=np.int64)
         self.frame = 0
@@ -425,6 +426,7 @@ class HandTracker:
         * free space: pixels that see the box or the table where the model puts a capsule on
           their ray, observed minus predicted depth;
         * no interpenetration with the box, grasp closure of hidden fingers near it;
+        * grasp rigidity of the established contacts (:func:`fsv.track.hand_system.rigidity_rows`);
         * temporal smoothness about the prediction (the occlusion prior for unseen fingers).
 
         ``rays`` (N, 3) and ``z_obs`` (N,) are the candidates' rays and depths; ``free`` is
@@ -432,15 +434,17 @@ class HandTracker:
         c = self.config
         n = self.model.num_joints
         pos, rot, axis, pivot = self.kin.pose(st)
+        box_pos = np.ascontiguousarray(box_pos, dtype=np.float64)
+        box_rot = np.ascontiguousarray(box_rot, dtype=np.float64)
         A, g, cost, explained = hand_normal_equations(
             pos, rot, axis, pivot, self.kin.moves, self._geom_segment, self._geom_fromto, self._geom_radius,
             self.rays.origin, rays, z_obs, free[0], free[1], float(sigma), float(c.cauchy_k), float(c.assign_max_m),
-            self.pen_local, self.pen_segment, self.pen_radius, float(c.penetration_m),
-            np.ascontiguousarray(box_pos, dtype=np.float64), np.ascontiguousarray(box_rot, dtype=np.float64),
-            self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius, self.flexion,
+            self.pen_local, self.pen_segment, self.pen_radius, float(c.penetration_m), box_pos, box_rot, self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius, self.flexion,
             float(c.closure_m), float(c.closure_range_m))
-        if self.anchored.any():
-            cost += self._rigidity_rows(A, g, (pos, rot, axis, pivot), box_pos, box_rot, sigma)
+        if self.rigid.size:
+            cost += rigidity_rows(A, g, pos, rot, axis, pivot, self.kin.moves, self._tip_segment, self._tip_offset,
+                                  self.rigid, self.anchor, self.anchor_axis, box_pos, box_rot,
+                                  (sigma / c.rigidity_m) ** 2)
         # Temporal smoothness about the prediction (the occlusion prior for unseen fingers).
         for sl, sd_, res in ((slice(0, 3), c.smooth_pos_m, st.palm_pos - prior.palm_pos),
                              (slice(3, 6), c.smooth_rot_rad, log_so3(mm(st.palm_rot, prior.palm_rot.T))),
@@ -453,28 +457,18 @@ class HandTracker:
         mirror_upper(A)
         return A, g, cost, explained
 
-    def _rigidity_rows(self, A, g, pose, box_pos, box_rot, sigma: float) -> float:
-        """Adds the grasp-rigidity rows to ``A`` (upper triangle) and ``g`` in place and returns their
-        cost: for every established contact, the pad's displacement from its anchor along the two
-        axes of its face, standard deviation ``rigidity_m``
-        (:func:`fsv.track.hand_system.rigidity_rows`)."""
-        pos, rot, axis, pivot = pose
-        return rigidity_rows(A, g, pos, rot, axis, pivot, self.kin.moves, self._tip_segment, self._tip_offset,
-                             np.flatnonzero(self.anchored), np.ascontiguousarray(self.anchor, dtype=np.float64),
-                             self.anchor_axis, np.ascontiguousarray(box_pos, dtype=np.float64),
-                             np.ascontiguousarray(box_rot, dtype=np.float64), (sigma / self.config.rigidity_m) ** 2)
-
-    def _update_rigidity(self, pose, box_pos, box_rot) -> None:
-        """Which digits touch the box after this frame's fit, and the anchors of the next frame."""
+    def _update_rigidity(self, tips: np.ndarray, box_pos: np.ndarray, box_rot: np.ndarray) -> None:
+        """Which digits touch the box after this frame's fit (pad centres ``tips`` (K, 3), [m]), and
+        the anchors of the next frame's grasp-rigidity rows."""
         c = self.config
         if not c.rigidity_frames:
             return
-        u = rows_mt(self.kin.fingertips(pose[0], pose[1]) - box_pos[None, :], box_rot.T)  # box frame
+        u = rows_mt(tips - box_pos[None, :], box_rot.T)  # box frame
         dist, _ = box_signed_distance(u, self.half)
         touch = dist - self.model.fingertip_radius <= c.rigidity_gap_m
         self.touching = np.where(touch, self.touching + 1, 0)
-        established = self.touching >= c.rigidity_frames
-        self.anchored = established if int(established.sum()) >= 2 else np.zeros_like(established)
+        established = np.flatnonzero(self.touching >= c.rigidity_frames)
+        self.rigid = established if established.size >= 2 else established[:0]
         self.anchor = u
         self.anchor_axis = np.argmax(np.abs(u) - self.half[None, :], axis=1)
 
@@ -553,7 +547,7 @@ class HandTracker:
         tips = self.kin.fingertips(pose[0], pose[1])
         observed = self._observed(idx, z_obs, pose, sigma)
         self.hidden = ~observed
-        self._update_rigidity(pose, np.asarray(box_pos, dtype=float), np.asarray(box_rot, dtype=float))
+        self._update_rigidity(tips, np.asarray(box_pos, dtype=float), np.asarray(box_rot, dtype=float))
         return HandFit(state=state, fingertips=tips, observed=observed, explained=explained, reinitialised=reinit)
 
     def _observed(self, idx, z_obs, pose, sigma) -> np.ndarray:

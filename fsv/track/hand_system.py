@@ -230,10 +230,11 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
 @_jit
 def rigidity_rows(A, g, pos, rot, axis, pivot, moves, tip_segment, tip_offset, fingers, anchor, anchor_axis,
                   box_pos, box_rot, w):  # pragma: no cover - compiled
-    """Adds the grasp-rigidity rows of :meth:`fsv.track.hand.HandTracker._rigidity_rows` to ``A``
-    (upper triangle) and ``g`` and returns their cost: for each finger index in ``fingers``, the
-    pad's displacement from ``box_pos + box_rot @ anchor[k]`` along the two box axes other than
-    ``anchor_axis[k]``, weight ``w``."""
+    """Adds the grasp-rigidity rows (:mod:`fsv.track.hand`) to ``A`` (upper triangle) and ``g`` and
+    returns their cost: for each finger index k in ``fingers``, the displacement of its pad (on
+    segment ``tip_segment[k]`` at ``tip_offset[k]``) from ``box_pos + box_rot @ anchor[k]`` along
+    the two box axes other than ``anchor_axis[k]`` (the axes of the face it touches), weight ``w``
+    (``(sigma / rigidity_m)^2``)."""
     row = np.zeros(A.shape[0])
     cost = 0.0
     for k in fingers:
