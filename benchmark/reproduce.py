@@ -64,7 +64,9 @@ DATASETS = {
     "table2-users-0-1": _TABLE2_GRID + ["--users", "0,1"],
     "table2-error-model": _TABLE2_GRID + ["--users", "0,4", "--contacts", "error-model"],
     "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
-    "default": ["--tasks", "lift", "--users", "0-3", "--grasps", "0-3", "--masses", "0,2", "--seeds", "100"],
+    "default": ["--tasks", ",".join(("lift", "place", "release", "rotate", "shake", "free", "excite-tx", "excite-ty",
+                                     "excite-tz", "excite-rx", "excite-ry", "excite-rz")),
+                "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "100"],
 }
 """``fsv-bench generate`` arguments of every dataset a committed result is made from."""
 

@@ -130,7 +130,8 @@ def test_bad_inputs_are_named():
 def test_learned_forces_explain_the_motion_and_follow_the_predictions():
     from fsv import Contacts, Kinematics, ObjectModel
     from fsv.forces import FrameStatus
-    from fsv.learn import learned_forces
+    from fsv.features import grasp_features
+    from fsv.learn import learned_forces, smooth_over_time
 
     rng = np.random.default_rng(4)
     T, names = 12, ("thumb", "index", "middle")
@@ -157,6 +158,40 @@ def test_learned_forces_explain_the_motion_and_follow_the_predictions():
     np.testing.assert_allclose(sol.internal_normal, pred, atol=1e-3)  # ... and the internal parts follow them
     with pytest.raises(InputError, match="fingers"):
         learned_forces(model, kin, Contacts(("a", "b", "c"), con.active, con.sliding, con.point, con.normal, con.slide_dir), obj)
+    # the amount is averaged over time, the shares stay per frame; 0 s gives the per-frame predictions
+    feats = grasp_features(kin, con, obj)
+    amount, shares, per_frame = model.predict(feats.matrix(), con.active)
+    _, pred0 = learned_forces(model, kin, con, obj, smoothing_s=0.0)
+    np.testing.assert_array_equal(pred0, per_frame)
+    _, pred1 = learned_forces(model, kin, con, obj, smoothing_s=0.1)
+    expected = smooth_over_time(amount, kin.t, np.ones(T, bool), 0.1)[:, None] * shares
+    np.testing.assert_allclose(pred1, expected, rtol=1e-12)
+    assert np.std(np.linalg.norm(pred1, axis=1)) < 0.5 * np.std(amount)  # the kinematics' noise is averaged out
+    with pytest.raises(InputError, match="smoothing_s"):
+        learned_forces(model, kin, con, obj, smoothing_s=-1.0)
+
+
+def test_smooth_over_time_is_the_windowed_weighted_mean_over_defined_frames():
+    from fsv.learn import smooth_over_time
+
+    rng = np.random.default_rng(7)
+    T, fps, sigma_s = 90, 30.0, 0.2
+    t = np.arange(T) / fps
+    v = rng.normal(5.0, 2.0, T)
+    defined = np.ones(T, bool)
+    defined[[0, 1, 40, 41, 42, 43, 70]] = False
+    out = smooth_over_time(v, t, defined, sigma_s)
+    dt = t[:, None] - t[None, :]  # the formula, by brute force
+    w = np.exp(-0.5 * (dt / sigma_s) ** 2) * (np.abs(dt) <= 4 * sigma_s + 1e-12) * defined[None, :]
+    expected = np.where(defined, (w * v[None, :]).sum(axis=1) / w.sum(axis=1), 0.0)
+    np.testing.assert_allclose(out, expected, rtol=1e-6)  # SciPy's kernel is the sampled Gaussian, normalised
+    np.testing.assert_array_equal(out[~defined], 0.0)
+    # a constant stays itself up to the video's edges and the gaps (the window is renormalised)
+    np.testing.assert_allclose(smooth_over_time(np.full(T, 3.0), t, defined, sigma_s)[defined], 3.0, rtol=1e-12)
+    with pytest.raises(InputError, match="sigma_s"):
+        smooth_over_time(v, t, defined, 0.0)
+    with pytest.raises(InputError, match="one length"):
+        smooth_over_time(v[:-1], t, defined, sigma_s)
 
 
 # --- model files: digest, corruption, provenance ------------------------------------------------

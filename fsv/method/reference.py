@@ -9,8 +9,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from fsv.errors import InputError
 from fsv.forces import ForceSettings, ForceSolution, nominal_forces
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig, differentiate_poses
+from fsv.learn import AMOUNT_SMOOTHING_S
 from fsv.track.tracker import TrackerConfig, Tracking, track
 from fsv.types import Contacts, Kinematics, Poses
 
@@ -75,18 +77,29 @@ class LearnedInternalForces:
         model: A trained ``fsv.learn.InternalForceModel``; None loads the shipped one on first use.
         settings: Settings of the cone program.
         source: Where the model came from, for the label (e.g. its file).
+        smoothing_s: Gaussian window over which the predicted amount of internal force is averaged,
+            [s] (``fsv.learn.AMOUNT_SMOOTHING_S``); 0: per frame.
     """
 
     model: object = None
     settings: ForceSettings | None = None
     source: str = ""
+    smoothing_s: float = AMOUNT_SMOOTHING_S
+
+    def __post_init__(self):
+        if not (isinstance(self.smoothing_s, (int, float)) and np.isfinite(self.smoothing_s) and self.smoothing_s >= 0):
+            raise InputError(f"LearnedInternalForces.smoothing_s must be a finite number of seconds >= 0, "
+                             f"got {self.smoothing_s!r}")
 
     @property
     def name(self) -> str:
-        return f"learned internal forces ({self.source or ('shipped model' if self.model is None else 'user model')})"
+        model = self.source or ("shipped model" if self.model is None else "user model")
+        window = f", amount averaged over {self.smoothing_s:g} s" if self.smoothing_s > 0 else ", per frame"
+        return f"learned internal forces ({model}{window})"
 
     def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model, gravity) -> tuple:
         from fsv.learn import default_model, learned_forces  # torch is loaded only when this stage runs
 
         model = self.model if self.model is not None else default_model()
-        return learned_forces(model, kinematics, contacts, object_model, gravity=gravity, settings=self.settings)
+        return learned_forces(model, kinematics, contacts, object_model, gravity=gravity, settings=self.settings,
+                              smoothing_s=self.smoothing_s)
