@@ -439,7 +439,8 @@ class HandTracker:
         A, g, cost, explained = hand_normal_equations(
             pos, rot, axis, pivot, self.kin.moves, self._geom_segment, self._geom_fromto, self._geom_radius,
             self.rays.origin, rays, z_obs, free[0], free[1], float(sigma), float(c.cauchy_k), float(c.assign_max_m),
-            self.pen_local, self.pen_segment, self.pen_radius, float(c.penetration_m), box_pos, box_rot, self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius, self.flexion,
+            self.pen_local, self.pen_segment, self.pen_radius, float(c.penetration_m), box_pos, box_rot,
+            self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius, self.flexion,
             float(c.closure_m), float(c.closure_range_m))
         if self.rigid.size:
             cost += rigidity_rows(A, g, pos, rot, axis, pivot, self.kin.moves, self._tip_segment, self._tip_offset,
