@@ -70,6 +70,9 @@ amount of internal force, [s]; 0 turns it off. Chosen on ``dev`` with tracked in
 of the final forces over its 48 episodes: 20.7 % per frame, 19.0 % at 0.1 s, 18.1 % at 0.25 s, 17.3 % at 0.5 s,
 17.1 % at 1 s and at 2 s; the middle of the plateau)."""
 
+AMOUNT_LOSSES = ("squared", "relative")
+"""The training losses of ANN_L2 (:attr:`LearnConfig.amount_loss`)."""
+
 FORMAT = "fsv-internal-forces"
 VERSION = 4  # versions 1 and 2 carried no digest; 3 was a torch archive. None of them is read
 
@@ -91,6 +94,10 @@ class LearnConfig:
             and are left out of ANN_decomp's loss.
         members: Pairs of networks trained from different initial weights; predictions are
             their average (1: the paper's single pair).
+        amount_loss: ANN_L2's training loss, one of :data:`AMOUNT_LOSSES`: ``"squared"``, the mean
+            squared error of the standardised amount (the paper's); ``"relative"``, the mean
+            relative error |a_hat - a| / max(a, relative_floor_n), the error the forces are scored by.
+        relative_floor_n: Smallest amount a relative error is taken against, [N].
     """
 
     hidden_l2: tuple = (6, 7)
@@ -103,6 +110,8 @@ class LearnConfig:
     seed: int = 0
     min_l2_n: float = 0.05
     members: int = 1
+    amount_loss: str = "squared"
+    relative_floor_n: float = 1.0
 
     def __post_init__(self):
         for name in ("hidden_l2", "hidden_decomp"):
@@ -118,6 +127,10 @@ class LearnConfig:
             object.__setattr__(self, name, int(v))
         if not (self.lr > 0 and self.min_l2_n >= 0):
             raise InputError(f"LearnConfig.lr must be > 0 and min_l2_n >= 0, got {self.lr!r}, {self.min_l2_n!r}")
+        if self.amount_loss not in AMOUNT_LOSSES:
+            raise InputError(f"LearnConfig.amount_loss must be one of {', '.join(AMOUNT_LOSSES)}, got {self.amount_loss!r}")
+        if not (isinstance(self.relative_floor_n, (int, float)) and self.relative_floor_n > 0):
+            raise InputError(f"LearnConfig.relative_floor_n must be a number of newtons > 0, got {self.relative_floor_n!r}")
         object.__setattr__(self, "etas", tuple(float(v) for v in self.etas))
         object.__setattr__(self, "step_sizes", tuple(float(v) for v in self.step_sizes))
 
@@ -475,16 +488,26 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
         w = torch.from_numpy((data.active & (l2 >= config.min_l2_n)[:, None]).astype(np.float64))
         s = torch.from_numpy(shares)
         n_w = max(float(w.sum()), 1.0)
+        if config.amount_loss == "squared":
+            def amount_loss(out):
+                return torch.mean((out[:, 0] - y) ** 2)
+        else:
+            a = torch.from_numpy(l2)
+            inv = torch.from_numpy(1.0 / np.maximum(l2, config.relative_floor_n))
+
+            def amount_loss(out):
+                return torch.mean(torch.abs(out[:, 0] * l2_std + l2_mean - a) * inv)
         net_l2, net_decomp, loss_l2, loss_dec = [], [], [], []
         for _ in range(config.members):
             net_l2.append(_mlp(z.shape[1], config.hidden_l2, 1, gen))
             net_decomp.append(_mlp(z.shape[1], config.hidden_decomp, K, gen))
-            loss_l2.append(_rprop(net_l2[-1], z, lambda out: torch.mean((out[:, 0] - y) ** 2), config, on_epoch))
+            loss_l2.append(_rprop(net_l2[-1], z, amount_loss, config, on_epoch))
             loss_dec.append(_rprop(net_decomp[-1], z, lambda out: torch.sum(w * (out - s) ** 2) / n_w, config, on_epoch))
     finally:
         torch.set_num_threads(threads)
     meta = dict(metadata or {})
-    meta.update(samples=len(data), train_mse_l2_std=float(np.mean(loss_l2)), train_mse_shares=float(np.mean(loss_dec)))
+    loss_name = "train_mse_l2_std" if config.amount_loss == "squared" else "train_rel_err_l2"
+    meta.update({"samples": len(data), loss_name: float(np.mean(loss_l2)), "train_mse_shares": float(np.mean(loss_dec))})
     return InternalForceModel(config, names, x_mean, x_std, l2_mean, l2_std, [_layers(n) for n in net_l2],
                               [_layers(n) for n in net_decomp], meta)
 
@@ -590,7 +613,8 @@ def learned_forces(
         raise InputError(f"smoothing_s must be a finite number of seconds >= 0, got {smoothing_s!r}")
     features = grasp_features(kinematics, contacts, object_model, gravity=gravity)
     ok = kinematics.valid[:, None] & contacts.active
-    x = np.where(np.isfinite(features.matrix()), features.matrix(), 0.0)
+    x = features.matrix()
+    x = np.where(np.isfinite(x), x, 0.0)
     amount, shares, _ = model.predict(x, contacts.active)
     if smoothing_s > 0:
         amount = smooth_over_time(amount, kinematics.t, ok.any(axis=1), smoothing_s)

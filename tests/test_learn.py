@@ -125,6 +125,30 @@ def test_bad_inputs_are_named():
         LearnConfig(folds=1)
     with pytest.raises(InputError, match="members"):
         LearnConfig(members=0)
+    with pytest.raises(InputError, match="amount_loss must be one of squared, relative, got 'l1'"):
+        LearnConfig(amount_loss="l1")
+    with pytest.raises(InputError, match="relative_floor_n"):
+        LearnConfig(relative_floor_n=0.0)
+
+
+def test_the_relative_loss_predicts_the_weighted_median_and_the_squared_loss_the_mean():
+    """Two users grip the same features with 2 N and 6 N alike often: the squared loss's minimiser
+    is their mean, 4 N; the relative loss |a_hat - a| / a weighs the 2 N grip three times as much,
+    so its minimiser is 2 N (between the two, the cost is ((a_hat - 2) / 2 + (6 - a_hat) / 6) / 2, rising
+    from 2 N)."""
+    n = 400
+    x = np.tile(np.concatenate([[5.0, 0.1], np.zeros(2 * K), np.ones(K)]), (n, 1))  # features alike
+    amount = np.where(np.arange(n) % 2 == 0, 2.0, 6.0)
+    internal = amount[:, None] * np.full((n, K), 0.5)  # unit share vector, norm = amount
+    data = TrainingSet(x, internal, np.ones((n, K), bool))
+    squared = train(data, LearnConfig(epochs=300, seed=1))
+    relative = train(data, LearnConfig(epochs=300, seed=1, amount_loss="relative"))
+    a_sq = squared.predict(x, data.active)[0]
+    a_rel = relative.predict(x, data.active)[0]
+    assert abs(np.median(a_sq) - 4.0) < 0.05, np.median(a_sq)  # measured 4.000
+    assert abs(np.median(a_rel) - 2.0) < 0.05, np.median(a_rel)  # measured 2.000
+    assert "train_rel_err_l2" in relative.metadata and "train_mse_l2_std" in squared.metadata
+    assert relative.config.amount_loss == "relative"
 
 
 def test_learned_forces_explain_the_motion_and_follow_the_predictions():

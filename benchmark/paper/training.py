@@ -1,6 +1,7 @@
 """``fsv-bench train``: fit the internal-force networks on a generated dataset and save them.
 
     fsv-bench train --data DIR --out model.npz [--seeds 0-2] [--epochs 1500] [--folds 5] [--members 5]
+                    [--amount-loss squared|relative]
 
 Runs k-fold cross-validation (folds made of whole episodes) to report the expected error, then
 trains on every selected sample and saves the model with its normalisation and a description of
@@ -22,7 +23,7 @@ import numpy as np
 from benchmark.paper.dataset import MAX_EXCESS_N, _ints, finger_names_of, load_dataset, training_set
 from benchmark.paper.table2 import TABLE2_MEMBERS
 from fsv.errors import InputError
-from fsv.learn import LearnConfig, cross_validate, train
+from fsv.learn import AMOUNT_LOSSES, LearnConfig, cross_validate, train
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -35,6 +36,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar (it is also hidden when stderr is not a terminal)")
     p.add_argument("--members", type=int, default=TABLE2_MEMBERS,
                    help=f"networks per ANN, averaged (default {TABLE2_MEMBERS}; 1 = the paper's single pair)")
+    p.add_argument("--amount-loss", choices=AMOUNT_LOSSES, default=LearnConfig.amount_loss,
+                   help="ANN_L2's training loss: squared (the paper's) or relative (|a_hat - a| / a, as the forces "
+                        f"are scored; default {LearnConfig.amount_loss})")
     p.add_argument("--max-excess", type=float, default=MAX_EXCESS_N,
                    help=f"plausibility rule on the samples, [N] (default {MAX_EXCESS_N}; inf: the paper's rule only)")
 
@@ -48,7 +52,8 @@ def run(args: argparse.Namespace):
     if args.folds and not 2 <= args.folds <= episodes:
         raise InputError(f"--folds {args.folds} needs between 2 and the dataset's {episodes} episodes; "
                          f"pass --folds {min(max(episodes, 2), 5)} or --folds 0 to skip cross-validation")
-    config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed, members=args.members)
+    config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed, members=args.members,
+                         amount_loss=args.amount_loss)
     from tqdm import tqdm
 
     t0 = time.perf_counter()

@@ -235,6 +235,8 @@ def run_stage(run) -> None:
     run.estimate = run_method(run.method_spec, ep, inputs=camera_input(ep, scale), progress=not run.args.quiet)
     tracking = run.tracking = run.estimate.tracking
     elapsed = run.estimate.timing_s["track"]
+    stages = dict(getattr(tracking, "timing_s", None) or {})
+    first = stages.pop("first_frame", 0.0)
     scores = score_tracking(tracking, ep.truth)
     run.out.mkdir(parents=True, exist_ok=True)
     overlay = run.out / "tracking_overlay.png"
@@ -246,7 +248,9 @@ def run_stage(run) -> None:
         "paper_contact_err_mm": PAPER_CONTACT_ERROR_MM,
         "gates": gate_report(scores),
         "frames_per_s": T / elapsed,
-        "stage_ms_per_frame": {k: 1e3 * v / T for k, v in (getattr(tracking, "timing_s", None) or {}).items()},
+        "frames_per_s_after_first": (T - 1) / (elapsed - first) if T > 1 and elapsed > first else float("nan"),
+        "first_frame_s": first,
+        "stage_ms_per_frame": {k: 1e3 * v / T for k, v in stages.items()},
         "tracker": run.estimate.labels.get("tracker"),
         "init_perturbation": {k: float(v) * scale for k, v in INIT_PERTURBATION.items()},
         "overlay": overlay.name,
@@ -254,7 +258,8 @@ def run_stage(run) -> None:
     run.summary["tracking"] = block
     failed = [k for k, g in block["gates"].items() if not g["pass"]]
     run.lines.append(
-        f"tracking [{run.estimate.labels.get('tracker')}] ({T / elapsed:.1f} frames/s): box {scores['box_pos_err_mm_median']:.2f} mm / "
+        f"tracking [{run.estimate.labels.get('tracker')}] ({block['frames_per_s_after_first']:.1f} frames/s after the "
+        f"first frame, which took {first:.1f} s with any compilation): box {scores['box_pos_err_mm_median']:.2f} mm / "
         f"{scores['box_rot_err_deg_median']:.2f} deg (median), fingertips {scores['fingertip_err_mm_median']:.1f} mm, "
         f"contact point {scores['contact_err_mm_mean']:+.2f} ± {scores['contact_err_mm_std']:.2f} mm per axis "
         f"(paper -1.55 ± 6.13), median {scores['contact_err_mm_median_euclid']:.1f} mm, recall "

@@ -236,11 +236,11 @@ def rigidity_rows(A, g, pos, rot, axis, pivot, moves, tip_segment, tip_offset, f
     the two box axes other than ``anchor_axis[k]`` (the axes of the face it touches), weight ``w``
     (``(sigma / rigidity_m)^2``)."""
     row = np.zeros(A.shape[0])
+    x = np.empty(3)
+    t = np.empty(3)
     cost = 0.0
     for k in fingers:
         s = tip_segment[k]
-        x = np.empty(3)
-        t = np.empty(3)
         for i in range(3):
             x[i] = pos[s, i] + rot[s, i, 0] * tip_offset[k, 0] + rot[s, i, 1] * tip_offset[k, 1] + rot[s, i, 2] * tip_offset[k, 2]
             t[i] = box_pos[i] + box_rot[i, 0] * anchor[k, 0] + box_rot[i, 1] * anchor[k, 1] + box_rot[i, 2] * anchor[k, 2]

@@ -83,7 +83,8 @@ class Tracking:
         box_inliers: Fraction of predicted-visible box pixels agreeing with the fit, shape (T,).
         hand_explained: Fraction of hand candidate points near the fitted hand, shape (T,).
         contacts: Contacts detected from the tracked fingertips (object frame).
-        timing_s: Seconds spent in each stage: ``box``, ``hand``, ``contacts``.
+        timing_s: Seconds spent in each stage: ``box``, ``hand``, ``contacts``; and ``first_frame``,
+            the first frame's box and hand fits (which include any compilation of the kernels).
     """
 
     box: Poses
@@ -130,7 +131,7 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     box_pos, box_rot, inl = np.zeros((T, 3)), np.zeros((T, 3, 3)), np.zeros(T)
     qpos = np.zeros((T, 7 + hand_model.num_joints))
     tips, observed, explained = np.zeros((T, K, 3)), np.zeros((T, K), bool), np.zeros(T)
-    t_box = t_hand = 0.0
+    t_box = t_hand = t_first = 0.0
     for i, frame in enumerate(depth.depth_m):
         t0 = time.perf_counter()
         fit = boxes.update(frame, occluder=hands.predicted_depth)
@@ -145,12 +146,14 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
         tips[i], observed[i], explained[i] = hf.fingertips, hf.observed, hf.explained
         t_box += t1 - t0
         t_hand += time.perf_counter() - t1
+        if i == 0:
+            t_first = time.perf_counter() - t0
         if on_frame is not None:
             on_frame(1)
     poses = Poses(t=depth.t, pos=box_pos, rot=box_rot)
     t2 = time.perf_counter()
     contacts = detect_contacts(tips, hand_model.fingertip_radius, observed, poses, object_model,
                                hand_model.finger_names, cfg.contacts)
-    timing = {"box": t_box, "hand": t_hand, "contacts": time.perf_counter() - t2}
+    timing = {"box": t_box, "hand": t_hand, "contacts": time.perf_counter() - t2, "first_frame": t_first}
     return Tracking(box=poses, hand_qpos=qpos, fingertips=tips, observed=observed, box_inliers=inl,
                     hand_explained=explained, contacts=contacts, timing_s=timing)
