@@ -6,7 +6,11 @@
 Both take the features of :mod:`fsv.features` (eq. 10-13), are multilayer perceptrons with logistic
 (sigmoid) hidden neurons and a linear output (like R's ``neuralnet`` with ``linear.output=TRUE``),
 two hidden layers of (6, 7) and (8, 13) neurons as in the paper, and are trained full-batch with
-resilient backpropagation (``torch.optim.Rprop``) on standardised inputs.
+resilient backpropagation (``torch.optim.Rprop``) on standardised inputs. ANN_L2's loss is the
+paper's squared error or, with ``LearnConfig.amount_loss="relative"``, the mean relative error
+|a_hat - a| / max(a, 1 N), the error the forces are scored by (the shipped model's): when people
+who grip differently show the same motion, the first predicts their mean squeeze, the second a
+median weighted by 1 / a.
 
 Members. ``LearnConfig.members`` pairs of networks are trained from different initial weights
 (one seeded generator, drawn in turn) and their outputs are averaged: the mean norm, and the mean
