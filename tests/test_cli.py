@@ -161,6 +161,10 @@ def test_the_kinect_preset_runs_end_to_end_and_is_recorded(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenario"]["sensor"] == "kinect-v1"
     assert summary["tracking"]["box_pos_err_mm_median"] < 10
+    tr = summary["tracking"]  # the frame rate without the first frame, which holds any compilation
+    assert tr["first_frame_s"] > 0 and tr["frames_per_s_after_first"] > 0
+    assert "first_frame" not in tr["stage_ms_per_frame"]
+    assert "frames/s after the first frame, which took" in capsys.readouterr().out
 
 
 def test_summary_json_is_strict_even_where_a_metric_has_nothing_to_score(tmp_path):
