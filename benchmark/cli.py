@@ -127,7 +127,8 @@ STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_le
 from benchmark import verdict as _verdict  # noqa: E402
 
 STAGES.append(Stage(name="verdict", add_arguments=_verdict.add_arguments, run=_verdict.run_stage))
-SUBCOMMANDS = {"generate": "benchmark.paper.dataset", "train": "benchmark.paper.training", "table2": "benchmark.paper.table2",
+SUBCOMMANDS = {"generate": "benchmark.paper.dataset", "calibrate": "benchmark.paper.calibration",
+               "train": "benchmark.paper.training", "table2": "benchmark.paper.table2",
                "reproduce": "benchmark.reproduce", "eval": "benchmark.suites.evaluate",
                "compare": "benchmark.suites.compare", "export": "benchmark.exchange.export",
                "score": "benchmark.exchange.score", "leaderboard": "benchmark.suites.leaderboard",

@@ -40,6 +40,8 @@ def source_fingerprint(root: pathlib.Path, python_files: list, data_files: list)
 
 
 def _data_files(root: pathlib.Path, folders) -> list:
+    """The data files directly in ``folders``; sub-folders hold results (the users' grip calibration,
+    ``sim_assets/calibration/``), which no fingerprint includes."""
     return sorted(p for d in folders if (root / d).is_dir() for p in (root / d).iterdir()
                   if p.is_file() and p.suffix in (".xml", ".yaml", ".json", ".npz") and not p.name.startswith("."))
 

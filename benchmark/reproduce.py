@@ -68,6 +68,7 @@ DATASETS = {
     "default": ["--tasks", ",".join(("lift", "place", "release", "rotate", "shake", "free", "excite-tx", "excite-ty",
                                      "excite-tz", "excite-rx", "excite-ry", "excite-rz")),
                 "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "100"],
+    "calibration": ["--tasks", "lift", "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "900"],
 }
 """``fsv-bench generate`` arguments of every dataset a committed result is made from."""
 
@@ -171,10 +172,17 @@ def _table2(out_sub: str, data: str, extra: tuple = ()) -> Result:
                   compare=_compare_json("table2.json"))
 
 
+def _compare_calibration(new: pathlib.Path, old: pathlib.Path) -> list[str]:
+    return compare_values(json.loads(new.read_text())["users"], json.loads(old.read_text())["users"], "users")
+
+
 RESULTS = (
+    Result(name="grip-calibration", path="sim_assets/calibration/grip_calibration.json", datasets=("calibration",),
+           commands=(("fsv-bench", "calibrate", "--data", "{data}/calibration", "--out", "{out}"),),
+           compare=_compare_calibration),
     Result(name="shipped-model", path="fsv/data/internal_forces.npz", datasets=("default",),
            commands=(("fsv-bench", "train", "--data", "{data}/default", "--out", "{out}", "--folds", "3",
-                      "--amount-loss", "relative"),),
+                      "--amount-loss", "relative", "--grip", "{root}/sim_assets/calibration/grip_calibration.json"),),
            compare=_compare_model),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
@@ -198,7 +206,8 @@ RESULTS = (
     _table2("error-model", "table2-error-model"),
     _table2("oracle-contacts", "table2-oracle-contacts"),
 )
-"""Every committed result, in the order they are made (the reference run uses the shipped model)."""
+"""Every committed result, in the order they are made (the shipped model uses the users' grip
+calibration, the reference run the shipped model)."""
 
 
 def recorded() -> dict:
@@ -208,13 +217,13 @@ def recorded() -> dict:
 
 
 def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: str, log) -> None:
-    argv = [c.format(data=data, out=out) for c in command]
+    argv = [c.format(data=data, out=out, root=ROOT) for c in command]
     print("$ " + " ".join(argv), file=log, flush=True)
     if argv[0] == "fsv-bench":
         from benchmark.cli import main
 
         saved = sys.argv  # what a model records as its command: the documented one
-        sys.argv = [c.format(data="data", out=documented_out) for c in command]
+        sys.argv = [c.format(data="data", out=documented_out, root=".") for c in command]
         try:
             code = main(argv[1:])
         finally:

@@ -5,6 +5,7 @@ hand; it never imports the simulator, the renderer or the benchmark.
 """
 
 from fsv.errors import FsvError, InputError, SolverError, TrackingError
+from fsv.grip import GripCalibration
 from fsv.models import HandModel, ObjectModel
 from fsv.types import Calibration, Contacts, DepthVideo, Kinematics, Poses
 
@@ -20,6 +21,7 @@ __all__ = [
     "DepthVideo",
     "Estimate",
     "FsvError",
+    "GripCalibration",
     "HandModel",
     "InputError",
     "Kinematics",

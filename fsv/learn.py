@@ -18,6 +18,13 @@ share vector renormalised. ``members=1`` is the paper's single pair; a few membe
 the dependence of a small network on its initial weights (``fsv-bench train`` and the Table 2
 scorer say how many they used).
 
+The person. The paper's features carry the motion and the contact geometry, nothing of who
+squeezes, and people add very different amounts of internal force to the same motion. With
+``LearnConfig.grip_inputs`` both networks also take the person's grip calibration
+(:class:`fsv.grip.GripCalibration`: the amount of internal force against the load, fitted to a
+short calibration recording with force sensors), two more inputs after the features. Such a model
+assumes, for a person without a calibration, the mean calibration of its training samples.
+
 Fingers not in contact. The hand has a fixed number K of finger slots (thumb first). The input is
 ``[p1, p3, p2_1..p2_K, p4_1..p4_K, active_1..active_K]`` (2 + 3K values) with p2_k = p4_k = 0 for
 a finger not in contact, so the network sees which fingers touch. ``ANN_decomp`` has K outputs;
@@ -74,6 +81,9 @@ amount of internal force, [s]; 0 turns it off. Chosen on ``dev`` with tracked in
 of the final forces over its 48 episodes: 20.7 % per frame, 19.0 % at 0.1 s, 18.1 % at 0.25 s, 17.3 % at 0.5 s,
 17.1 % at 1 s and at 2 s; the middle of the plateau)."""
 
+GRIP_INPUTS = 2
+"""Inputs a grip calibration adds to the networks' (:meth:`fsv.grip.GripCalibration.vector`)."""
+
 AMOUNT_LOSSES = ("squared", "relative")
 """The training losses of ANN_L2 (:attr:`LearnConfig.amount_loss`)."""
 
@@ -102,6 +112,8 @@ class LearnConfig:
             squared error of the standardised amount (the paper's); ``"relative"``, the mean
             relative error |a_hat - a| / max(a, relative_floor_n), the error the forces are scored by.
         relative_floor_n: Smallest amount a relative error is taken against, [N].
+        grip_inputs: The networks also take the person's grip calibration
+            (:class:`fsv.grip.GripCalibration`, two values) beside the paper's features.
     """
 
     hidden_l2: tuple = (6, 7)
@@ -116,6 +128,7 @@ class LearnConfig:
     members: int = 1
     amount_loss: str = "squared"
     relative_floor_n: float = 1.0
+    grip_inputs: bool = False
 
     def __post_init__(self):
         for name in ("hidden_l2", "hidden_decomp"):
@@ -135,6 +148,8 @@ class LearnConfig:
             raise InputError(f"LearnConfig.amount_loss must be one of {', '.join(AMOUNT_LOSSES)}, got {self.amount_loss!r}")
         if not (isinstance(self.relative_floor_n, (int, float)) and self.relative_floor_n > 0):
             raise InputError(f"LearnConfig.relative_floor_n must be a number of newtons > 0, got {self.relative_floor_n!r}")
+        if not isinstance(self.grip_inputs, bool):
+            raise InputError(f"LearnConfig.grip_inputs must be True or False, got {self.grip_inputs!r}")
         object.__setattr__(self, "etas", tuple(float(v) for v in self.etas))
         object.__setattr__(self, "step_sizes", tuple(float(v) for v in self.step_sizes))
 
@@ -150,12 +165,15 @@ class TrainingSet:
         active: Finger k in contact, shape (N, K).
         groups: Group label per sample (e.g. the episode), shape (N,); cross-validation folds
             never split a group.
+        grip: The grip calibration of the person in each sample
+            (:meth:`fsv.grip.GripCalibration.vector`), shape (N, 2); None if not known.
     """
 
     x: np.ndarray
     internal: np.ndarray
     active: np.ndarray
     groups: np.ndarray = field(default=None)
+    grip: np.ndarray = field(default=None)
 
     def __post_init__(self):
         x = np.asarray(self.x, dtype=np.float64)
@@ -171,7 +189,12 @@ class TrainingSet:
         g = np.arange(x.shape[0]) if self.groups is None else np.asarray(self.groups)
         if g.shape != (x.shape[0],):
             raise InputError(f"TrainingSet.groups must have shape ({x.shape[0]},), got {g.shape}")
-        for k, v in dict(x=x, internal=np.where(a, f, 0.0), active=a, groups=g).items():
+        grip = None
+        if self.grip is not None:
+            grip = np.asarray(self.grip, dtype=np.float64)
+            if grip.shape != (x.shape[0], GRIP_INPUTS) or not np.all(np.isfinite(grip)):
+                raise InputError(f"TrainingSet.grip must be finite with shape ({x.shape[0]}, {GRIP_INPUTS}), got {grip.shape}")
+        for k, v in dict(x=x, internal=np.where(a, f, 0.0), active=a, groups=g, grip=grip).items():
             object.__setattr__(self, k, v)
 
     def __len__(self) -> int:
@@ -182,7 +205,16 @@ class TrainingSet:
         return self.internal.shape[1]
 
     def subset(self, index) -> "TrainingSet":
-        return TrainingSet(self.x[index], self.internal[index], self.active[index], self.groups[index])
+        grip = None if self.grip is None else self.grip[index]
+        return TrainingSet(self.x[index], self.internal[index], self.active[index], self.groups[index], grip)
+
+    def inputs(self, grip_inputs: bool) -> np.ndarray:
+        """The networks' inputs: ``x``, followed by ``grip`` if ``grip_inputs``, shape (N, 2 + 3K [+ 2])."""
+        if not grip_inputs:
+            return self.x
+        if self.grip is None:
+            raise InputError("networks with grip inputs need TrainingSet.grip, the grip calibration of every sample")
+        return np.concatenate([self.x, self.grip], axis=1)
 
     @staticmethod
     def from_features(features: Features, internal: np.ndarray, groups=None) -> "TrainingSet":
@@ -263,14 +295,17 @@ class InternalForceModel:
     Attributes:
         config: How they were built and trained.
         finger_names: The K finger slots, thumb first.
-        x_mean, x_std: Input standardisation, shape (2 + 3K,).
+        x_mean, x_std: Input standardisation, shape (2 + 3K,), or (2 + 3K + 2,) with grip inputs.
         l2_mean, l2_std: Standardisation of ANN_L2's target, [N].
         net_l2, net_decomp: The networks, one per member (lists of ``config.members``); each is its
             list of (weight (out, in), bias (out,)) float64 layers (see :func:`forward`).
         metadata: Free-form description (dataset, command, losses); JSON-like values only.
+        grip_mean: With grip inputs, the mean grip calibration of the training samples, shape (2,):
+            what :meth:`predict` assumes for a person without one; None otherwise.
     """
 
-    def __init__(self, config, finger_names, x_mean, x_std, l2_mean, l2_std, net_l2, net_decomp, metadata=None):
+    def __init__(self, config, finger_names, x_mean, x_std, l2_mean, l2_std, net_l2, net_decomp, metadata=None,
+                 grip_mean=None):
         self.config = config
         self.finger_names = tuple(str(n) for n in finger_names)
         self.x_mean = np.asarray(x_mean, dtype=np.float64)
@@ -283,17 +318,46 @@ class InternalForceModel:
             raise InputError(f"a model needs as many ANN_L2 as ANN_decomp networks (>= 1), got {len(self.net_l2)}, "
                              f"{len(self.net_decomp)}")
         self.metadata = dict(metadata or {})
+        if config.grip_inputs:
+            g = np.asarray(grip_mean if grip_mean is not None else np.full(GRIP_INPUTS, np.nan), dtype=np.float64)
+            if g.shape != (GRIP_INPUTS,) or not np.all(np.isfinite(g)):
+                raise InputError(f"a model with grip inputs needs a finite grip_mean of shape ({GRIP_INPUTS},), got {grip_mean!r}")
+            self.grip_mean = g
+        else:
+            self.grip_mean = None
 
     @property
     def num_fingers(self) -> int:
         return len(self.finger_names)
 
-    def predict(self, x: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    @property
+    def num_inputs(self) -> int:
+        """Network inputs: 2 + 3K features, and 2 more with grip inputs."""
+        return 2 + 3 * self.num_fingers + (GRIP_INPUTS if self.config.grip_inputs else 0)
+
+    def grip_columns(self, grip, n: int) -> np.ndarray:
+        """The grip inputs of ``n`` samples, shape (n, 2): ``grip`` ((2,), (n, 2), a
+        :class:`fsv.grip.GripCalibration`, or None for :attr:`grip_mean`)."""
+        if grip is None:
+            g = self.grip_mean
+        elif hasattr(grip, "vector"):
+            g = grip.vector()
+        else:
+            g = np.asarray(grip, dtype=np.float64)
+        g = np.broadcast_to(g, (n, GRIP_INPUTS)) if np.shape(g) in ((GRIP_INPUTS,), (n, GRIP_INPUTS)) else None
+        if g is None or not np.all(np.isfinite(g)):
+            raise InputError(f"grip must be a GripCalibration, or finite values of shape ({GRIP_INPUTS},) or "
+                             f"({n}, {GRIP_INPUTS}), got {grip!r:.80}")
+        return g
+
+    def predict(self, x: np.ndarray, active: np.ndarray, grip=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Predicts the internal forces of each finger in contact.
 
         Args:
-            x: Network inputs, shape (N, 2 + 3K) (see :meth:`fsv.features.Features.matrix`).
+            x: The paper's features, shape (N, 2 + 3K) (see :meth:`fsv.features.Features.matrix`).
             active: Finger in contact, shape (N, K).
+            grip: With grip inputs, the person's grip calibration (see :meth:`grip_columns`);
+                None assumes the training samples' mean. Ignored by a model without grip inputs.
 
         Returns:
             ``(l2, shares, internal)``: the internal-force norm, shape (N,), [N] (clipped at 0);
@@ -306,6 +370,8 @@ class InternalForceModel:
         K = self.num_fingers
         if x.ndim != 2 or x.shape[1] != 2 + 3 * K or a.shape != (x.shape[0], K):
             raise InputError(f"predict expects x of shape (N, {2 + 3 * K}) and active of shape (N, {K}), got {x.shape}, {a.shape}")
+        if self.config.grip_inputs:
+            x = np.concatenate([x, self.grip_columns(grip, x.shape[0])], axis=1)
         z = (x - self.x_mean) / self.x_std
         l2 = np.mean([forward(net, z)[:, 0] for net in self.net_l2], axis=0) * self.l2_std + self.l2_mean
         s = np.zeros((x.shape[0], K))
@@ -318,11 +384,12 @@ class InternalForceModel:
         l2 = np.maximum(l2, 0.0)
         return l2, s, l2[:, None] * s
 
-    def predict_features(self, features: Features) -> np.ndarray:
-        """Internal normal forces per finger, shape (T, K), [N], from :class:`Features`."""
+    def predict_features(self, features: Features, grip=None) -> np.ndarray:
+        """Internal normal forces per finger, shape (T, K), [N], from :class:`Features` (and the
+        person's grip calibration, see :meth:`predict`)."""
         if features.num_fingers != self.num_fingers:
             raise InputError(f"features have {features.num_fingers} fingers, the model {self.num_fingers} ({self.finger_names})")
-        return self.predict(features.matrix(), features.active)[2]
+        return self.predict(features.matrix(), features.active, grip)[2]
 
     def state(self) -> dict:
         """What :meth:`save` writes: the model, its metadata and ``sha256``, the digest of the rest.
@@ -348,6 +415,8 @@ class InternalForceModel:
             "net_decomp": [[{"weight": W.copy(), "bias": b.copy()} for W, b in net] for net in self.net_decomp],
             "metadata": metadata,
         }
+        if self.grip_mean is not None:
+            st["grip_mean"] = [float(v) for v in self.grip_mean]
         st["sha256"] = content_sha256(st)
         return st
 
@@ -444,13 +513,13 @@ def load(path) -> InternalForceModel:
         K = len(st["finger_names"])
         nets = {key: [[(layer["weight"], layer["bias"]) for layer in net] for net in st[key]] for key in _NETS}
         for key, hidden, n_out in (("net_l2", config.hidden_l2, 1), ("net_decomp", config.hidden_decomp, K)):
-            sizes = [2 + 3 * K, *hidden, n_out]
+            sizes = [2 + 3 * K + (GRIP_INPUTS if config.grip_inputs else 0), *hidden, n_out]
             for net in nets[key]:
                 if [W.shape for W, _ in net] != list(zip(sizes[1:], sizes[:-1])) or \
                         [b.shape for _, b in net] != [(n,) for n in sizes[1:]]:
                     raise InputError(f"{key} layers do not have the config's sizes {sizes}")
         return InternalForceModel(config, st["finger_names"], st["x_mean"], st["x_std"], st["l2_mean"], st["l2_std"],
-                                  nets["net_l2"], nets["net_decomp"], st["metadata"])
+                                  nets["net_l2"], nets["net_decomp"], st["metadata"], st.get("grip_mean"))
     except (KeyError, TypeError, AttributeError, ValueError, InputError) as e:
         raise InputError(f"{path!r} has inconsistent internal-force model data: {one_line(e)}") from e
 
@@ -476,8 +545,9 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
     names = tuple(finger_names) if finger_names is not None else tuple(f"finger{k}" for k in range(K))
     if len(names) != K:
         raise InputError(f"finger_names has {len(names)} names for K = {K} finger slots")
-    x_mean = data.x.mean(axis=0)
-    x_std = data.x.std(axis=0)
+    x = data.inputs(config.grip_inputs)
+    x_mean = x.mean(axis=0)
+    x_std = x.std(axis=0)
     x_std = np.where(x_std > 1e-12, x_std, 1.0)
     l2, shares = _targets(data.internal, data.active)
     l2_mean, l2_std = float(l2.mean()), float(l2.std()) if l2.std() > 1e-12 else 1.0
@@ -487,7 +557,7 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
     torch.set_num_threads(1)
     try:
         gen = torch.Generator().manual_seed(config.seed)
-        z = torch.from_numpy((data.x - x_mean) / x_std)
+        z = torch.from_numpy((x - x_mean) / x_std)
         y = torch.from_numpy((l2 - l2_mean) / l2_std)
         w = torch.from_numpy((data.active & (l2 >= config.min_l2_n)[:, None]).astype(np.float64))
         s = torch.from_numpy(shares)
@@ -512,8 +582,9 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
     meta = dict(metadata or {})
     loss_name = "train_mse_l2_std" if config.amount_loss == "squared" else "train_rel_err_l2"
     meta.update({"samples": len(data), loss_name: float(np.mean(loss_l2)), "train_mse_shares": float(np.mean(loss_dec))})
+    grip_mean = data.grip.mean(axis=0) if config.grip_inputs else None
     return InternalForceModel(config, names, x_mean, x_std, l2_mean, l2_std, [_layers(n) for n in net_l2],
-                              [_layers(n) for n in net_decomp], meta)
+                              [_layers(n) for n in net_decomp], meta, grip_mean)
 
 
 def relative_errors_pct(predicted: np.ndarray, truth: np.ndarray, active: np.ndarray, min_force_n: float = 1.0) -> np.ndarray:
@@ -576,7 +647,7 @@ def cross_validate(data: TrainingSet, config: LearnConfig = LearnConfig(), *, on
     for k in range(config.folds):
         model = train(data.subset(fold != k), config, on_epoch=on_epoch)
         val = data.subset(fold == k)
-        l2, s, f = model.predict(val.x, val.active)
+        l2, s, f = model.predict(val.x, val.active, val.grip)
         l2_true, s_true = _targets(val.internal, val.active)
         rel.append(np.mean(relative_errors_pct(f, val.internal, val.active)))
         ok = l2_true >= 1.0
@@ -594,6 +665,7 @@ def learned_forces(
     gravity=GRAVITY,
     settings: ForceSettings | None = None,
     smoothing_s: float = AMOUNT_SMOOTHING_S,
+    grip=None,
 ) -> tuple[ForceSolution, np.ndarray]:
     """Full contact forces from vision with human-like internal forces (the paper's Fig. 2b).
 
@@ -606,6 +678,8 @@ def learned_forces(
         settings: Settings of the cone program.
         smoothing_s: Standard deviation of the Gaussian window over which the predicted amount of
             internal force is averaged, [s] (:func:`smooth_over_time`); 0: per frame.
+        grip: The person's :class:`fsv.grip.GripCalibration`, for a model with grip inputs (None:
+            the training samples' mean, see :meth:`InternalForceModel.predict`).
 
     Returns:
         ``(solution, predicted)``: the reconstruction (eq. 14) and the predicted internal normal
@@ -619,7 +693,7 @@ def learned_forces(
     ok = kinematics.valid[:, None] & contacts.active
     x = features.matrix()
     x = np.where(np.isfinite(x), x, 0.0)
-    amount, shares, _ = model.predict(x, contacts.active)
+    amount, shares, _ = model.predict(x, contacts.active, grip)
     if smoothing_s > 0:
         amount = smooth_over_time(amount, kinematics.t, ok.any(axis=1), smoothing_s)
     predicted = np.where(ok, amount[:, None] * shares, 0.0)

@@ -31,7 +31,7 @@ def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectMode
                  init: TrackInit, *, differentiator: AlgebraicConfig | CentralConfig | GaussianConfig | None = None,
                  tracker_config: TrackerConfig | None = None, contacts: Contacts | None = None,
                  kinematics: Kinematics | None = None, forces: bool = True, internal_model=None,
-                 gravity=GRAVITY, rng: np.random.Generator | None = None) -> Estimate:
+                 gravity=GRAVITY, rng: np.random.Generator | None = None, grip=None) -> Estimate:
     """Runs the reference FSV method on a depth video.
 
     Args:
@@ -50,6 +50,8 @@ def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectMode
             reconstructs the full forces with learned internal forces (eq. 14).
         gravity: Gravity in the world, shape (3,), [m/s^2].
         rng: Generator of the trackers' re-initialisation searches.
+        grip: The person's grip calibration (:class:`fsv.grip.GripCalibration`), for an internal
+            model trained with grip inputs; None: the model's training mean.
 
     Returns:
         The estimate, with per-stage timings.
@@ -61,5 +63,5 @@ def run_pipeline(depth: DepthVideo, calib: Calibration, object_model: ObjectMode
         internal=LearnedInternalForces(internal_model) if forces and internal_model is not None else False,
     )
     inputs = CameraInput(depth=depth, calib=calib, object_model=object_model, hand_model=hand_model, init=init,
-                         gravity=gravity)
+                         gravity=gravity, grip=grip)
     return method(inputs, rng, contacts=contacts, kinematics=kinematics)

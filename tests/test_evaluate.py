@@ -6,6 +6,7 @@ import json
 import pytest
 
 from benchmark.cli import main
+from benchmark.paper.dataset import _ints
 from benchmark.world.scenario import Scenario
 from benchmark.suites import SUITES, Gate, Suite
 from benchmark.world.assets import validate
@@ -187,6 +188,20 @@ def test_dev_is_the_standard_design_on_seeds_no_reported_suite_uses():
     assert [sc.mass for sc in dev] != [sc.mass for sc in std]  # drawn by its own generator
     assert SUITES["dev"].gates == SUITES["standard"].gates
     assert [sc.seed for sc in std] == list(range(300, 348))  # the headline's seeds did not move
+
+
+def test_the_grip_calibration_recording_uses_seeds_no_suite_and_no_training_grid_uses():
+    """A user's grip is measured on recordings of their own, never scored and never trained on."""
+    from benchmark.paper.calibration import read_calibration
+    from benchmark.reproduce import DATASETS
+
+    seeds = lambda name: set(_ints(dict(zip(DATASETS[name][::2], DATASETS[name][1::2]))["--seeds"]))
+    used = {sc.seed for suite in SUITES.values() for sc in suite.scenarios}
+    for name in DATASETS:
+        if name != "calibration":
+            used |= seeds(name)
+    assert seeds("calibration") == {900} and not seeds("calibration") & used
+    assert sorted(read_calibration()) == [0, 1, 2, 3, 4]  # every user of users.yaml
 
 
 def test_a_local_ray_cluster_gives_the_scores_of_the_local_run(tiny, ray_cluster, tmp_path):

@@ -31,7 +31,7 @@ def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys):
     assert [e["episode"] for e in index["episodes"]] == ["lift-u0-g0-m0-s21"]
     with zipfile.ZipFile(inputs / "lift-u0-g0-m0-s21.npz") as z:  # camera inputs only, no truth
         sections = {n.split("/")[0] for n in z.namelist() if n != "meta.json.npy"}
-    assert sections == {"camera", "init", "object", "hand"}
+    assert sections == {"camera", "init", "object", "hand", "grip"}  # grip: measured on other recordings
     write_estimates(inputs, estimates, spec.build(), method_label(spec))
     capsys.readouterr()
     code = main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "scores"),
@@ -57,6 +57,14 @@ def test_camera_file_round_trips_the_inputs(tiny, tmp_path):
     assert np.array_equal(a.depth.depth_m, b.depth.depth_m) and np.array_equal(a.calib.K, b.calib.K)
     assert np.array_equal(a.init.joints, b.init.joints) and a.object_model.mass_kg == b.object_model.mass_kg
     assert b.hand_model.finger_names == a.hand_model.finger_names and meta["rng_seed"] == [1, 2]
+    from benchmark.paper.calibration import user_grip
+
+    assert a.grip == user_grip(TINY.scenarios[0].user) and b.grip == a.grip and a.grip.samples > 0
+    import dataclasses
+
+    blind = save_camera_input(dataclasses.replace(a, grip=None), tmp_path / "y.npz", episode="y", suite=TINY,
+                              rng_seed=[1, 2])
+    assert load_camera_input(blind)[0].grip is None
 
 
 def _write(path, arrays, meta):

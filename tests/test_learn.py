@@ -388,3 +388,53 @@ def test_progress_is_reported_once_per_epoch_of_every_network():
     calls.clear()
     cross_validate(synthetic(200, 1), cfg, on_epoch=calls.append)
     assert len(calls) == 2 * 2 * 3 * 7
+
+
+def _two_grippers(n=400):
+    """Two people show the camera the same features; one adds 2 N of internal force, the other 6 N,
+    and their grip calibrations say so (baselines 2 and 6 N, no gain)."""
+    x = np.tile(np.concatenate([[5.0, 0.1], np.zeros(2 * K), np.ones(K)]), (n, 1))
+    firm = np.arange(n) % 2 == 1
+    amount = np.where(firm, 6.0, 2.0)
+    internal = amount[:, None] * np.full((n, K), 0.5)  # unit share vector, norm = amount
+    grip = np.stack([amount, np.zeros(n)], axis=1)
+    return TrainingSet(x, internal, np.ones((n, K), bool), grip=grip), firm
+
+
+def test_grip_inputs_tell_the_people_apart_where_the_features_cannot(tmp_path):
+    from fsv.grip import GripCalibration
+
+    data, firm = _two_grippers()
+    model = train(data, LearnConfig(epochs=300, seed=1, grip_inputs=True))
+    assert model.num_inputs == 2 + 3 * K + 2
+    np.testing.assert_allclose(model.grip_mean, [4.0, 0.0])
+    a = model.predict(data.x, data.active, data.grip)[0]
+    assert np.max(np.abs(a - np.where(firm, 6.0, 2.0))) < 0.05, np.max(np.abs(a - np.where(firm, 6.0, 2.0)))
+    one = data.x[:1]
+    assert abs(model.predict(one, data.active[:1], GripCalibration(6.0, 0.0))[0][0] - 6.0) < 0.05
+    assert abs(model.predict(one, data.active[:1], np.array([2.0, 0.0]))[0][0] - 2.0) < 0.05
+    # without a calibration the model assumes its training mean (4 N of baseline): between the two
+    middle = model.predict(one, data.active[:1])[0][0]
+    assert 2.5 < middle < 5.5, middle
+    model.save(tmp_path / "grip.npz")
+    back = load(tmp_path / "grip.npz")
+    assert back.config.grip_inputs and np.array_equal(back.grip_mean, model.grip_mean)
+    np.testing.assert_array_equal(back.predict(data.x, data.active, data.grip)[0], a)
+    with pytest.raises(InputError, match="grip must be"):
+        model.predict(one, data.active[:1], np.array([1.0, 2.0, 3.0]))
+
+
+def test_grip_inputs_need_every_samples_calibration():
+    data, _ = _two_grippers(40)
+    blind = TrainingSet(data.x, data.internal, data.active)
+    with pytest.raises(InputError, match="TrainingSet.grip"):
+        train(blind, LearnConfig(epochs=2, grip_inputs=True))
+    with pytest.raises(InputError, match=r"TrainingSet.grip must be finite with shape \(40, 2\)"):
+        TrainingSet(data.x, data.internal, data.active, grip=np.zeros((40, 3)))
+    with pytest.raises(InputError, match="grip_inputs must be True or False"):
+        LearnConfig(grip_inputs="yes")
+    # a blind model ignores a calibration; the subset keeps the calibrations of its samples
+    model = train(data, LearnConfig(epochs=2))
+    assert model.grip_mean is None and model.num_inputs == 2 + 3 * K
+    np.testing.assert_array_equal(model.predict(data.x, data.active, data.grip)[0], model.predict(data.x, data.active)[0])
+    np.testing.assert_array_equal(data.subset(np.arange(3)).grip, data.grip[:3])

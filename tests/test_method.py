@@ -82,3 +82,33 @@ def test_a_minimal_tracker_output_and_an_oracle_are_labelled(inputs):
     est = m(camera, kinematics=oracle_kinematics(ep.truth))
     assert est.oracle == ("kinematics",) and est.labels["differentiator"] == "oracle"
     assert est.fingertips is None and est.nominal.count(0) > 0  # OPTIMAL frames
+
+
+def test_an_internal_force_stage_that_takes_grip_is_given_the_persons_calibration(inputs):
+    """A stage with a ``grip`` keyword gets ``CameraInput.grip``; one without is called as before."""
+    import dataclasses
+
+    from fsv import GripCalibration
+    from fsv.method.stages import accepts_grip
+
+    ep, camera = inputs
+    seen = []
+
+    def with_grip(kinematics, contacts, object_model, gravity, *, grip=None):
+        seen.append(grip)
+        return LearnedInternalForces()(kinematics, contacts, object_model, gravity, grip=grip)
+
+    def without(kinematics, contacts, object_model, gravity):
+        seen.append("none")
+        return LearnedInternalForces()(kinematics, contacts, object_model, gravity)
+
+    assert accepts_grip(with_grip) and accepts_grip(LearnedInternalForces()) and not accepts_grip(without)
+    firm = dataclasses.replace(camera, grip=GripCalibration(12.0, 3.0))
+    tracking = make_method(internal=False).track(firm, ep.scenario.rng("tracker"))
+    a = make_method(internal=with_grip).after_tracking(firm, tracking)
+    b = make_method(internal=without).after_tracking(firm, tracking)
+    assert seen == [firm.grip, "none"]
+    # the shipped model takes grip inputs: a firmer calibration predicts more internal force
+    assert np.nansum(a.internal_pred) > 1.2 * np.nansum(b.internal_pred), (np.nansum(a.internal_pred), np.nansum(b.internal_pred))
+    with pytest.raises(InputError, match="CameraInput.grip must be None or an fsv.grip.GripCalibration, got tuple"):
+        dataclasses.replace(camera, grip=(1.0, 2.0))

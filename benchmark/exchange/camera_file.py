@@ -35,6 +35,9 @@ with the table top at z = 0 and z up; rotations are 3x3 matrices (world_R_object
     object/inertia            (3, 3)    float64  inertia about the centre of mass, box frame, [kg m^2]
     hand/*                              the known hand (fsv.HandModel fields: segment tree, joint axes
                                         and ranges, capsules, fingertip pads)
+    grip/baseline_n           ()        float64  the user's grip calibration (fsv.grip.GripCalibration),
+    grip/gain                 ()        float64  measured in a recording of their own with force sensors;
+    grip/samples              ()        int64    absent if the user has none
 
 ``meta.json``: ``{"format": "fsv-bench-camera", "version": 1, "episode": NAME, "suite": {"name",
 "version"}, "frames": T, "object": {"mass_kg", "friction", "table_friction"}, "hand":
@@ -73,6 +76,9 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list) -> p
                    "init/palm_rot": i.palm_rot, "init/joints": i.joints, "init/gravity": inputs.gravity})
     meta = {"episode": episode, "suite": {"name": suite.name, "version": suite.version},
             "frames": inputs.num_frames, "rng_seed": [int(v) for v in rng_seed]}
+    if inputs.grip is not None:
+        arrays.update({"grip/baseline_n": np.float64(inputs.grip.baseline_n), "grip/gain": np.float64(inputs.grip.gain),
+                       "grip/samples": np.int64(inputs.grip.samples)})
     for name, (arrs, scalars) in model_sections(inputs.object_model, inputs.hand_model).items():
         meta[name] = scalars
         arrays.update({f"{name}/{k}": v for k, v in arrs.items()})
@@ -90,6 +96,7 @@ def load_camera_input(path) -> tuple:
     """
     from benchmark.episode import depth_from_arrays, models_from_sections
     from fsv import FsvError
+    from fsv.grip import GripCalibration
     from fsv.method import CameraInput
     from fsv.track.tracker import TrackInit
 
@@ -100,7 +107,11 @@ def load_camera_input(path) -> tuple:
         i = s["init"]
         init = TrackInit(box_pos=i["box_pos"], box_rot=i["box_rot"], palm_pos=i["palm_pos"], palm_rot=i["palm_rot"],
                          joints=i["joints"])
-        inputs = CameraInput(depth=depth, calib=calib, object_model=om, hand_model=hm, init=init, gravity=i["gravity"])
+        g = s.get("grip")
+        grip = None if g is None else GripCalibration(baseline_n=float(g["baseline_n"]), gain=float(g["gain"]),
+                                                      samples=int(g["samples"]))
+        inputs = CameraInput(depth=depth, calib=calib, object_model=om, hand_model=hm, init=init, gravity=i["gravity"],
+                             grip=grip)
     except (KeyError, TypeError, FsvError, BenchmarkError) as e:
         raise CameraFileError(f"{path} has missing or inconsistent camera-input data: {e}") from e
     return inputs, meta

@@ -6,7 +6,9 @@ from benchmark.method.spec import MethodSpec
 
 
 def camera_input(episode, init_scale: float = 1.0):
-    """What the method is given of a rendered episode (no truth beyond the perturbed first frame).
+    """What the method is given of a rendered episode: no truth beyond the perturbed first frame,
+    and the user's grip calibration (:func:`benchmark.paper.calibration.user_grip`), measured in
+    recordings of their own.
 
     Args:
         episode: A rendered ``benchmark.Episode``.
@@ -16,11 +18,13 @@ def camera_input(episode, init_scale: float = 1.0):
         An ``fsv.method.CameraInput``.
     """
     from benchmark.method.init import tracker_init
+    from benchmark.paper.calibration import user_grip
     from fsv.method import CameraInput
 
     init = tracker_init(episode.truth, episode.scenario, episode.hand_model, init_scale)
     return CameraInput(depth=episode.depth, calib=episode.calib, object_model=episode.object_model,
-                       hand_model=episode.hand_model, init=init, gravity=episode.truth.gravity)
+                       hand_model=episode.hand_model, init=init, gravity=episode.truth.gravity,
+                       grip=user_grip(episode.scenario.user))
 
 
 def oracle_inputs(episode, oracle: tuple) -> dict:

@@ -86,7 +86,7 @@ from benchmark.world.scenario import Scenario
 from benchmark.paper.samples import (DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask,  # noqa: F401
                                      take_contacts as _take_con, take_kinematics as _take_kin, true_normal_forces)
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
-from fsv import Contacts, Kinematics
+from fsv import Contacts, InputError, Kinematics
 from fsv.features import grasp_features
 from fsv.provenance import provenance
 
@@ -845,18 +845,27 @@ def finger_names_of(df: pd.DataFrame) -> tuple:
     return tuple(c[len("active_"):] for c in df.columns if c.startswith("active_"))
 
 
-def training_set(df: pd.DataFrame):
+def training_set(df: pd.DataFrame, grips: dict | None = None):
     """The networks' samples of a dataset table (:class:`fsv.learn.TrainingSet`): features,
-    decomposition targets, episode groups."""
+    decomposition targets, episode groups, and with ``grips`` (``{user: fsv.grip.GripCalibration}``,
+    :func:`benchmark.paper.calibration.read_calibration`) each sample's user's grip calibration."""
     from fsv.learn import TrainingSet  # torch: imported only where it is used, not in the workers
     names = finger_names_of(df)
+    grip = None
+    if grips is not None:
+        users = sorted(int(u) for u in df["user"].unique())
+        missing = [u for u in users if u not in grips]
+        if missing:
+            raise InputError(f"the grip calibration has no user {', '.join(map(str, missing))} of the dataset "
+                             f"(it has users {', '.join(map(str, sorted(grips)))})")
+        grip = np.stack([grips[int(u)].vector() for u in df["user"].to_numpy()]) if len(df) else np.zeros((0, 2))
     x = np.concatenate([
         df[["p1", "p3"]].to_numpy(float), df[[f"p2_{n}" for n in names]].to_numpy(float),
         df[[f"p4_{n}" for n in names]].to_numpy(float), df[[f"active_{n}" for n in names]].to_numpy(float),
     ], axis=1)
     return TrainingSet(
         x, df[[f"f_int_{n}" for n in names]].to_numpy(float), df[[f"active_{n}" for n in names]].to_numpy(bool),
-        groups=pd.factorize(df["episode"])[0],
+        groups=pd.factorize(df["episode"])[0], grip=grip,
     )
 
 

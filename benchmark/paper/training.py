@@ -1,13 +1,15 @@
 """``fsv-bench train``: fit the internal-force networks on a generated dataset and save them.
 
     fsv-bench train --data DIR --out model.npz [--seeds 0-2] [--epochs 1500] [--folds 5] [--members 5]
-                    [--amount-loss squared|relative]
+                    [--amount-loss squared|relative] [--grip grip_calibration.json]
 
 Runs k-fold cross-validation (folds made of whole episodes) to report the expected error, then
 trains on every selected sample and saves the model with its normalisation and a description of
 the data and command (:meth:`fsv.learn.InternalForceModel.save`, atomic). Samples: those of the
 dataset (the paper's rule) that also pass the plausibility rule
-(:func:`benchmark.paper.dataset.nominal_excess_n`, ``--max-excess``; inf turns it off).
+(:func:`benchmark.paper.dataset.nominal_excess_n`, ``--max-excess``; inf turns it off). With
+``--grip`` (a file of ``fsv-bench calibrate``), the networks also take the grip calibration of each
+sample's user (``LearnConfig.grip_inputs``).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ import time
 
 import numpy as np
 
+from benchmark.paper.calibration import CalibrationError, read_calibration
 from benchmark.paper.dataset import MAX_EXCESS_N, _ints, finger_names_of, load_dataset, training_set
 from benchmark.paper.table2 import TABLE2_MEMBERS
 from fsv.errors import InputError
@@ -39,6 +42,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--amount-loss", choices=AMOUNT_LOSSES, default=LearnConfig.amount_loss,
                    help="ANN_L2's training loss: squared (the paper's) or relative (|a_hat - a| / a, as the forces "
                         f"are scored; default {LearnConfig.amount_loss})")
+    p.add_argument("--grip", default=None, metavar="FILE",
+                   help="grip-calibration file (`fsv-bench calibrate`): the networks also take each sample's user's "
+                        "grip line (default: none, user-blind as in the paper)")
     p.add_argument("--max-excess", type=float, default=MAX_EXCESS_N,
                    help=f"plausibility rule on the samples, [N] (default {MAX_EXCESS_N}; inf: the paper's rule only)")
 
@@ -46,14 +52,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace):
     where = {} if args.seeds is None else dict(seed=list(_ints(args.seeds)))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
+    try:
+        grips = None if args.grip is None else read_calibration(args.grip)
+    except CalibrationError as e:
+        raise InputError(f"--grip: {e}") from e
     df = load_dataset(args.data, max_excess_n=rule, **where)
-    data = training_set(df)
+    data = training_set(df, grips)
     episodes = int(df["episode"].nunique())
     if args.folds and not 2 <= args.folds <= episodes:
         raise InputError(f"--folds {args.folds} needs between 2 and the dataset's {episodes} episodes; "
                          f"pass --folds {min(max(episodes, 2), 5)} or --folds 0 to skip cross-validation")
     config = LearnConfig(epochs=args.epochs, folds=max(args.folds, 2), seed=args.seed, members=args.members,
-                         amount_loss=args.amount_loss)
+                         amount_loss=args.amount_loss, grip_inputs=grips is not None)
     from tqdm import tqdm
 
     t0 = time.perf_counter()
@@ -69,6 +79,9 @@ def run(args: argparse.Namespace):
             dataset=header["spec"], selection=where, max_excess_n=rule, episodes=int(df["episode"].nunique()),
             cross_validation=cv,
         )
+        if grips is not None:
+            with open(args.grip) as fh:
+                meta["grip_calibration"] = {k: v for k, v in json.load(fh).items() if k != "provenance"}
         model = train(data, config, finger_names=finger_names_of(df), metadata=meta, on_epoch=bar.update)
     finally:
         bar.close()

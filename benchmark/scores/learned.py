@@ -81,9 +81,11 @@ def score_episode(episode, solution, kinematics: Kinematics, contacts: Contacts)
 
 
 def model_block(model) -> dict:
-    """What an internal-force model was trained on (episodes, samples, the command)."""
+    """What an internal-force model was trained on (episodes, samples, the command) and whether it
+    takes the user's grip calibration."""
     meta = model.metadata
-    return dict(episodes=meta.get("episodes"), samples=meta.get("samples"), command=meta.get("command"))
+    return dict(episodes=meta.get("episodes"), samples=meta.get("samples"), command=meta.get("command"),
+                grip_inputs=model.config.grip_inputs)
 
 
 def _take(x, idx):
@@ -116,8 +118,13 @@ def run_stage(run) -> None:
     if est.labels["internal"].startswith("learned internal forces"):
         from fsv.learn import default_model, load
 
+        from benchmark.paper.calibration import user_grip
+
         model_info = {"internal_model": path or "fsv/data/internal_forces.npz",
                       "model": model_block(default_model() if path is None else load(path))}
+        if model_info["model"]["grip_inputs"]:
+            grip = user_grip(run.episode.scenario.user)
+            model_info["grip_calibration"] = None if grip is None else {"baseline_n": grip.baseline_n, "gain": grip.gain}
     block = {**labels, "program": est.labels["internal"], **model_info, **block}
     run.summary["learning"] = block
     tag = f"ORACLE {', '.join(labels['oracle'])}" if labels["oracle"] else "no oracle input"
@@ -126,4 +133,6 @@ def run_stage(run) -> None:
         f"relative error {block['rel_err_pct_mean']:.1f} ± {block['rel_err_pct_std']:.1f} % over {block['scored']} "
         f"finger-frames kept by the sample rules (paper, Table 2: 9.7-10.9 %; {block['rel_err_pct_mean_all']:.1f} ± "
         f"{block['rel_err_pct_std_all']:.1f} % over all {block['scored_all']}); {block['solver_failures']} solver failures"
+        + (f"; the user's grip calibration: {g['baseline_n']:.2f} N + {g['gain']:.2f} N per N of load"
+           if (g := block.get("grip_calibration")) else "")
     )

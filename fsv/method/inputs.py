@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsv.errors import InputError
+from fsv.grip import GripCalibration
 from fsv.models import HandModel, ObjectModel
 from fsv.track.tracker import TrackInit
 from fsv.types import Calibration, DepthVideo
@@ -26,6 +27,9 @@ class CameraInput:
         hand_model: The known hand (segments, joints, capsules, fingertips).
         init: A coarse first-frame initialisation of the box and the hand.
         gravity: Gravity in the world, shape (3,), [m/s^2].
+        grip: The person's grip, measured once in a calibration recording with force sensors
+            (:class:`fsv.grip.GripCalibration`); None if there was none. Nothing of the episode
+            itself: a method may use it, as the reference's internal-force stage does, or not.
     """
 
     depth: DepthVideo
@@ -34,6 +38,7 @@ class CameraInput:
     hand_model: HandModel
     init: TrackInit
     gravity: np.ndarray = field(default_factory=GRAVITY.copy)
+    grip: GripCalibration | None = None
 
     def __post_init__(self):
         for name, kind in (("depth", DepthVideo), ("calib", Calibration), ("object_model", ObjectModel),
@@ -41,6 +46,8 @@ class CameraInput:
             if not isinstance(getattr(self, name), kind):
                 raise InputError(f"CameraInput.{name} must be an {kind.__module__}.{kind.__name__}, "
                                  f"got {type(getattr(self, name)).__name__}")
+        if self.grip is not None and not isinstance(self.grip, GripCalibration):
+            raise InputError(f"CameraInput.grip must be None or an fsv.grip.GripCalibration, got {type(self.grip).__name__}")
         g = np.asarray(self.gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise InputError(f"CameraInput.gravity must be a finite (3,) vector in m/s^2, got {self.gravity!r}")

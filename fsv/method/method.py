@@ -16,7 +16,7 @@ from fsv.forces import ForceSolution
 from fsv.method.estimate import Estimate
 from fsv.method.inputs import CameraInput
 from fsv.method.reference import LearnedInternalForces, NominalForces, ReferenceTracker, StencilDifferentiator
-from fsv.method.stages import ORACLE, stage_label
+from fsv.method.stages import ORACLE, accepts_grip, stage_label
 from fsv.types import Contacts, Kinematics, Poses
 
 
@@ -106,7 +106,8 @@ class Method:
             timing["forces"] = time.perf_counter() - t0
         if self.internal is not None:
             t0 = time.perf_counter()
-            out = self.internal(kinematics, contacts, inputs.object_model, inputs.gravity)
+            grip = {"grip": inputs.grip} if accepts_grip(self.internal) else {}
+            out = self.internal(kinematics, contacts, inputs.object_model, inputs.gravity, **grip)
             if not (isinstance(out, tuple) and len(out) == 2):
                 raise InputError(f"the internal-force stage {labels['internal']!r} must return "
                                  f"(ForceSolution, predicted), got {type(out).__name__}")

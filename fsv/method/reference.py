@@ -97,9 +97,11 @@ class LearnedInternalForces:
         window = f", amount averaged over {self.smoothing_s:g} s" if self.smoothing_s > 0 else ", per frame"
         return f"learned internal forces ({model}{window})"
 
-    def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model, gravity) -> tuple:
+    def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model, gravity, *, grip=None) -> tuple:
+        """The final forces; ``grip`` is the person's :class:`fsv.grip.GripCalibration` (or None),
+        used by a model trained with grip inputs."""
         from fsv.learn import default_model, learned_forces  # torch is loaded only when this stage runs
 
         model = self.model if self.model is not None else default_model()
         return learned_forces(model, kinematics, contacts, object_model, gravity=gravity, settings=self.settings,
-                              smoothing_s=self.smoothing_s)
+                              smoothing_s=self.smoothing_s, grip=grip)

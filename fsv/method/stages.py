@@ -10,11 +10,13 @@ An optional ``name`` attribute labels it in reports; otherwise its qualified nam
   nominal forces that explain the motion.
 * :class:`InternalForces`: ``(kinematics, contacts, object_model, gravity) -> (ForceSolution,
   predicted)``: the final forces with internal forces added, and the internal normal forces used,
-  shape (T, K), [N].
+  shape (T, K), [N]. A stage that accepts a keyword ``grip`` is also given the person's grip
+  calibration (``CameraInput.grip``, :class:`fsv.grip.GripCalibration` or None).
 """
 
 from __future__ import annotations
 
+import inspect
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -59,6 +61,16 @@ class InternalForces(Protocol):
 
     def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model: ObjectModel,
                  gravity: np.ndarray) -> tuple: ...
+
+
+def accepts_grip(stage) -> bool:
+    """Whether an internal-force stage takes the keyword ``grip`` (or any keyword)."""
+    try:
+        params = inspect.signature(stage).parameters.values()
+    except (TypeError, ValueError):  # a builtin without a signature: the four positional arguments only
+        return False
+    return any((p.name == "grip" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)) or p.kind == p.VAR_KEYWORD
+               for p in params)
 
 
 def stage_label(stage) -> str:

@@ -1,0 +1,73 @@
+"""fsv-bench calibrate: each user's grip line, from a calibration recording, handed to methods."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from benchmark.cli import main
+from benchmark.paper.calibration import (CalibrationError, grip_calibrations, read_calibration, user_grip,
+                                         write_calibration)
+from benchmark.paper.dataset import training_set
+
+NAMES = ("thumb", "index", "middle")
+
+
+def _table(lines: dict, n=60, seed=0) -> pd.DataFrame:
+    """A dataset table whose users' internal-force amounts lie on the given lines of the load p1."""
+    rng = np.random.default_rng(seed)
+    rows = []
+    for user, (baseline, gain) in lines.items():
+        p1 = rng.uniform(2.0, 7.0, n)
+        shares = rng.uniform(0.3, 1.0, (n, len(NAMES)))
+        shares /= np.linalg.norm(shares, axis=1, keepdims=True)
+        f = (baseline + gain * p1)[:, None] * shares
+        for i in range(n):
+            row = {"episode": f"lift_u{user}", "user": user, "p1": p1[i], "p3": 0.1}
+            for k, name in enumerate(NAMES):
+                row |= {f"f_int_{name}": f[i, k], f"active_{name}": True, f"p2_{name}": 0.0, f"p4_{name}": 0.0}
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def test_each_users_line_is_fitted_to_that_users_samples_and_round_trips(tmp_path):
+    df = _table({0: (6.9, 1.6), 3: (9.6, 2.6)})
+    grips = grip_calibrations(df)
+    assert sorted(grips) == [0, 3] and grips[0].samples == 60
+    assert abs(grips[0].baseline_n - 6.9) < 1e-9 and abs(grips[3].gain - 2.6) < 1e-9
+    write_calibration(tmp_path / "g.json", grips, {"tasks": ["lift"]})
+    doc = json.loads((tmp_path / "g.json").read_text())
+    assert doc["format"] == "fsv-bench-grip-calibration" and "commit" in json.dumps(doc["provenance"])
+    assert read_calibration(tmp_path / "g.json") == grips
+    data = training_set(df, grips)
+    np.testing.assert_array_equal(data.grip[df["user"].to_numpy() == 3], np.tile(grips[3].vector(), (60, 1)))
+    with pytest.raises(Exception, match="the grip calibration has no user 3 of the dataset"):
+        training_set(df, {0: grips[0]})
+
+
+def test_the_shipped_calibration_covers_every_user_and_the_firm_user_squeezes_most():
+    grips = read_calibration()
+    assert sorted(grips) == [0, 1, 2, 3, 4] and all(g.samples > 1000 for g in grips.values())
+    amount_at_5n = {u: g.baseline_n + 5.0 * g.gain for u, g in grips.items()}
+    assert max(amount_at_5n, key=amount_at_5n.get) == 3  # users.yaml: user 3 grips firmest
+    assert user_grip(2) == grips[2] and user_grip(99) is None
+
+
+def test_foreign_or_missing_files_are_named(tmp_path):
+    (tmp_path / "x.json").write_text(json.dumps({"format": "other"}))
+    with pytest.raises(CalibrationError, match="x.json is not an fsv-bench-grip-calibration file of version 1"):
+        read_calibration(tmp_path / "x.json")
+    with pytest.raises(CalibrationError, match="nope.json is not a readable grip-calibration file"):
+        read_calibration(tmp_path / "nope.json")
+
+
+def test_bad_input_exits_2_on_one_line_before_any_work(tmp_path, capsys):
+    assert main(["train", "--data", str(tmp_path / "no-data"), "--out", str(tmp_path / "m.npz"),
+                 "--grip", str(tmp_path / "nope.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--grip" in err and "nope.json" in err and "no-data" not in err
+    assert main(["calibrate", "--data", str(tmp_path / "no-data"), "--out", str(tmp_path / "g.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no-data" in err
+    assert not (tmp_path / "m.npz").exists() and not (tmp_path / "g.json").exists()
