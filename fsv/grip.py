@@ -1,9 +1,9 @@
 """A person's grip, measured once in a calibration recording: :class:`GripCalibration`.
 
 The amount of internal force a person adds is invisible to a camera: the object's motion is the
-same whoever squeezes it. People differ in how much they add (safety margins over the slip limit of
-20-90 % of the grip force and baselines of 1-3.5 N in the literature), so a user-blind estimator
-errs most on the people farthest from the population it was trained on. A calibration recording
+same whoever squeezes it. People differ in how much they add (how far their grip exceeds the slip
+limit, and how much they squeeze without load), so a user-blind estimator errs most on the people
+farthest from the population it was trained on. A calibration recording
 measures it: the person lifts the object a few times with force sensors on the fingertips, the
 internal forces of those frames are computed (the decomposition of eq. 9 with the sensors'
 readings, the same targets the networks are trained on), and their amount (L2 norm over the

@@ -154,13 +154,15 @@ GATE_SEEDS = (1, 2, 3, 4)
 def tracked_lifts():
     """``[(episode, estimate, tracking scores, force scores, learned-force block)]`` for
     ``fsv-bench --task lift --noise 0.01 --seed S`` with S in :data:`GATE_SEEDS`: the whole method
-    from depth (tracker, algebraic kinematics, nominal forces, the shipped internal-force model)."""
+    from depth (tracker, algebraic kinematics, nominal forces, the shipped internal-force model with
+    user 0's grip calibration)."""
     from benchmark.scores.learned import score_episode
     from benchmark.camera.render import render
     from benchmark.world.scenario import Scenario
     from benchmark.scores.forces import score_forces
     from benchmark.world.simulate import simulate
     from benchmark.method.init import tracker_init
+    from benchmark.paper.calibration import user_grip
     from benchmark.scores.tracking import score_tracking
     from fsv import run_pipeline
     from fsv.learn import default_model
@@ -170,7 +172,8 @@ def tracked_lifts():
         ep = render(simulate(Scenario(task="lift", seed=seed)))
         init = tracker_init(ep.truth, ep.scenario, ep.hand_model)
         est = run_pipeline(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, gravity=ep.truth.gravity,
-                           internal_model=default_model(), rng=ep.scenario.rng("tracker"))
+                           internal_model=default_model(), rng=ep.scenario.rng("tracker"),
+                           grip=user_grip(ep.scenario.user))
         tracking = score_tracking(est.tracking, ep.truth)
         forces = score_forces(est.nominal, ep.truth, est.kinematics.rot)
         learned = score_episode(ep, est.forces, est.kinematics, est.contacts)

@@ -10,7 +10,13 @@ def test_shipped_model_was_trained_by_the_documented_command():
     model = default_model()
     assert model.finger_names == ("thumb", "index", "middle", "ring", "little")
     assert model.metadata["command"] == ("fsv-bench train --data data/default --out fsv/data/internal_forces.npz "
-                                         "--folds 3 --amount-loss relative")
+                                         "--folds 3 --amount-loss relative --grip ./sim_assets/calibration/grip_calibration.json")
+    assert model.config.grip_inputs and model.metadata["grip_calibration"]["recording"]["seeds"] == [900]
+    from benchmark.paper.calibration import read_calibration
+
+    users = {int(u): c for u, c in model.metadata["grip_calibration"]["users"].items()}
+    assert {u: (c["baseline_n"], c["gain"]) for u, c in users.items()} == \
+           {u: (c.baseline_n, c.gain) for u, c in read_calibration().items()}  # trained on the shipped lines
     assert model.metadata["episodes"] == 480 and model.metadata["samples"] > 100_000
     assert model.metadata["dataset"]["tasks"] == ["lift", "place", "release", "rotate", "shake", "free", "excite-tx",
                                                    "excite-ty", "excite-tz", "excite-rx", "excite-ry", "excite-rz"]

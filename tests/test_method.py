@@ -88,7 +88,6 @@ def test_an_internal_force_stage_that_takes_grip_is_given_the_persons_calibratio
     """A stage with a ``grip`` keyword gets ``CameraInput.grip``; one without is called as before."""
     import dataclasses
 
-    from fsv import GripCalibration
     from fsv.method.stages import accepts_grip
 
     ep, camera = inputs
@@ -103,12 +102,18 @@ def test_an_internal_force_stage_that_takes_grip_is_given_the_persons_calibratio
         return LearnedInternalForces()(kinematics, contacts, object_model, gravity)
 
     assert accepts_grip(with_grip) and accepts_grip(LearnedInternalForces()) and not accepts_grip(without)
-    firm = dataclasses.replace(camera, grip=GripCalibration(12.0, 3.0))
+    from benchmark.paper.calibration import read_calibration
+
+    grips = read_calibration()
+    firm, light = (dataclasses.replace(camera, grip=grips[u]) for u in (3, 2))  # the firm and the economic user
     tracking = make_method(internal=False).track(firm, ep.scenario.rng("tracker"))
     a = make_method(internal=with_grip).after_tracking(firm, tracking)
-    b = make_method(internal=without).after_tracking(firm, tracking)
-    assert seen == [firm.grip, "none"]
-    # the shipped model takes grip inputs: a firmer calibration predicts more internal force
-    assert np.nansum(a.internal_pred) > 1.2 * np.nansum(b.internal_pred), (np.nansum(a.internal_pred), np.nansum(b.internal_pred))
+    b = make_method(internal=with_grip).after_tracking(light, tracking)
+    c = make_method(internal=without).after_tracking(firm, tracking)
+    assert seen == [firm.grip, light.grip, "none"]
+    # the shipped model takes grip inputs: the firm user's line predicts more internal force
+    ratio = np.sum(a.internal_pred) / np.sum(b.internal_pred)
+    assert ratio > 1.2, ratio  # measured 1.72 (user 3 against user 2 on the same motion)
+    assert np.all(np.isfinite(c.internal_pred))
     with pytest.raises(InputError, match="CameraInput.grip must be None or an fsv.grip.GripCalibration, got tuple"):
         dataclasses.replace(camera, grip=(1.0, 2.0))
