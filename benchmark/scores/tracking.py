@@ -236,7 +236,7 @@ def run_stage(run) -> None:
     tracking = run.tracking = run.estimate.tracking
     elapsed = run.estimate.timing_s["track"]
     stages = dict(getattr(tracking, "timing_s", None) or {})
-    first = stages.pop("first_frame", 0.0)
+    first = float(getattr(tracking, "first_frame_s", 0.0))
     scores = score_tracking(tracking, ep.truth)
     run.out.mkdir(parents=True, exist_ok=True)
     overlay = run.out / "tracking_overlay.png"
