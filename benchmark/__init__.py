@@ -11,10 +11,9 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 from benchmark.errors import BenchmarkError, EpisodeFileError, RenderError, ScenarioError, SimulationError
 from benchmark.world.scenario import Scenario
-from benchmark.episode import Episode, load_episode, save_episode
+from benchmark.world.episode import Episode
 from benchmark.world.simulate import simulate
 from benchmark.world.tasks import TASKS
-
-# Depth rendering (issue 3)
-from benchmark.camera.render import render  # noqa: E402
-from benchmark.camera.sensor import SensorModel  # noqa: E402
+from benchmark.camera.episode_file import load_episode, save_episode
+from benchmark.camera.render import render
+from benchmark.camera.sensor import SensorModel

@@ -1,75 +1,73 @@
-"""Fingerprints of the source that produces a result: comments and docstrings do not count.
+"""Fingerprints of the code and data that produce a result: content, never paths.
 
-A cached episode is keyed by :func:`world_fingerprint` (the simulation, the sensor and their
-assets); the committed results by :func:`results_fingerprint` (the world, the method and the
-learning).
+A cached episode and a dataset are keyed by :func:`world_fingerprint` (the simulation, the sensor,
+the depth codec and their assets); the committed results by :func:`results_fingerprint` (the
+world, the method, the scorers and the commands that write the results).
+
+Which modules count is read from the code, not from a list of files: the modules that the entry
+points (:data:`WORLD_ENTRY_POINTS`, :data:`RESULTS_ENTRY_POINTS`) import, directly or not, at
+module level or inside functions (:func:`benchmark.source.closure`). Each module counts by its
+normalised code (:func:`benchmark.source.normalised_code`: no comments, docstrings, formatting or
+import paths) and each data file by its bytes; the digests are sorted before they are hashed. So a
+pure move (a file renamed, its importers' import lines changed to the new path) changes no
+fingerprint, invalidates no cached episode and makes no committed result stale, while a change to
+any code that runs does.
 """
 
 from __future__ import annotations
 
-import ast
 import hashlib
 import pathlib
 
+from benchmark.source import closure, import_graph, modules, normalised_code
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
-WORLD_MODULES = ("episode", "world/grip", "world/hand", "world/living", "camera/render", "world/scenario", "camera/sensor",
-                 "world/simulate", "world/truth", "world/assets")
-"""``benchmark`` modules (paths without ``.py``) that decide an episode's truth and depth (with
-``benchmark/world/tasks/``)."""
+WORLD_ENTRY_POINTS = ("benchmark.world.simulate", "benchmark.camera.render", "benchmark.camera.episode_file")
+"""What makes an episode's truth and depth and stores them: simulation, rendering, the episode file."""
 
-RESULTS_MODULES = WORLD_MODULES + ("world/humanness", "paper/dataset", "paper/samples", "world/motion", "paper/table1", "paper/table2", "world/tactile",
-                                   "paper/training", "method/spec", "method/run", "method/load", "method/init")
-"""``benchmark`` modules that decide the committed results (with ``fsv/`` and the packages of
-:data:`RESULTS_PACKAGES`)."""
+RESULTS_ENTRY_POINTS = WORLD_ENTRY_POINTS + (
+    "fsv", "benchmark.commands.cli", "benchmark.commands.humanness", "benchmark.paper.table1",
+    "benchmark.paper.dataset", "benchmark.paper.calibration", "benchmark.paper.training", "benchmark.paper.table2",
+    "benchmark.suites.evaluate", "benchmark.suites.leaderboard",
+)
+"""What makes the committed results: the method, the main command and every sub-command that
+``fsv-bench reproduce`` runs (:data:`benchmark.reproduce.RESULTS`)."""
 
-RESULTS_PACKAGES = ("world/tasks", "scores", "suites")
-"""``benchmark`` sub-packages that decide the committed results."""
-
-
-def source_fingerprint(root: pathlib.Path, python_files: list, data_files: list) -> str:
-    """sha256 over the given files: Python as its syntax tree without docstrings, data as bytes."""
-    h = hashlib.sha256()
-    for p in python_files:
-        h.update(str(p.relative_to(root)).encode())
-        h.update(_normalised_source(p.read_text()).encode())
-    for p in data_files:
-        h.update(str(p.relative_to(root)).encode())
-        h.update(p.read_bytes())
-    return h.hexdigest()
+DATA_FOLDERS = {"world": ("sim_assets",), "results": ("sim_assets", "fsv/data")}
+"""Folders whose data files (directly in them) count: ``.xml``, ``.yaml``, ``.json`` and ``.npz``;
+sub-folders hold results (the users' grip calibration, ``sim_assets/calibration/``), and the
+shipped model (``fsv/data/*.npz``) is itself a result: neither counts."""
 
 
-def _data_files(root: pathlib.Path, folders) -> list:
-    """The data files directly in ``folders``; sub-folders hold results (the users' grip calibration,
-    ``sim_assets/calibration/``), which no fingerprint includes."""
+def _data_files(root: pathlib.Path, folders, suffixes=(".xml", ".yaml", ".json", ".npz")) -> list:
     return sorted(p for d in folders if (root / d).is_dir() for p in (root / d).iterdir()
-                  if p.is_file() and p.suffix in (".xml", ".yaml", ".json", ".npz") and not p.name.startswith("."))
+                  if p.is_file() and p.suffix in suffixes and not p.name.startswith("."))
+
+
+def content_fingerprint(python_files, data_files) -> str:
+    """sha256 over the sorted digests of the files' contents: Python as normalised code, data as bytes."""
+    digests = sorted([hashlib.sha256(normalised_code(p).encode()).hexdigest() for p in python_files]
+                     + [hashlib.sha256(pathlib.Path(p).read_bytes()).hexdigest() for p in data_files])
+    return hashlib.sha256("\n".join(digests).encode()).hexdigest()
+
+
+def code_of(root: pathlib.Path, entry_points) -> list:
+    """The files of every module that ``entry_points`` import, directly or not (with their own)."""
+    root = pathlib.Path(root)
+    mods = modules(root)
+    return [mods[m] for m in closure(import_graph(root), entry_points)]
 
 
 def world_fingerprint(root: pathlib.Path = ROOT) -> str:
-    """Fingerprint of the world: ``sim_assets/``, ``benchmark/world/tasks/`` and :data:`WORLD_MODULES`."""
-    files = sorted((root / "benchmark" / "world" / "tasks").glob("*.py")) + \
-        [root / "benchmark" / f"{m}.py" for m in sorted(WORLD_MODULES)]
-    return source_fingerprint(root, files, _data_files(root, ("sim_assets",)))
+    """Fingerprint of the world: the code :data:`WORLD_ENTRY_POINTS` run and ``sim_assets/``'s data."""
+    root = pathlib.Path(root)
+    return content_fingerprint(code_of(root, WORLD_ENTRY_POINTS), _data_files(root, DATA_FOLDERS["world"]))
 
 
 def results_fingerprint(root: pathlib.Path = ROOT) -> str:
-    """Fingerprint of what the committed results depend on: ``fsv/`` (code and its data files, the
-    shipped model excepted, which is itself a result), ``sim_assets/``, :data:`RESULTS_PACKAGES` and
-    :data:`RESULTS_MODULES`."""
-    files = sorted((root / "fsv").rglob("*.py"))
-    for pkg in RESULTS_PACKAGES:
-        files += sorted((root / "benchmark" / pkg).glob("*.py"))
-    files += [root / "benchmark" / f"{m}.py" for m in sorted(RESULTS_MODULES)]
-    data = [p for p in _data_files(root, ("sim_assets", "fsv/data")) if p.suffix != ".npz"]
-    return source_fingerprint(root, files, data)
-
-
-def _normalised_source(src: str) -> str:
-    tree = ast.parse(src)
-    for node in ast.walk(tree):
-        body = getattr(node, "body", None)
-        if isinstance(body, list) and body and isinstance(body[0], ast.Expr) \
-                and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str):
-            node.body = body[1:] or [ast.Pass()]
-    return ast.dump(tree)
+    """Fingerprint of what the committed results depend on: the code :data:`RESULTS_ENTRY_POINTS` run
+    and the data of ``sim_assets/`` and ``fsv/data/`` (the shipped model excepted)."""
+    root = pathlib.Path(root)
+    data = [p for p in _data_files(root, DATA_FOLDERS["results"]) if p.suffix != ".npz"]
+    return content_fingerprint(code_of(root, RESULTS_ENTRY_POINTS), data)

@@ -6,16 +6,22 @@
 ``fn`` must be a module-level function (it is pickled to the workers); results arrive as they are
 done, with the index of their job, so callers can keep the jobs' order. The Ray path needs the
 ``ray`` extra (``pip install 'fsv-bench[ray]'``); a bad address fails within seconds
-(:func:`benchmark.paper.dataset.check_ray_address`).
+(:func:`check_ray_address`).
 """
 
 from __future__ import annotations
 
 from typing import Callable, Iterator
 
+from benchmark.errors import DatasetError
+
 
 class RayUnavailable(ValueError):
     """A Ray address was given but Ray is not installed."""
+
+
+class RayAddressError(DatasetError):
+    """A Ray address that is malformed or where nothing answers."""
 
 
 ONE_CORE_ENV = {"LP_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
@@ -57,8 +63,6 @@ def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | N
 
 
 def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
-    from benchmark.paper.dataset import check_ray_address
-
     check_ray_address(address)
     try:
         import ray
@@ -79,3 +83,30 @@ def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
         for r in pending:
             ray.cancel(r)
         raise
+
+
+RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head node answers at once; Ray's own client retries for minutes
+
+
+def check_ray_address(address: str) -> None:
+    """Fails within seconds when nothing listens at a ``host:port`` or ``ray://host:port`` address.
+
+    ``"auto"`` (a cluster started on this machine) is left to Ray.
+
+    Raises:
+        RayAddressError: Naming the address when it is malformed or nothing answers there.
+    """
+    import socket
+
+    if address == "auto":
+        return
+    hostport = address[len("ray://"):] if address.startswith("ray://") else address
+    host, _, port = hostport.rpartition(":")
+    if not host or not port.isdigit():
+        raise RayAddressError(f"--ray-address {address!r}: expected 'auto', 'host:port' or 'ray://host:port'")
+    try:
+        with socket.create_connection((host, int(port)), timeout=RAY_CONNECT_TIMEOUT_S):
+            pass
+    except OSError as e:
+        raise RayAddressError(f"--ray-address {address!r}: no Ray cluster answers there ({e}); start one with "
+                           "`ray start --head` or run without --ray-address to use the local process pool") from e

@@ -188,7 +188,7 @@ RESULTS = (
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
            compare=lambda new, old: _compare_json("summary.json")(new, old) + _compare_csv("table1.csv")(new, old)),
     Result(name="world", path="results/world", datasets=(),
-           commands=(("python", "-m", "benchmark.world.humanness", "--suite", "standard", "--quiet", "--out", "{out}"),),
+           commands=(("python", "-m", "benchmark.commands.humanness", "--suite", "standard", "--quiet", "--out", "{out}"),),
            compare=_compare_json("humanness.json")),
     Result(name="table1", path="results/table1", datasets=(),
            commands=(("python", "-m", "benchmark.paper.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
@@ -220,7 +220,7 @@ def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: 
     argv = [c.format(data=data, out=out, root=ROOT) for c in command]
     print("$ " + " ".join(argv), file=log, flush=True)
     if argv[0] == "fsv-bench":
-        from benchmark.cli import main
+        from benchmark.commands.cli import main
 
         saved = sys.argv  # what a model records as its command: the documented one
         sys.argv = [c.format(data="data", out=documented_out, root=".") for c in command]
@@ -246,7 +246,7 @@ def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: 
 
 
 def _generate(name: str, data: pathlib.Path, workers: int | None, log) -> None:
-    from benchmark.cli import main
+    from benchmark.commands.cli import main
 
     argv = ["generate", "--out", str(data / name), *DATASETS[name], "--no-progress"]
     if workers:

@@ -162,7 +162,7 @@ def tracked_lifts():
     from benchmark.scores.forces import score_forces
     from benchmark.world.simulate import simulate
     from benchmark.method.init import tracker_init
-    from benchmark.paper.calibration import user_grip
+    from benchmark.method.grip_file import user_grip
     from benchmark.scores.tracking import score_tracking
     from fsv import run_pipeline
     from fsv.learn import default_model

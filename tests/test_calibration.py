@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from benchmark.cli import main
-from benchmark.paper.calibration import (CalibrationError, grip_calibrations, read_calibration, user_grip,
-                                         write_calibration)
+from benchmark.commands.cli import main
+from benchmark.method.grip_file import CalibrationError, read_calibration, user_grip, write_calibration
+from benchmark.paper.calibration import grip_calibrations
 from benchmark.paper.dataset import training_set
 
 NAMES = ("thumb", "index", "middle")

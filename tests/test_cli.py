@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from benchmark.cli import main
-from benchmark.episode import load_episode
+from benchmark.commands.cli import main
+from benchmark.camera.episode_file import load_episode
 
 
 def test_run_writes_episode_and_summary(tmp_path, capsys):
@@ -93,7 +93,7 @@ def _with_render_stage(monkeypatch, exc):
     """Replaces the render stage of the main command by one that raises ``exc`` (after simulating)."""
     import dataclasses
 
-    import benchmark.cli as cli
+    import benchmark.commands.cli as cli
 
     def boom(run):
         raise exc

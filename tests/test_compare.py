@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from benchmark.cli import main
+from benchmark.commands.cli import main
 from benchmark.suites.compare import compare
 
 

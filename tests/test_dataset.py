@@ -365,7 +365,7 @@ def test_a_bad_ray_address_fails_within_seconds(tmp_path):
     (["--duration", "0.1"], "duration 0.1 s is too short for task 'lift'; accepted: >= 1.0 s"),
 ])
 def test_generate_refuses_a_bad_grid_before_any_work_and_writes_nothing(tmp_path, capsys, argv, needle):
-    from benchmark.cli import main
+    from benchmark.commands.cli import main
 
     out = tmp_path / "data"
     assert main(["generate", "--out", str(out), *argv]) == 2

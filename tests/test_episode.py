@@ -6,7 +6,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from benchmark.episode import FORMAT, VERSION, load_episode, save_episode
+from benchmark.camera.episode_file import FORMAT, VERSION, load_episode, save_episode
 from benchmark.errors import EpisodeFileError
 from fsv import Calibration, DepthVideo
 
@@ -109,7 +109,7 @@ def test_write_is_atomic_and_leaves_no_temporaries(saved, tmp_path):
 
 def test_rendered_depth_of_the_default_sensor_round_trips_bit_exactly(rendered_lift_episode, tmp_path):
     """The default sensor quantises to 1 mm, so the file stores whole millimetres exactly."""
-    from benchmark.episode import depth_arrays
+    from benchmark.camera.episode_file import depth_arrays
 
     ep = rendered_lift_episode
     arrays = depth_arrays(ep)

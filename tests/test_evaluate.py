@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from benchmark.cli import main
+from benchmark.commands.cli import main
 from benchmark.paper.dataset import _ints
 from benchmark.world.scenario import Scenario
 from benchmark.suites import SUITES, Gate, Suite
@@ -147,7 +147,7 @@ def test_a_bad_method_exits_2_before_any_work(tiny, tmp_path, capsys, argv, need
 
 
 def test_a_suite_seen_by_another_sensor_is_its_own_suite(tmp_path, capsys):
-    from benchmark.cli import main
+    from benchmark.commands.cli import main
     from benchmark.suites import get_suite
 
     smoke = get_suite("smoke")
@@ -192,7 +192,7 @@ def test_dev_is_the_standard_design_on_seeds_no_reported_suite_uses():
 
 def test_the_grip_calibration_recording_uses_seeds_no_suite_and_no_training_grid_uses():
     """A user's grip is measured on recordings of their own, never scored and never trained on."""
-    from benchmark.paper.calibration import read_calibration
+    from benchmark.method.grip_file import read_calibration
     from benchmark.reproduce import DATASETS
 
     seeds = lambda name: set(_ints(dict(zip(DATASETS[name][::2], DATASETS[name][1::2]))["--seeds"]))

@@ -6,7 +6,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from benchmark.cli import main
+from benchmark.commands.cli import main
 from benchmark.exchange import load_camera_input
 from benchmark.suites import SUITES
 from test_evaluate import TINY
@@ -57,7 +57,7 @@ def test_camera_file_round_trips_the_inputs(tiny, tmp_path):
     assert np.array_equal(a.depth.depth_m, b.depth.depth_m) and np.array_equal(a.calib.K, b.calib.K)
     assert np.array_equal(a.init.joints, b.init.joints) and a.object_model.mass_kg == b.object_model.mass_kg
     assert b.hand_model.finger_names == a.hand_model.finger_names and meta["rng_seed"] == [1, 2]
-    from benchmark.paper.calibration import user_grip
+    from benchmark.method.grip_file import user_grip
 
     assert a.grip == user_grip(TINY.scenarios[0].user) and b.grip == a.grip and a.grip.samples > 0
     import dataclasses

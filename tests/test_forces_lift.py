@@ -6,7 +6,7 @@ import types
 import numpy as np
 import pytest
 
-from benchmark.scores.contact_error import contacts_from_truth
+from benchmark.world.contact_error import contacts_from_truth
 from benchmark.world.motion import oracle_kinematics
 from benchmark.scores.forces import add_arguments, run_stage, score_forces, true_net_wrench_instant
 from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
@@ -114,7 +114,7 @@ def test_stage_inputs_are_the_estimates_with_its_labels(lift):
 
 
 def test_with_the_tracker_the_stage_also_scores_its_contacts(lift, tmp_path):
-    from benchmark.scores.contact_error import vision_like_contacts
+    from benchmark.world.contact_error import vision_like_contacts
 
     episode = lift[0]
     tracked = vision_like_contacts(contacts_from_truth(episode.truth), episode.object_model,

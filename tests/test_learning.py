@@ -1,6 +1,6 @@
 import numpy as np
 
-from benchmark.scores.contact_error import contacts_from_truth
+from benchmark.world.contact_error import contacts_from_truth
 from benchmark.scores.learned import score_episode
 from benchmark.world.motion import oracle_kinematics
 from fsv.learn import default_model, learned_forces
@@ -12,7 +12,7 @@ def test_shipped_model_was_trained_by_the_documented_command():
     assert model.metadata["command"] == ("fsv-bench train --data data/default --out fsv/data/internal_forces.npz "
                                          "--folds 3 --amount-loss relative --grip ./sim_assets/calibration/grip_calibration.json")
     assert model.config.grip_inputs and model.metadata["grip_calibration"]["recording"]["seeds"] == [900]
-    from benchmark.paper.calibration import read_calibration
+    from benchmark.method.grip_file import read_calibration
 
     users = {int(u): c for u, c in model.metadata["grip_calibration"]["users"].items()}
     assert {u: (c["baseline_n"], c["gain"]) for u, c in users.items()} == \

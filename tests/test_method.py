@@ -71,7 +71,7 @@ def test_a_method_with_a_replaced_stage_runs_every_other_stage_as_the_reference(
 
 def test_a_minimal_tracker_output_and_an_oracle_are_labelled(inputs):
     ep, camera = inputs
-    from benchmark.scores.contact_error import contacts_from_truth
+    from benchmark.world.contact_error import contacts_from_truth
     from benchmark.world.motion import oracle_kinematics
 
     from fsv import Poses
@@ -102,7 +102,7 @@ def test_an_internal_force_stage_that_takes_grip_is_given_the_persons_calibratio
         return LearnedInternalForces()(kinematics, contacts, object_model, gravity)
 
     assert accepts_grip(with_grip) and accepts_grip(LearnedInternalForces()) and not accepts_grip(without)
-    from benchmark.paper.calibration import read_calibration
+    from benchmark.method.grip_file import read_calibration
 
     grips = read_calibration()
     firm, light = (dataclasses.replace(camera, grip=grips[u]) for u in (3, 2))  # the firm and the economic user

@@ -345,7 +345,7 @@ def test_missing_libraries_is_empty_on_this_machine():
 def synthetic_episode(noise_m=0.01, seed=0, duration_s=1.0):
     """An episode of the real world whose truth is an analytic box lift with a still hand above it."""
 
-    from benchmark.episode import Episode
+    from benchmark.world.episode import Episode
     from benchmark.world.scenario import Scenario
     from benchmark.world.assets import build_world
     from conftest import make_analytic_truth

@@ -6,7 +6,7 @@ import pytest
 
 from benchmark import reproduce
 from benchmark.fingerprint import results_fingerprint
-from benchmark.cli import main
+from benchmark.commands.cli import main
 
 
 def test_compare_values_tolerates_rounding_and_names_what_moved():

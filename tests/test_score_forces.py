@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 
-from benchmark.scores.contact_error import contacts_from_truth, vision_like_contacts
+from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 from benchmark.scores.forces import plot_fig5, score_forces, sensitivity, true_net_wrench, true_net_wrench_instant
 from forces_oracle import grasp_truth
 from fsv import Kinematics

@@ -139,7 +139,7 @@ def test_frames_are_exact_multiples_of_the_frame_period():
 
 
 def test_same_seed_same_bits(tmp_path):
-    from benchmark.episode import save_episode
+    from benchmark.camera.episode_file import save_episode
 
     a = simulate(Scenario(task="free", duration_s=2.0, seed=3))
     b = simulate(Scenario(task="free", duration_s=2.0, seed=3))

@@ -5,7 +5,7 @@ import pytest
 
 from benchmark.errors import ScenarioError
 from benchmark.world.motion import DECLARED, oracle_kinematics
-from benchmark.scores.pose_error import tracker_like_poses
+from benchmark.world.pose_error import tracker_like_poses
 from benchmark.world.scenario import Scenario
 from benchmark.paper.table1 import PAPER, Table1, error_stats, plot_fig4, score_table1, tune, write_outputs
 from fsv import Kinematics, Poses
@@ -131,7 +131,7 @@ def test_cli_stage_prints_and_writes_table1_and_labels_the_oracle(lift_episode, 
 
 
 def test_cli_parser_offers_the_kinematics_choices():
-    from benchmark.cli import build_parser
+    from benchmark.commands.cli import build_parser
 
     args = build_parser().parse_args(["--kinematics", "oracle"])
     assert args.kinematics == "oracle"
@@ -141,7 +141,7 @@ def test_cli_parser_offers_the_kinematics_choices():
 
 
 def test_pose_error_stats_recover_the_error_model(analytic_truth_factory):
-    from benchmark.scores.pose_error import PoseErrorModel
+    from benchmark.world.pose_error import PoseErrorModel
     from benchmark.paper.table1 import pose_error_stats
 
     truth = analytic_truth_factory(duration_s=60.0)

@@ -78,7 +78,7 @@ def test_user_blind_prediction_averages_the_two_users_frame_by_frame():
 
 @pytest.mark.parametrize("users", ["0,0", "4", "0,1,4"])
 def test_users_option_takes_two_different_users(tmp_path, capsys, users):
-    from benchmark.cli import main
+    from benchmark.commands.cli import main
 
     code = main(["table2", "--data", str(tmp_path), "--out", str(tmp_path / "out"), "--users", users])
     err = capsys.readouterr().err

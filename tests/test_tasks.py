@@ -4,7 +4,7 @@ lifts the box where the task says so, never drops it, and grips within a human r
 import numpy as np
 import pytest
 
-from benchmark.report import max_slip_m
+from benchmark.commands.report import max_slip_m
 from benchmark.world.tasks import TASKS
 
 SHORT_S = 2.4

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from benchmark.scores.contact_error import contacts_from_truth
+from benchmark.world.contact_error import contacts_from_truth
 from benchmark.scores.forces import score_forces
 from benchmark.method.init import INIT_PERTURBATION, tracker_init
 from benchmark.scores.tracking import GATES, gate_report, plot_overlay, score_tracking

@@ -1,6 +1,6 @@
 """fsv-bench train: trains on a generated dataset, saves a loadable model, checks --folds before work."""
 
-from benchmark.cli import main
+from benchmark.commands.cli import main
 from fsv.learn import load
 
 

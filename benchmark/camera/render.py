@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import yaml
 
-from benchmark.episode import Episode
+from benchmark.world.episode import Episode
 from benchmark.errors import BenchmarkError, RenderError
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from fsv import Calibration, DepthVideo
@@ -744,7 +744,7 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
     return episode.with_depth(DepthVideo(depth_m=depth, fps=sc.fps), camera.calibration(), labels)
 
 
-# --- the command-line stage (benchmark.cli appends it to its STAGES) --------------------------
+# --- the command-line stage (benchmark.commands.cli appends it to its STAGES) --------------------------
 
 
 def add_cli_arguments(parser) -> None:
@@ -756,7 +756,7 @@ def run_cli_stage(run) -> None:
     """Renders ``run.episode``, writes the depth preview to ``run.out`` and adds a "render" block.
 
     Args:
-        run: The command's ``benchmark.cli.Run`` (its episode is replaced by the rendered one).
+        run: The command's ``benchmark.commands.cli.Run`` (its episode is replaced by the rendered one).
     """
     from benchmark.camera.preview import preview_paths, write_preview
 

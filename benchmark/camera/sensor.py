@@ -65,6 +65,7 @@ import numba
 import numpy as np
 
 from benchmark.errors import BenchmarkError
+from benchmark.world.scenario import SENSORS
 
 AXIAL_MODELS = ("none", "tof", "nguyen2012")
 """Axial noise models (step 4 of the module docstring)."""
@@ -304,7 +305,8 @@ PRESETS = {
 * ``ideal``: exact depth (the scenario's white noise only, if any).
 """
 
-SENSORS = tuple(PRESETS)
+if tuple(PRESETS) != SENSORS:  # pragma: no cover - a preset added in one place only
+    raise BenchmarkError(f"the sensor presets {tuple(PRESETS)} differ from the scenario's names {SENSORS}")
 DEFAULT_SENSOR = "ds325"
 
 

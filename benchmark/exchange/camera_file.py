@@ -63,7 +63,7 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list) -> p
         suite: The ``benchmark.suites.Suite`` it belongs to.
         rng_seed: Entropy of the generator an in-process method gets (see ``FORMAT_DOC``).
     """
-    from benchmark.episode import model_sections, quantise_depth
+    from benchmark.camera.episode_file import model_sections, quantise_depth
 
     counts, q = quantise_depth(inputs.depth.depth_m)
     c = inputs.calib
@@ -94,7 +94,7 @@ def load_camera_input(path) -> tuple:
     Raises:
         CameraFileError: If it is missing, damaged, or of another format or version.
     """
-    from benchmark.episode import depth_from_arrays, models_from_sections
+    from benchmark.camera.episode_file import depth_from_arrays, models_from_sections
     from fsv import FsvError
     from fsv.grip import GripCalibration
     from fsv.method import CameraInput

@@ -7,7 +7,7 @@ from benchmark.method.spec import MethodSpec
 
 def camera_input(episode, init_scale: float = 1.0):
     """What the method is given of a rendered episode: no truth beyond the perturbed first frame,
-    and the user's grip calibration (:func:`benchmark.paper.calibration.user_grip`), measured in
+    and the user's grip calibration (:func:`benchmark.method.grip_file.user_grip`), measured in
     recordings of their own.
 
     Args:
@@ -18,7 +18,7 @@ def camera_input(episode, init_scale: float = 1.0):
         An ``fsv.method.CameraInput``.
     """
     from benchmark.method.init import tracker_init
-    from benchmark.paper.calibration import user_grip
+    from benchmark.method.grip_file import user_grip
     from fsv.method import CameraInput
 
     init = tracker_init(episode.truth, episode.scenario, episode.hand_model, init_scale)
@@ -31,7 +31,7 @@ def oracle_inputs(episode, oracle: tuple) -> dict:
     """The truth's contacts and/or kinematics for a labelled oracle ablation (keyword arguments of a method call)."""
     out = {}
     if "contacts" in oracle:
-        from benchmark.scores.contact_error import contacts_from_truth
+        from benchmark.world.contact_error import contacts_from_truth
 
         out["contacts"] = contacts_from_truth(episode.truth)
     if "kinematics" in oracle:

@@ -17,8 +17,8 @@ streams as ``fsv-bench``) estimates the box poses and the contacts, and the kine
 algebraic differentiator of ``benchmark.world.motion`` on the tracked poses. Two cheaper, labelled
 alternatives skip rendering and tracking: ``"error-model"``, the truth's contacts moved by the
 paper's measured contact-point error (mean -1.55 mm, std 6.13 mm per axis, white in time,
-``benchmark.scores.contact_error``) with kinematics differentiated from tracker-like poses
-(``benchmark.scores.pose_error``); and ``"oracle"``, the truth's contacts (an ablation). ``kinematics=
+``benchmark.world.contact_error``) with kinematics differentiated from tracker-like poses
+(``benchmark.world.pose_error``); and ``"oracle"``, the truth's contacts (an ablation). ``kinematics=
 "oracle"`` takes the true kinematics (an ablation). The dataset records its sources in
 ``dataset.json`` and in every file, and every report labels them.
 
@@ -82,9 +82,11 @@ import pyarrow.parquet as pq
 
 from benchmark.atomic import write_bytes, write_text
 from benchmark.errors import ScenarioError, BenchmarkError, DatasetError, DatasetFileError
+from benchmark.parallel import check_ray_address
 from benchmark.world.scenario import Scenario
-from benchmark.paper.samples import (DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask,  # noqa: F401
-                                     take_contacts as _take_con, take_kinematics as _take_kin, true_normal_forces)
+from benchmark.scores.forces import true_normal_forces
+from benchmark.scores.samples import (DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask,  # noqa: F401
+                                      take_contacts as _take_con, take_kinematics as _take_kin)
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from fsv import Contacts, InputError, Kinematics
 from fsv.features import grasp_features
@@ -108,7 +110,7 @@ class DatasetSpec:
         duration_s: Episode length in [s]; None takes each task's default.
         fps: Frame rate in [Hz].
         noise_m: Depth noise of the scenarios [m]; it sets the tracker-like pose errors that the
-            kinematics are differentiated from (``benchmark.scores.pose_error``).
+            kinematics are differentiated from (``benchmark.world.pose_error``).
         kinematics: Kinematics behind the features and the decomposition: a differentiator of
             ``benchmark.world.motion`` ("algebraic", "central", "gaussian") on the observed poses, or
             "oracle" (the truth). On tracked poses "algebraic" is the reference method's
@@ -206,8 +208,8 @@ def track_episode(episode):
 def episode_contacts(episode, source: str, tracking=None) -> Contacts:
     """The contacts behind the features: "tracker" (``tracking.contacts``), "oracle" (the truth's)
     or "error-model" (the truth's moved by the paper's contact-point error model,
-    ``benchmark.scores.contact_error``)."""
-    from benchmark.scores.contact_error import contacts_from_truth, vision_like_contacts
+    ``benchmark.world.contact_error``)."""
+    from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 
     if source == "tracker":
         if tracking is None:
@@ -672,33 +674,6 @@ def _run_pool(todo, spec, build, workers, done, frames=None) -> None:
         manager.shutdown()
 
 
-RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head node answers at once; Ray's own client retries for minutes
-
-
-def check_ray_address(address: str) -> None:
-    """Fails within seconds when nothing listens at a ``host:port`` or ``ray://host:port`` address.
-
-    ``"auto"`` (a cluster started on this machine) is left to Ray.
-
-    Raises:
-        DatasetError: Naming the address when it is malformed or nothing answers there.
-    """
-    import socket
-
-    if address == "auto":
-        return
-    hostport = address[len("ray://"):] if address.startswith("ray://") else address
-    host, _, port = hostport.rpartition(":")
-    if not host or not port.isdigit():
-        raise DatasetError(f"--ray-address {address!r}: expected 'auto', 'host:port' or 'ray://host:port'")
-    try:
-        with socket.create_connection((host, int(port)), timeout=RAY_CONNECT_TIMEOUT_S):
-            pass
-    except OSError as e:
-        raise DatasetError(f"--ray-address {address!r}: no Ray cluster answers there ({e}); start one with "
-                           "`ray start --head` or run without --ray-address to use the local process pool") from e
-
-
 def _run_ray(todo, spec, build, address, done) -> None:
     """Builds ``todo`` as tasks on the Ray cluster at ``address`` (:func:`benchmark.parallel.run_jobs`)."""
     from benchmark.parallel import RayUnavailable, run_jobs
@@ -848,7 +823,7 @@ def finger_names_of(df: pd.DataFrame) -> tuple:
 def training_set(df: pd.DataFrame, grips: dict | None = None):
     """The networks' samples of a dataset table (:class:`fsv.learn.TrainingSet`): features,
     decomposition targets, episode groups, and with ``grips`` (``{user: fsv.grip.GripCalibration}``,
-    :func:`benchmark.paper.calibration.read_calibration`) each sample's user's grip calibration."""
+    :func:`benchmark.method.grip_file.read_calibration`) each sample's user's grip calibration."""
     from fsv.learn import TrainingSet  # torch: imported only where it is used, not in the workers
     names = finger_names_of(df)
     grip = None

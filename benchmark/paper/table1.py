@@ -34,7 +34,7 @@ from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses
 METHODS = ("central", "gaussian", "algebraic")
 from benchmark.suites.registry import TABLE1_TASKS as SIX_AXIS_TASKS  # noqa: E402  (one source: the table1 suite)
 """The paper's §4.1 protocol: motions emphasizing each translational and rotational axis."""
-POSES_LABEL = "true poses with tracker-like correlated errors (benchmark.scores.pose_error)"
+POSES_LABEL = "true poses with tracker-like correlated errors (benchmark.world.pose_error)"
 PAPER = {
     "central": {"acc_mean": -0.029, "acc_std": 1.686, "gyro_mean": 0.084, "gyro_std": 1.559},
     "gaussian": {"acc_mean": -0.022, "acc_std": 1.627, "gyro_mean": 0.070, "gyro_std": 1.294},
@@ -338,7 +338,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run_stage(run) -> None:
     """``fsv-bench`` stage: prints Table 1, writes it (MD, CSV, Fig. 4 PNG) and the summary blocks.
 
-    ``run`` is a ``benchmark.cli.Run`` (reads ``episode``, ``args.kinematics``, ``out``; extends
+    ``run`` is a ``benchmark.commands.cli.Run`` (reads ``episode``, ``args.kinematics``, ``out``; extends
     ``summary`` and ``lines``). Later stages get the selected kinematics from
     ``benchmark.world.motion.episode_kinematics(run.episode, run.args.kinematics)``.
     """
@@ -413,7 +413,7 @@ def episode_set(
         tracked: Observe the poses with the tracker on the rendered depth (``fsv.track``, slow:
             about a minute per 10 s episode) instead of the tracker-like error model.
     """
-    from benchmark.scores.pose_error import tracker_like_poses
+    from benchmark.world.pose_error import tracker_like_poses
     from benchmark.world.scenario import Scenario
     from benchmark.world.simulate import simulate
 

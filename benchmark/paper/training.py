@@ -22,7 +22,7 @@ import time
 
 import numpy as np
 
-from benchmark.paper.calibration import CalibrationError, read_calibration
+from benchmark.method.grip_file import CalibrationError, read_calibration
 from benchmark.paper.dataset import MAX_EXCESS_N, _ints, finger_names_of, load_dataset, training_set
 from benchmark.paper.table2 import TABLE2_MEMBERS
 from fsv.errors import InputError

@@ -31,7 +31,7 @@ TARGET_RATIO = 10.0
 
 
 def _frames(seed: int, grasp: int = 0):
-    from benchmark.scores.contact_error import contacts_from_truth
+    from benchmark.world.contact_error import contacts_from_truth
     from benchmark.world.motion import oracle_kinematics
     from benchmark.world.scenario import Scenario
     from benchmark.world.simulate import simulate

@@ -42,7 +42,7 @@ def _get(d: dict, dotted: str):
 
 def _run(kernel: str, argv: list) -> None:
     env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
-    subprocess.run([sys.executable, "-m", "benchmark.cli", *argv], env=env, check=True, stdout=subprocess.DEVNULL)
+    subprocess.run([sys.executable, "-m", "benchmark.commands.cli", *argv], env=env, check=True, stdout=subprocess.DEVNULL)
 
 
 def main(argv=None) -> int:

@@ -22,7 +22,7 @@ import warnings
 import numpy as np
 
 from benchmark.world.motion import DECLARED
-from benchmark.scores.pose_error import tracker_like_poses
+from benchmark.world.pose_error import tracker_like_poses
 from benchmark.world.scenario import Scenario
 from fsv.kinematics import differentiate_poses
 

@@ -55,8 +55,8 @@ def true_net_wrench_instant(truth: Truth) -> np.ndarray:
 
 
 def true_normal_forces(truth: Truth) -> np.ndarray:
-    """The true normal force n_k . F_k per finger, (T, K), [N]; 0 off contact."""
-    f = np.einsum("tki,tki->tk", np.asarray(truth.contact_force, float), np.asarray(truth.contact_normal, float))
+    """Each finger's true normal force n_k . F_k, shape (T, K), [N]; 0 off contact (the scoring reference)."""
+    f = np.sum(np.asarray(truth.contact_force, float) * np.asarray(truth.contact_normal, float), axis=-1)
     return np.where(truth.contact_active, f, 0.0)
 
 
@@ -289,7 +289,7 @@ def add_arguments(parser) -> None:
 
 
 def stage_inputs(run) -> tuple:
-    """The kinematics and contacts the method's force stages used in a ``benchmark.cli.Run``, with labels.
+    """The kinematics and contacts the method's force stages used in a ``benchmark.commands.cli.Run``, with labels.
 
     Both come from the method's estimate (``run.estimate``, made by the tracking stage through
     :func:`benchmark.method.run_method`): the differentiated tracked poses and the tracked contacts,
@@ -308,7 +308,7 @@ def stage_inputs(run) -> tuple:
 
 def run_stage(run) -> None:
     """Nominal forces for the run's episode: the ``forces`` block, a printed line and the Fig. 5 plot."""
-    from benchmark.scores.contact_error import contacts_from_truth, vision_like_contacts
+    from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 
     ep = run.episode
     kin, contacts, labels = stage_inputs(run)

@@ -19,7 +19,8 @@ import argparse
 
 import numpy as np
 
-from benchmark.paper.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask, true_normal_forces
+from benchmark.scores.forces import true_normal_forces
+from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
 from fsv.forces import SOLVED, FrameStatus
@@ -90,7 +91,7 @@ def model_block(model) -> dict:
 
 def _take(x, idx):
     """The frames ``idx`` of a :class:`fsv.Kinematics` or :class:`fsv.Contacts`."""
-    from benchmark.paper.samples import take_contacts as _take_con, take_kinematics as _take_kin
+    from benchmark.scores.samples import take_contacts as _take_con, take_kinematics as _take_kin
 
     return _take_kin(x, idx) if isinstance(x, Kinematics) else _take_con(x, idx)
 
@@ -102,7 +103,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_stage(run) -> None:
-    """The ``learning`` block of summary.json and one printed line for a ``benchmark.cli.Run``:
+    """The ``learning`` block of summary.json and one printed line for a ``benchmark.commands.cli.Run``:
     the method's final forces (``run.estimate.forces``) scored against the truth."""
     from benchmark.scores.forces import stage_inputs
 
@@ -118,7 +119,7 @@ def run_stage(run) -> None:
     if est.labels["internal"].startswith("learned internal forces"):
         from fsv.learn import default_model, load
 
-        from benchmark.paper.calibration import user_grip
+        from benchmark.method.grip_file import user_grip
 
         model_info = {"internal_model": path or "fsv/data/internal_forces.npz",
                       "model": model_block(default_model() if path is None else load(path))}

@@ -66,7 +66,9 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
     Returns:
         ``(episode, rendered)``: ``rendered`` is True when it had to be made.
     """
-    from benchmark import load_episode, render, save_episode, simulate
+    from benchmark.camera.episode_file import load_episode, save_episode
+    from benchmark.camera.render import render
+    from benchmark.world.simulate import simulate
 
     path = cache / suite.name / f"{episode_name(scenario)}-{episode_key(suite, scenario)}.npz"
     if path.exists():
@@ -316,7 +318,7 @@ def run(args: argparse.Namespace) -> dict:
     check_out(args.out)
     spec = spec_from_args(args)
     if args.ray_address is not None:
-        from benchmark.paper.dataset import check_ray_address
+        from benchmark.parallel import check_ray_address
 
         check_ray_address(args.ray_address)
     scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers,

@@ -8,7 +8,7 @@
   report must say so).
 
 Observed poses: the tracker (issue 6) is not part of the benchmark yet, so the poses are the true
-ones corrupted by the tracker-like error model of ``benchmark.scores.pose_error``.
+ones corrupted by the tracker-like error model of ``benchmark.world.pose_error``.
 
 Declared parameters (``DECLARED``): central differences are the textbook three-point differences
 (step 1), declared in advance. The Gaussian (sigma, truncation) and the algebraic window and
@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.errors import ScenarioError
-from benchmark.scores.pose_error import tracker_like_poses
+from benchmark.world.pose_error import tracker_like_poses
 from benchmark.world.truth import Truth
 from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig, differentiate_poses

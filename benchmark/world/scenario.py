@@ -15,6 +15,8 @@ MAX_DURATION_S = 120.0
 """Upper bound of an episode's length [s] (the truth and the depth of 120 s at 30 fps fit in memory)."""
 MAX_FPS = 240.0
 """Upper bound of the camera frame rate [Hz]."""
+SENSORS = ("ds325", "kinect-v1", "ideal")
+"""The depth-sensor presets a scenario may name (their models: ``benchmark.camera.sensor.PRESETS``)."""
 
 
 @dataclass(frozen=True)
@@ -30,7 +32,7 @@ class Scenario:
         seed: Seed of the scenario's random generator.
         duration_s: Episode length in [s]; None takes the task's default.
         fps: Camera frame rate in [Hz].
-        sensor: Name of a depth-sensor preset (``benchmark.camera.sensor.SENSORS``: "ds325", the
+        sensor: Name of a depth-sensor preset (:data:`SENSORS`: "ds325", the
             paper's camera, "kinect-v1" or "ideal"); ``noise_m`` is white noise added to its own.
     """
 
@@ -55,8 +57,6 @@ class Scenario:
             raise ScenarioError(f"duration must be > 0 and <= {MAX_DURATION_S:g} seconds, got {self.duration_s!r}")
         if not (np.isfinite(self.fps) and 0 < self.fps <= MAX_FPS):
             raise ScenarioError(f"fps must be > 0 and <= {MAX_FPS:g}, got {self.fps!r}")
-        from benchmark.camera.sensor import SENSORS
-
         if self.sensor not in SENSORS:
             raise ScenarioError(f"sensor must be one of {', '.join(SENSORS)}, got {self.sensor!r}")
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from benchmark.episode import Episode
+from benchmark.world.episode import Episode
 from benchmark.errors import SimulationError
 from benchmark.world.grip import Human
 from benchmark.world.scenario import Scenario

@@ -12,7 +12,7 @@ import functools
 
 import numpy as np
 
-from benchmark.world.tasks import Task
+from benchmark.world.tasks.task import Task
 from benchmark.world.tasks.motion import Phases, timed
 
 AMPLITUDE_M = 0.04

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.world.tasks import Task
+from benchmark.world.tasks.task import Task
 from benchmark.world.tasks.human import MIN_JERK_PEAK_ACC, SHAKE_FREQUENCY_HZ, SHAKE_PEAK_ACC, Plan
 from benchmark.world.tasks.motion import Phases
 

@@ -1,10 +1,10 @@
-"""benchmark.scores.pose_error: correlated tracker-like pose errors."""
+"""benchmark.world.pose_error: correlated tracker-like pose errors."""
 
 import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
-from benchmark.scores.pose_error import PoseErrorModel, tracker_like_poses
+from benchmark.world.pose_error import PoseErrorModel, tracker_like_poses
 from benchmark.world.scenario import Scenario
 from fsv.kinematics import so3
 

@@ -1,46 +1,20 @@
-"""An episode: one scenario, its truth, and (after rendering) its depth video and calibration."""
+"""The episode file: an episode's truth, models and rendered depth (quantised) in one archive."""
 
 from __future__ import annotations
 
 import dataclasses
 import pathlib
-from dataclasses import dataclass, fields, replace
+from dataclasses import fields, replace
 
 import numpy as np
 
 from benchmark.archive import read_archive, write_archive
+from benchmark.camera.sensor import dequantise
 from benchmark.errors import BenchmarkError, EpisodeFileError
+from benchmark.world.episode import Episode
 from benchmark.world.scenario import Scenario
 from benchmark.world.truth import Truth
 from fsv import Calibration, DepthVideo, FsvError, HandModel, ObjectModel
-
-
-@dataclass(frozen=True)
-class Episode:
-    """One simulated (and possibly rendered) scenario.
-
-    Attributes:
-        scenario: What was simulated.
-        truth: Ground truth at frame times.
-        object_model: The known object model handed to the method.
-        hand_model: The known hand model handed to the method.
-        depth: Depth video, or None before rendering.
-        calib: Camera calibration, or None before rendering.
-        labels: Truth-side label image per frame, (T, H, W) uint8 (0 none, 1 table, 2 box,
-            10 + k finger k's segments, 9 palm), or None; never handed to `fsv`.
-    """
-
-    scenario: Scenario
-    truth: Truth
-    object_model: ObjectModel
-    hand_model: HandModel
-    depth: DepthVideo | None = None
-    calib: Calibration | None = None
-    labels: np.ndarray | None = None
-
-    def with_depth(self, depth: DepthVideo, calib: Calibration, labels: np.ndarray | None) -> "Episode":
-        return replace(self, depth=depth, calib=calib, labels=labels)
-
 
 # --- Rendered part of an episode in the episode file (depth, calibration, labels) -------------
 
@@ -87,8 +61,6 @@ def quantise_depth(depth: np.ndarray) -> tuple:
     Raises:
         EpisodeFileError: If the depth does not fit uint16 even at the coarsest quantum.
     """
-    from benchmark.camera.sensor import dequantise
-
     top = float(depth.max(initial=0.0))
     for i, q in enumerate(DEPTH_QUANTA_M):
         counts = np.rint(depth.astype(np.float64) / q)
@@ -108,8 +80,6 @@ def depth_from_arrays(arrays) -> tuple[DepthVideo | None, Calibration | None, np
     """
     if "depth_counts" not in arrays:
         return None, None, None
-    from benchmark.camera.sensor import dequantise
-
     depth = DepthVideo(
         depth_m=dequantise(arrays["depth_counts"], float(arrays["depth_quantum_m"])), fps=float(arrays["depth_fps"])
     )

@@ -22,9 +22,10 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from benchmark.background import Background
-from benchmark.episode import Episode, save_episode
+from benchmark.camera.episode_file import save_episode
+from benchmark.world.episode import Episode
 from benchmark.errors import BenchmarkError, ScenarioError
-from benchmark.report import format_world, scenario_block, world_block, write_json
+from benchmark.commands.report import format_world, scenario_block, world_block, write_json
 from benchmark.world.scenario import Scenario
 from fsv.errors import InputError
 from fsv.provenance import provenance
@@ -124,7 +125,7 @@ from benchmark.scores import learned as _learning  # noqa: E402
 STAGES.append(Stage(name="learn", add_arguments=_learning.add_arguments, run=_learning.run_stage))
 
 # the verdict: the episode's metrics against the smoke suite's gates (a suite of one).
-from benchmark import verdict as _verdict  # noqa: E402
+from benchmark.commands import verdict as _verdict  # noqa: E402
 
 STAGES.append(Stage(name="verdict", add_arguments=_verdict.add_arguments, run=_verdict.run_stage))
 SUBCOMMANDS = {"generate": "benchmark.paper.dataset", "calibrate": "benchmark.paper.calibration",

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from benchmark.scores.contact_error import contacts_from_truth, vision_like_contacts
+from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 from benchmark.errors import BenchmarkError
 from forces_oracle import grasp_truth
 

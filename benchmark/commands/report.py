@@ -14,7 +14,7 @@ import pathlib
 import numpy as np
 
 from benchmark.atomic import write_text
-from benchmark.episode import Episode
+from benchmark.world.episode import Episode
 
 
 def scenario_block(episode: Episode) -> dict:

@@ -1,7 +1,7 @@
 """The paper's sample rules and the decomposition settings behind training targets and their scores.
 
-Shared by dataset generation (:mod:`benchmark.paper.dataset`) and the learned-force scores
-(:mod:`benchmark.scores.learned`), without the dataset's file machinery (pandas, pyarrow).
+Used by the learned-force scores (:mod:`benchmark.scores.learned`) and by dataset generation
+(:mod:`benchmark.paper.dataset`, a floor above), without the dataset's file machinery (pandas, pyarrow).
 """
 
 from __future__ import annotations
@@ -10,12 +10,6 @@ import numpy as np
 
 from fsv import Contacts, Kinematics
 from fsv.forces import ForceSettings
-
-
-def true_normal_forces(truth) -> np.ndarray:
-    """Each finger's true normal force n_k . F_k, shape (T, K), [N]; 0 off contact (the scoring reference)."""
-    f = np.sum(np.asarray(truth.contact_force) * np.asarray(truth.contact_normal), axis=-1)
-    return np.where(truth.contact_active, f, 0.0)
 
 
 def sample_mask(kin: Kinematics, con: Contacts, feats, truth, min_fingers: int = 2, max_gap_n: float = 1.5):

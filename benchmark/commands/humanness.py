@@ -1,0 +1,85 @@
+"""How human the world is, over a suite's episodes: ``python -m benchmark.commands.humanness``.
+
+Writes ``humanness.md`` and ``humanness.json`` (``results/world``) from
+:func:`benchmark.world.humanness.suite_humanness`: the peaks of the box's motion while lifted, the
+grip's fluctuation in holds and its coupling to the load, per task, beside the ranges the world
+was planned with.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+from dataclasses import asdict
+
+import numpy as np
+
+from benchmark.atomic import write_text
+from benchmark.suites import get_suite
+from benchmark.world import living
+from benchmark.world.humanness import suite_humanness
+from benchmark.world.tasks.human import ROTATION_PEAK_ALPHA, SHAKE_PEAK_ACC, TRANSPORT_PEAK_ACC
+from fsv.provenance import provenance
+
+
+def _span(values) -> str:
+    v = np.asarray([x for x in values if np.isfinite(x)], float)
+    if not len(v):
+        return "-"
+    return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
+
+
+def report_markdown(suite, rows: list) -> str:
+    """The per-task table of :func:`suite_humanness`'s rows, with the literature ranges."""
+    lines = [
+        f"# How human the world is: suite {suite.name} v{suite.version} ({len(rows)} episodes, truth only)",
+        "",
+        "Peaks while the box is lifted (held, no table contact); median (min-max) over the task's episodes.",
+        f"Planned ranges (benchmark/world/tasks/human.py): transports peak at {TRANSPORT_PEAK_ACC.lo:g}-"
+        f"{TRANSPORT_PEAK_ACC.hi:g} m/s^2, turns at {ROTATION_PEAK_ALPHA.lo:g}-{ROTATION_PEAK_ALPHA.hi:g} rad/s^2, "
+        f"shake at {SHAKE_PEAK_ACC.lo:g}-{SHAKE_PEAK_ACC.hi:g} m/s^2; grip fluctuations drawn for a total "
+        f"coefficient of variation of about {100 * np.hypot(living.DRIFT_CV[0], living.TREMOR_CV[0]):.1f}-"
+        f"{100 * np.hypot(living.DRIFT_CV[1], living.TREMOR_CV[1]):.1f} % (benchmark/world/living.py).",
+        "",
+        "| task | episodes | peak acc [m/s^2] | peak angular velocity [rad/s] | thumb grip CV in holds [%] "
+        "| grip-load correlation | grip lead [ms] | Newton-Euler residual [N] |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for task in dict.fromkeys(sc.task for sc, _ in rows):  # in the suite's order
+        hs = [h for sc, h in rows if sc.task == task]
+        lines.append(
+            f"| {task} | {len(hs)} | {_span(h.peak_acc for h in hs)} | {_span(h.peak_omega for h in hs)} "
+            f"| {_span(100 * h.grip_cv for h in hs)} | {_span(h.grip_load_corr for h in hs)} "
+            f"| {_span(1000 * h.grip_lead_s for h in hs)} | {max(h.newton_euler_n for h in hs):.1e} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None) -> int:
+    """``python -m benchmark.commands.humanness``: writes humanness.md and humanness.json."""
+    p = argparse.ArgumentParser(prog="python -m benchmark.commands.humanness", description=__doc__.splitlines()[0])
+    p.add_argument("--suite", default="standard", help="suite whose episodes are simulated (default standard)")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results/world"), help="output folder")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    args = p.parse_args(argv)
+    try:
+        suite = get_suite(args.suite)
+    except ValueError as e:
+        p.exit(2, f"{p.prog}: error: {e}\n")
+    rows = suite_humanness(suite, progress=not args.quiet)
+    md = report_markdown(suite, rows)
+    def strict(h):  # nan (no hold, no lifted frame) as null
+        return {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in asdict(h).items()}
+
+    doc = {"suite": {"name": suite.name, "version": suite.version},
+           "episodes": [{"scenario": asdict(sc), **strict(h)} for sc, h in rows], "provenance": provenance()}
+    args.out.mkdir(parents=True, exist_ok=True)
+    write_text(str(args.out / "humanness.md"), md)
+    write_text(str(args.out / "humanness.json"), json.dumps(doc, indent=1, allow_nan=False) + "\n")
+    print(md)
+    print(f"written to {args.out}/ (humanness.md, humanness.json)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
