@@ -128,10 +128,3 @@ class Background:
                 job.terminate()
         for _, job, _ in jobs:
             job.join()
-
-
-def background_of(run) -> Background:
-    """The command's :class:`Background` (``run.background``), or one that works at once for a run
-    record without it (a stage called on its own)."""
-    bg = getattr(run, "background", None)
-    return bg if isinstance(bg, Background) else Background(enabled=False)

@@ -27,7 +27,7 @@ WORLD_ENTRY_POINTS = ("benchmark.world.simulate", "benchmark.camera.render", "be
 """What makes an episode's truth and depth and stores them: simulation, rendering, the episode file."""
 
 RESULTS_ENTRY_POINTS = WORLD_ENTRY_POINTS + (
-    "fsv", "benchmark.commands.cli", "benchmark.commands.humanness", "benchmark.paper.table1",
+    "fsv", "benchmark.commands.cli", "benchmark.commands.humanness", "benchmark.commands.table1",
     "benchmark.paper.dataset", "benchmark.paper.calibration", "benchmark.paper.training", "benchmark.paper.table2",
     "benchmark.suites.evaluate", "benchmark.suites.leaderboard",
 )

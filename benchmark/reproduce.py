@@ -191,7 +191,7 @@ RESULTS = (
            commands=(("python", "-m", "benchmark.commands.humanness", "--suite", "standard", "--quiet", "--out", "{out}"),),
            compare=_compare_json("humanness.json")),
     Result(name="table1", path="results/table1", datasets=(),
-           commands=(("python", "-m", "benchmark.paper.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
+           commands=(("python", "-m", "benchmark.commands.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
            compare=_compare_csv("table1.csv")),
     Result(name="standard", path="results/standard", datasets=(),
            commands=(("fsv-bench", "leaderboard", "--suite", "standard", "--quiet", "--workers", "2", "--out",

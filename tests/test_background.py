@@ -2,11 +2,10 @@
 
 import os
 import time
-import types
 
 import pytest
 
-from benchmark.background import Background, background_of
+from benchmark.background import Background
 from benchmark.errors import BenchmarkError
 
 
@@ -73,9 +72,3 @@ def test_a_preloaded_module_is_imported_before_the_fork(tmp_path):
     bg.process("child", lambda: _write(tmp_path / "pid.txt", str(os.getpid())))
     bg.wait()
     assert int((tmp_path / "pid.txt").read_text()) != os.getpid()
-
-
-def test_background_of_a_run_without_one_works_at_once():
-    bg = Background()
-    assert background_of(types.SimpleNamespace(background=bg)) is bg
-    assert background_of(types.SimpleNamespace()).enabled is False

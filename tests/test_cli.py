@@ -73,7 +73,7 @@ def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, arg
 
 
 def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, capsys):
-    from benchmark.camera.preview import COLOUR_BAR_HEIGHT
+    from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT
     from PIL import Image
 
     out = tmp_path / "run"
@@ -95,7 +95,7 @@ def _with_render_stage(monkeypatch, exc):
 
     import benchmark.commands.cli as cli
 
-    def boom(run):
+    def boom(record, options):
         raise exc
 
     stages = [dataclasses.replace(s, run=boom) if s.name == "render" else s for s in cli.STAGES]

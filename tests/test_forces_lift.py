@@ -8,7 +8,9 @@ import pytest
 
 from benchmark.world.contact_error import contacts_from_truth
 from benchmark.world.motion import oracle_kinematics
-from benchmark.scores.forces import add_arguments, run_stage, score_forces, true_net_wrench_instant
+from benchmark.commands.stage import Run, complete_now
+from benchmark.commands.stages.forces import STAGE, add_arguments, estimate_inputs
+from benchmark.scores.forces import score_forces, true_net_wrench_instant
 from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
 from pictures import assert_figure
 
@@ -73,12 +75,15 @@ def _estimate(episode, contacts, kinematics, oracle=()):
 
 
 def _run(episode, estimate, out=None):
+    """The forces stage on its own: its blocks as a dict, its lines; its files and pictures drawn into ``out``."""
     import argparse
 
     parser = argparse.ArgumentParser()
     add_arguments(parser)
-    return types.SimpleNamespace(args=parser.parse_args([]), episode=episode, out=out, summary={}, lines=[],
-                                 estimate=estimate)
+    record = Run(scenario=episode.scenario, out=out, method_spec=None, episode=episode, estimate=estimate)
+    result = STAGE(record, parser.parse_args([]))
+    complete_now(result, out)
+    return types.SimpleNamespace(summary=dict(result.blocks), lines=list(result.lines))
 
 
 def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
@@ -86,7 +91,6 @@ def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
     est = _estimate(episode, contacts_from_truth(episode.truth), oracle_kinematics(episode.truth),
                     oracle=("contacts", "kinematics"))
     run = _run(episode, est, tmp_path)
-    run_stage(run)
     block = run.summary["forces"]
     for key in ("net_force_err_n_rms", "net_torque_err_nm_rms", "nominal_normal_err_n_mean", "solver_failures"):
         assert key in block
@@ -100,16 +104,14 @@ def test_the_forces_stage_writes_its_block_and_plot(lift, tmp_path):
     json.dumps(block)  # summary.json must be able to hold it
 
 
-def test_stage_inputs_are_the_estimates_with_its_labels(lift):
-    from benchmark.scores.forces import stage_inputs
-
+def test_estimate_inputs_are_the_estimates_with_its_labels(lift):
     episode = lift[0]
     est = _estimate(episode, contacts_from_truth(episode.truth), oracle_kinematics(episode.truth), oracle=("kinematics",))
-    kin, contacts, labels = stage_inputs(_run(episode, est))
+    kin, contacts, labels = estimate_inputs(est)
     assert kin is est.kinematics and contacts is est.contacts
     assert labels == {"kinematics": "oracle (truth)", "contacts": "vision (a tracker)", "oracle": ["kinematics"]}
     est = _estimate(episode, contacts_from_truth(episode.truth), oracle_kinematics(episode.truth), oracle=("contacts",))
-    labels = stage_inputs(_run(episode, est))[2]
+    labels = estimate_inputs(est)[2]
     assert labels["kinematics"] == "algebraic differentiation on tracked poses" and labels["contacts"] == "oracle (truth)"
 
 
@@ -120,7 +122,6 @@ def test_with_the_tracker_the_stage_also_scores_its_contacts(lift, tmp_path):
     tracked = vision_like_contacts(contacts_from_truth(episode.truth), episode.object_model,
                                    np.random.default_rng(1), mean_m=0.0, std_m=0.01)
     run = _run(episode, _estimate(episode, tracked, oracle_kinematics(episode.truth), oracle=("kinematics",)), tmp_path)
-    run_stage(run)
     block = run.summary["forces"]
     assert block["contacts"] == "vision (a tracker)" and block["oracle"] == ["kinematics"]
     assert block["sensitivity_tracker"]["pairs"] > 0

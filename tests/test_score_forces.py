@@ -5,7 +5,8 @@ import dataclasses
 import numpy as np
 
 from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
-from benchmark.scores.forces import plot_fig5, score_forces, sensitivity, true_net_wrench, true_net_wrench_instant
+from benchmark.commands.pictures.fig5 import plot_fig5
+from benchmark.scores.forces import score_forces, sensitivity, true_net_wrench, true_net_wrench_instant
 from forces_oracle import grasp_truth
 from fsv import Kinematics
 from fsv.forces import FrameStatus, nominal_forces
@@ -78,7 +79,7 @@ def test_frames_without_estimate_are_not_scored():
 
 
 def test_robust_limits_show_the_bulk_and_leave_an_outlier_to_the_edge():
-    from benchmark.scores.forces import robust_limits
+    from benchmark.commands.pictures.fig5 import robust_limits
 
     truth = np.linspace(0.0, 10.0, 200)
     estimate = truth + 0.5

@@ -7,7 +7,8 @@ from benchmark.errors import ScenarioError
 from benchmark.world.motion import DECLARED, oracle_kinematics
 from benchmark.world.pose_error import tracker_like_poses
 from benchmark.world.scenario import Scenario
-from benchmark.paper.table1 import PAPER, Table1, error_stats, plot_fig4, score_table1, tune, write_outputs
+from benchmark.commands.table1 import write_outputs
+from benchmark.paper.table1 import PAPER, Table1, error_stats, score_table1, tune
 from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig
 from pictures import assert_figure
@@ -112,18 +113,21 @@ def test_on_the_default_lift_algebraic_is_no_worse_than_central(lift_episode):
 @pytest.mark.parametrize("choice", ["algebraic", "oracle"])
 def test_cli_stage_prints_and_writes_table1_and_labels_the_oracle(lift_episode, tmp_path, choice):
     from argparse import Namespace
-    from types import SimpleNamespace
 
-    from benchmark.paper.table1 import run_stage
+    from benchmark.commands.stage import Run, complete_now
+    from benchmark.commands.stages import kinematics
 
-    run = SimpleNamespace(episode=lift_episode[0], args=Namespace(kinematics=choice), out=tmp_path, summary={}, lines=[])
-    run_stage(run)
-    block = run.summary["kinematics"]
+    episode = lift_episode[0]
+    record = Run(scenario=episode.scenario, out=tmp_path, method_spec=None, episode=episode)
+    result = kinematics.STAGE(record, Namespace(kinematics=choice, contacts="vision"))
+    complete_now(result, tmp_path)
+    summary = dict(result.blocks)
+    block = summary["kinematics"]
     assert set(block) == {"central", "gaussian", "algebraic"}
     assert all(set(v) == {"acc_mean", "acc_std", "gyro_mean", "gyro_std"} for v in block.values())
-    info = run.summary["kinematics_info"]
+    info = summary["kinematics_info"]
     assert info["selected"] == choice and info["oracle"] == (choice == "oracle")
-    text = "\n".join(run.lines)
+    text = "\n".join(result.lines)
     assert "1.686" in text and "Algebraic (ours / paper)" in text
     assert ("ORACLE" in text) == (choice == "oracle")
     assert_figure(tmp_path / "fig4_kinematics.png", min_width=1000, colours={"algebraic (tab:blue)": (31, 119, 180), "central (tab:red)": (214, 39, 40), "truth (black)": (0, 0, 0)})

@@ -5,7 +5,8 @@ import pytest
 from benchmark.world.contact_error import contacts_from_truth
 from benchmark.scores.forces import score_forces
 from benchmark.method.init import INIT_PERTURBATION, tracker_init
-from benchmark.scores.tracking import GATES, gate_report, plot_overlay, score_tracking
+from benchmark.commands.pictures.overlay import plot_overlay
+from benchmark.scores.tracking import GATES, gate_report, score_tracking
 from fsv import Poses
 from fsv.rotation import quat_to_rot
 from fsv.rotation import angle_between, log_so3

@@ -34,7 +34,6 @@ from benchmark.world.episode import Episode
 from benchmark.errors import BenchmarkError, RenderError
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from fsv import Calibration, DepthVideo
-from benchmark.background import background_of
 
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
@@ -742,43 +741,3 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
         world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth")
     )
     return episode.with_depth(DepthVideo(depth_m=depth, fps=sc.fps), camera.calibration(), labels)
-
-
-# --- the command-line stage (benchmark.commands.cli appends it to its STAGES) --------------------------
-
-
-def add_cli_arguments(parser) -> None:
-    """Options of the render stage of ``fsv-bench``."""
-    parser.add_argument("--no-gif", action="store_true", help="write the PNG depth preview but no animated GIF")
-
-
-def run_cli_stage(run) -> None:
-    """Renders ``run.episode``, writes the depth preview to ``run.out`` and adds a "render" block.
-
-    Args:
-        run: The command's ``benchmark.commands.cli.Run`` (its episode is replaced by the rendered one).
-    """
-    from benchmark.camera.preview import preview_paths, write_preview
-
-    run.episode = render(run.episode)
-    depth = run.episode.depth
-    paths = preview_paths(run.out, gif=not run.args.no_gif)
-    background_of(run).process("depth preview", write_preview, depth.depth_m, depth.fps, run.out, gif=not run.args.no_gif)
-    background_of(run).preload("matplotlib.pyplot")  # for the later stages' pictures, while the next stage tracks
-    T, H, W = depth.depth_m.shape
-    block = {
-        "frames": T,
-        "width": W,
-        "height": H,
-        "fps": depth.fps,
-        "noise_m": run.scenario.noise_m,
-        "valid_fraction": float(np.mean(depth.depth_m > 0)),
-        "box_pixels_median": float(np.median(np.sum(run.episode.labels == LABEL_BOX, axis=(1, 2)))),
-        "preview": [p.name for p in paths],
-    }
-    run.summary["render"] = block
-    run.lines.append(
-        f"render: {T} depth frames {W}x{H} at {depth.fps:g} Hz, noise {run.scenario.noise_m:g} m, "
-        f"{100 * block['valid_fraction']:.0f} % of pixels measured, box on {block['box_pixels_median']:.0f} px; "
-        f"preview {paths[0]}"
-    )

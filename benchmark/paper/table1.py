@@ -10,23 +10,17 @@ estimate (``Kinematics.valid``), so all methods are scored on the same frames.
 
 Fairness: every method's parameters are either declared in advance or tuned on calibration
 episodes whose seeds are never scored (``benchmark.world.motion.DECLARED``, ``TUNING``); the table
-prints them and says which. ``python -m benchmark.paper.table1 --calibrate`` re-runs the tuning.
+prints them and says which. ``python -m benchmark.commands.table1 --calibrate`` re-runs the tuning.
 """
 
 from __future__ import annotations
 
-import argparse
-import io
-import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from benchmark.background import background_of
-from benchmark.atomic import write_bytes
 from benchmark.errors import ScenarioError
-from benchmark.world.motion import CALIBRATION_SEEDS, CHOICES, DECLARED, TUNING, observed_poses
+from benchmark.world.motion import CALIBRATION_SEEDS, DECLARED, TUNING
 from benchmark.world.truth import Truth
 from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses
@@ -252,133 +246,6 @@ def tune(calibration: list[tuple[Truth, Poses]], grids: dict | None = None) -> t
     return best, scores
 
 
-def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: str = "", panels: list | None = None) -> Path:
-    """A figure like the paper's Fig. 4: vision kinematics against the AHRS, six axes.
-
-    Args:
-        truth: The truth (AHRS readings ``imu_acc``, ``imu_gyro``).
-        kinematics: label -> Kinematics to draw (e.g. the three methods).
-        path: Where to write the PNG (atomically).
-        title: Figure title.
-        panels: Optional six (truth, kinematics, subtitle) triples, one per panel in the order
-            acc x, y, z, gyro x, y, z (e.g. each axis from the excitation of that axis); they
-            replace ``truth`` and ``kinematics`` panel by panel.
-
-    Returns:
-        The written path.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    if panels is not None and len(panels) != 6:
-        raise ScenarioError(f"plot_fig4 needs 6 panels (acc x, y, z, gyro x, y, z), got {len(panels)}")
-    fig, axes = plt.subplots(2, 3, figsize=(13, 6))
-    styles = {"central": ("tab:red", 0.6, "-"), "algebraic": ("tab:blue", 1.6, "-"), "gaussian": ("tab:green", 1.0, ":")}
-    for row, (unit, key) in enumerate((("m/s$^2$", "imu_acc"), ("rad/s", "imu_gyro"))):
-        for ax_i, axis in enumerate("xyz"):
-            tr, kins, sub = panels[3 * row + ax_i] if panels is not None else (truth, kinematics, "")
-            ax = axes[row, ax_i]
-            for label in sorted(kins, key=lambda m: list(styles).index(m) if m in styles else 9):
-                kin = kins[label]
-                acc, gyro = kin.imu(tr.gravity)
-                est = (acc if row == 0 else gyro)[:, ax_i]
-                color, width, ls = styles.get(label, ("tab:purple", 1.0, "-"))
-                ax.plot(kin.t[kin.valid], est[kin.valid], color=color, lw=width, ls=ls, label=f"vision, {label}")
-            ax.plot(tr.t, getattr(tr, key)[:, ax_i], color="k", lw=1.2, ls="--", label="AHRS (truth)")
-            name = "Translational acceleration" if row == 0 else "Rotational velocity"
-            ax.set_title(f"{name} {axis}" + (f" ({sub})" if sub else ""), fontsize=10)
-            ax.set_ylabel(unit)
-            ax.set_xlabel("t [s]")
-    axes[0, 0].legend(fontsize=7)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    write_bytes(path, buf.getvalue())
-    return path
-
-
-def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | os.PathLike, panels: list | None = None,
-                  background=None) -> dict:
-    """Writes table1.md, table1.csv and fig4_kinematics.png into ``out_dir``; returns their paths.
-
-    ``panels`` is passed to :func:`plot_fig4` (e.g. one excitation episode per axis). With a
-    ``background`` (:class:`benchmark.background.Background`) the figure is drawn there.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"markdown": out / "table1.md", "csv": out / "table1.csv", "plot": out / "fig4_kinematics.png"}
-    write_bytes(paths["markdown"], (table.markdown() + "\n").encode())
-    write_bytes(paths["csv"], table.csv().encode())
-    title = f"Vision kinematics vs AHRS ({table.poses})"
-    if background is None:
-        plot_fig4(truth, kinematics, paths["plot"], title=title, panels=panels)
-    else:
-        background.process("Fig. 4", plot_fig4, truth, kinematics, paths["plot"], title=title, panels=panels)
-    return paths
-
-
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The kinematics stage's ``fsv-bench`` option."""
-    parser.add_argument(
-        "--kinematics",
-        choices=CHOICES,
-        default="algebraic",
-        help="box kinematics the later stages use: a differentiator on the observed poses, or 'oracle' "
-        "(the true kinematics: an ablation, labelled as such in every report)",
-    )
-
-
-def run_stage(run) -> None:
-    """``fsv-bench`` stage: prints Table 1, writes it (MD, CSV, Fig. 4 PNG) and the summary blocks.
-
-    ``run`` is a ``benchmark.commands.cli.Run`` (reads ``episode``, ``args.kinematics``, ``out``; extends
-    ``summary`` and ``lines``). Later stages get the selected kinematics from
-    ``benchmark.world.motion.episode_kinematics(run.episode, run.args.kinematics)``.
-    """
-    ep = run.episode
-    choice = getattr(run.args, "kinematics", "algebraic")
-    if choice not in CHOICES:
-        raise ScenarioError(f"kinematics must be one of {', '.join(CHOICES)}; got {choice!r}")
-    if getattr(run, "tracking", None) is not None:  # the tracker ran (issue 6): Table 1 on tracked poses
-        table, kins = score_table1(ep.truth, run.tracking.box, poses_label="tracked poses (fsv.track, from depth)")
-    else:
-        table, kins = score_table1(ep.truth, observed_poses(ep))
-    paths = write_outputs(table, ep.truth, kins, run.out, background=background_of(run))
-    run.summary["kinematics"] = table.summary()
-    oracle = choice == "oracle"
-    # what the later stages use: the method's differentiator when the method ran (the reference's
-    # differentiates tracked poses on its own window, not Table 1's), else the declared stencil
-    estimate = getattr(run, "estimate", None)
-    if oracle:
-        used = "true kinematics (oracle ablation)"
-    elif estimate is not None:
-        used = estimate.labels["differentiator"]
-    else:
-        used = f"{choice} ({DECLARED[choice].describe()})"
-    run.summary["kinematics_info"] = {
-        "selected": choice,
-        "oracle": oracle,
-        "selected_params": used,
-        "poses": table.poses,
-        "scored_frames": table.frames,
-        "params": table.params,
-        "tuning": table.tuning,
-        "paper": PAPER,
-        "files": {k: v.name for k, v in paths.items()},  # relative to --out, like the other stages
-    }
-    run.lines.append("Table 1: kinematics errors vs the AHRS (ours / paper's), pooled over axes and frames")
-    run.lines.extend(table.markdown().splitlines())
-    run.lines.append(f"kinematics used by later stages: {'ORACLE (true kinematics, an ablation)' if oracle else used}; "
-                     f"Fig. 4: {paths['plot']}")
-
-
 def rms_errors(calibration: list[tuple[Truth, Poses]], config) -> tuple[float, float]:
     """RMS acceleration and gyro errors of one config pooled over episodes (frames where it is valid)."""
     acc, gyro = [], []
@@ -463,72 +330,3 @@ def pose_error_stats(episodes: list[tuple[Truth, Poses]]) -> dict:
         "pos_lag1_corr": lag1(pos),
         "rot_lag1_corr": lag1(rot),
     }
-
-
-def _csv_list(text: str) -> list[str]:
-    return [x for x in (t.strip() for t in text.split(",")) if x]
-
-
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(
-        description="Table 1 tools: tune the differentiators on calibration episodes, or score the six-axis table."
-    )
-    parser.add_argument("--calibrate", action="store_true", help="tune on the calibration seeds and print the best parameters")
-    parser.add_argument("--sweep", action="store_true", help="compare the best Gaussian and algebraic filters per window budget")
-    parser.add_argument("--score", action="store_true", help="score Table 1 pooled over the tasks and --seeds")
-    parser.add_argument("--tasks", default=",".join(SIX_AXIS_TASKS), help="comma-separated tasks (default: the six excitations)")
-    parser.add_argument("--seeds", default="0", help="comma-separated seeds scored by --score (never the calibration seeds)")
-    parser.add_argument("--noise", type=float, default=0.01)
-    parser.add_argument("--out", type=Path, default=None, help="with --score: write table1.md, table1.csv and Fig. 4 here")
-    parser.add_argument(
-        "--tracked", action="store_true", help="with --score: differentiate the tracker's poses (render + fsv.track; slow)"
-    )
-    args = parser.parse_args(argv)
-    if not (args.calibrate or args.sweep or args.score):
-        parser.print_help()
-        return 0
-    tasks = _csv_list(args.tasks)
-    if args.calibrate or args.sweep:
-        calibration = episode_set(tasks, args.noise, CALIBRATION_SEEDS)
-        seeds = ",".join(str(s) for s in CALIBRATION_SEEDS)
-        print(f"calibration: tasks {','.join(tasks)}, noise {args.noise} m, seeds {seeds}, support <= {MAX_SUPPORT_FRAMES} frames")
-    if args.calibrate:
-        best, scores = tune(calibration)
-        for method, scored in scores.items():
-            print(f"{method}: best {best[method].describe()}")
-            for cfg, j in sorted(scored, key=lambda s: s[1])[:5]:
-                print(f"    objective {j:.4f}  {cfg.describe()}")
-    if args.sweep:
-        print("| support [frames] | method | parameters | acc RMS [m/s^2] | gyro RMS [rad/s] |")
-        print("|---|---|---|---|---|")
-        ref_acc, ref_gyro = rms_errors(calibration, DECLARED["central"])
-        print(f"| 3 | central | {DECLARED['central'].describe()} | {ref_acc:.3f} | {ref_gyro:.3f} |")
-        for r in support_sweep(calibration):
-            print(f"| {r['support']} | {r['method']} | {r['params']} | {r['acc_rms']:.3f} | {r['gyro_rms']:.3f} |")
-    if args.score:
-        seeds = [int(s) for s in _csv_list(args.seeds)]
-        if set(seeds) & set(CALIBRATION_SEEDS):
-            raise ScenarioError(f"--seeds {seeds} overlap the calibration seeds {CALIBRATION_SEEDS}: they are never scored")
-        episodes = episode_set(tasks, args.noise, seeds, tracked=args.tracked)
-        label = "tracked poses (fsv.track, from depth)" if args.tracked else POSES_LABEL
-        table, kins = score_episodes(episodes, poses_label=label)
-        err = pose_error_stats(episodes)
-        print(
-            f"pose errors: {err['pos_std_mm']:.2f} mm and {err['rot_std_deg']:.2f} deg per axis (std), "
-            f"lag-1 correlation {err['pos_lag1_corr']:.2f} (position), {err['rot_lag1_corr']:.2f} (rotation)"
-        )
-        print(f"Table 1 on tasks {','.join(tasks)}, seeds {','.join(map(str, seeds))}, noise {args.noise} m")
-        print(table.markdown())
-        if args.out is not None:
-            panels = None
-            by_task = {task: i * len(seeds) for i, task in enumerate(tasks)}  # first seed of each task
-            wanted = [f"excite-{kind}{axis}" for kind in "tr" for axis in "xyz"]
-            if all(t in by_task for t in wanted):
-                panels = [(episodes[by_task[t]][0], kins[by_task[t]], t) for t in wanted]
-            paths = write_outputs(table, episodes[0][0], kins[0], args.out, panels=panels)
-            print(f"wrote {', '.join(str(p) for p in paths.values())}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -15,7 +15,6 @@ beside it (``rel_err_pct_mean_all``).
 
 from __future__ import annotations
 
-import argparse
 
 import numpy as np
 
@@ -94,46 +93,3 @@ def _take(x, idx):
     from benchmark.scores.samples import take_contacts as _take_con, take_kinematics as _take_kin
 
     return _take_kin(x, idx) if isinstance(x, Kinematics) else _take_con(x, idx)
-
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Adds ``--internal-model FILE`` to ``fsv-bench``."""
-    p.add_argument("--internal-model", default=None,
-                   help="internal-force model from `fsv-bench train` (default: the model shipped in fsv/data)")
-
-
-def run_stage(run) -> None:
-    """The ``learning`` block of summary.json and one printed line for a ``benchmark.commands.cli.Run``:
-    the method's final forces (``run.estimate.forces``) scored against the truth."""
-    from benchmark.scores.forces import stage_inputs
-
-    kin, contacts, labels = stage_inputs(run)
-    est = run.estimate
-    if est.forces is None:
-        run.summary["learning"] = {**labels, "program": None}
-        run.lines.append(f"learning: the method has no internal-force stage ({est.labels['internal']})")
-        return
-    block = score_episode(run.episode, est.forces, kin, contacts)
-    path = getattr(run.args, "internal_model", None)
-    model_info = {}
-    if est.labels["internal"].startswith("learned internal forces"):
-        from fsv.learn import default_model, load
-
-        from benchmark.method.grip_file import user_grip
-
-        model_info = {"internal_model": path or "fsv/data/internal_forces.npz",
-                      "model": model_block(default_model() if path is None else load(path))}
-        if model_info["model"]["grip_inputs"]:
-            grip = user_grip(run.episode.scenario.user)
-            model_info["grip_calibration"] = None if grip is None else {"baseline_n": grip.baseline_n, "gain": grip.gain}
-    block = {**labels, "program": est.labels["internal"], **model_info, **block}
-    run.summary["learning"] = block
-    tag = f"ORACLE {', '.join(labels['oracle'])}" if labels["oracle"] else "no oracle input"
-    run.lines.append(
-        f"learning [{tag}] (kinematics {labels['kinematics']}, contacts {labels['contacts']}): learned forces' "
-        f"relative error {block['rel_err_pct_mean']:.1f} ± {block['rel_err_pct_std']:.1f} % over {block['scored']} "
-        f"finger-frames kept by the sample rules (paper, Table 2: 9.7-10.9 %; {block['rel_err_pct_mean_all']:.1f} ± "
-        f"{block['rel_err_pct_std_all']:.1f} % over all {block['scored_all']}); {block['solver_failures']} solver failures"
-        + (f"; the user's grip calibration: {g['baseline_n']:.2f} N + {g['gain']:.2f} N per N of load"
-           if (g := block.get("grip_calibration")) else "")
-    )

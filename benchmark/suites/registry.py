@@ -105,7 +105,7 @@ TABLE1 = Suite(
         "The paper's Table 1 protocol: the six one-axis excitations (translation and rotation along x, y, "
         "z), 10 s each, seeds 0-2, 1 cm depth noise; the box's acceleration and angular velocity in the "
         "frame of an AHRS fixed to it, against the simulated AHRS. The same episodes as "
-        "`python -m benchmark.paper.table1 --score --seeds 0,1,2` (results/table1), which compares the three "
+        "`python -m benchmark.commands.table1 --score --seeds 0,1,2` (results/table1), which compares the three "
         "differentiators on them. Gates: the paper's algebraic errors (0.904 m/s^2, 1.241 rad/s)."
     ),
 )

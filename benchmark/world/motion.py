@@ -12,7 +12,7 @@ ones corrupted by the tracker-like error model of ``benchmark.world.pose_error``
 
 Declared parameters (``DECLARED``): central differences are the textbook three-point differences
 (step 1), declared in advance. The Gaussian (sigma, truncation) and the algebraic window and
-(kappa, mu) were tuned with ``python -m benchmark.paper.table1 --calibrate`` on calibration episodes
+(kappa, mu) were tuned with ``python -m benchmark.commands.table1 --calibrate`` on calibration episodes
 whose seeds are never scored (``CALIBRATION_SEEDS``): the six excitation tasks of the paper's
 §4.1 (``benchmark.paper.table1.SIX_AXIS_TASKS``), within the support budget declared in
 ``benchmark.paper.table1.MAX_SUPPORT_FRAMES`` (both optima sit at that budget), then written here;

@@ -6,7 +6,7 @@ from matplotlib import colormaps
 from PIL import Image
 
 from benchmark.errors import BenchmarkError
-from benchmark.camera.preview import COLOUR_BAR_HEIGHT, colorize, strip, write_preview
+from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT, colorize, strip, write_preview
 
 
 def video(T=12, H=40, W=32):

@@ -1,0 +1,127 @@
+"""One kind of stage for the main command: a function of a frozen record that returns a frozen result.
+
+The main command (:mod:`benchmark.commands.cli`) runs its stages in order. A stage reads the
+:class:`Run` (the scenario, the method, and what earlier stages made: the episode, the estimate)
+and the options it declares, and returns a :class:`StageResult`: its blocks of ``summary.json``,
+its printed lines, its files, the pictures to draw beside the next stages, and what it makes for the later
+stages. The command builds the next :class:`Run` from it (``dataclasses.replace``); no stage writes
+into another's state or reads an option it did not declare.
+"""
+
+from __future__ import annotations
+
+import types
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+from benchmark.world.episode import Episode
+from benchmark.world.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class Picture:
+    """A picture (or other file) a stage asks for; the command draws it beside the later stages.
+
+    Attributes:
+        name: What it is, for an error message ("tracking overlay").
+        draw: A module-level function that writes it.
+        args: Positional arguments of ``draw``.
+        kwargs: Keyword arguments of ``draw``.
+    """
+
+    name: str
+    draw: Callable
+    args: tuple = ()
+    kwargs: Mapping = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Run:
+    """What the stages of one command share, as it stands before a stage.
+
+    Attributes:
+        scenario: The scenario being run.
+        out: The folder the stages write into (a temporary sibling of ``--out`` until the end).
+        method_spec: The method the command runs (``benchmark.method.MethodSpec``), checked before any work.
+        quiet: No progress bars.
+        episode: The episode, once simulated (rendered after the render stage).
+        estimate: The method's ``fsv.method.Estimate`` on the episode, once the track stage ran it.
+    """
+
+    scenario: Scenario
+    out: Any
+    method_spec: Any
+    quiet: bool = False
+    episode: Episode | None = None
+    estimate: Any = None
+
+
+@dataclass(frozen=True)
+class StageResult:
+    """What one stage made.
+
+    Attributes:
+        blocks: ``((key, block), ...)``: blocks of ``summary.json``, in order.
+        lines: Lines printed at the end of the command.
+        files: ``((file name, bytes), ...)``: small files the command writes into its output folder.
+        pictures: Pictures to draw beside the later stages.
+        episode: The stage's new episode (the rendered one), or None to keep the run's.
+        estimate: The method's estimate, if this stage ran the method, else None.
+    """
+
+    blocks: tuple = ()
+    lines: tuple = ()
+    files: tuple = ()
+    pictures: tuple = ()
+    episode: Episode | None = None
+    estimate: Any = None
+
+    def __post_init__(self):
+        for name in ("blocks", "lines", "files", "pictures"):
+            if not isinstance(getattr(self, name), tuple):
+                raise TypeError(f"StageResult.{name} must be a tuple, got {type(getattr(self, name)).__name__}")
+
+    def updates(self) -> dict:
+        """The fields of :class:`Run` this result replaces."""
+        return {k: v for k, v in (("episode", self.episode), ("estimate", self.estimate)) if v is not None}
+
+
+def _no_arguments(parser) -> None:
+    return None
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One step of the main command.
+
+    Attributes:
+        name: Its entry in ``timing_s``.
+        run: ``run(record, options) -> StageResult``; raises a BenchmarkError/FsvError on failure.
+        options: The names (``argparse`` destinations) of the options it reads; it gets exactly those.
+        add_arguments: Adds the options it owns to the parser (an option may be read by several
+            stages and is added by one).
+    """
+
+    name: str
+    run: Callable[[Run, Mapping], StageResult]
+    options: tuple = ()
+    add_arguments: Callable = _no_arguments
+
+    def __call__(self, record: Run, args) -> StageResult:
+        """Runs the stage on ``record`` with its declared options taken from ``args`` (an argparse namespace)."""
+        options = types.MappingProxyType({name: getattr(args, name) for name in self.options})
+        result = self.run(record, options)
+        if not isinstance(result, StageResult):
+            raise TypeError(f"stage {self.name} returned {type(result).__name__}, not a StageResult")
+        return result
+
+
+def complete_now(result: StageResult, out) -> None:
+    """Writes a result's files into ``out`` and draws its pictures in this process, at once (a stage
+    run on its own; the main command draws them beside its later stages instead)."""
+    from benchmark.atomic import write_bytes
+
+    for name, data in result.files:
+        write_bytes(out / name, data)
+    for picture in result.pictures:
+        picture.draw(*picture.args, **dict(picture.kwargs))

@@ -1,0 +1,48 @@
+"""The learn stage: the method's final forces (learned internal forces) against the truth."""
+
+from __future__ import annotations
+
+from benchmark.commands.stage import Run, Stage, StageResult
+from benchmark.commands.stages.forces import estimate_inputs, oracle_tag
+from benchmark.method.grip_file import user_grip
+from benchmark.scores.learned import model_block, score_episode
+from fsv.learn import default_model, load
+
+SHIPPED_MODEL = "fsv/data/internal_forces.npz"
+
+
+def add_arguments(parser) -> None:
+    """Adds ``--internal-model FILE`` to ``fsv-bench``."""
+    parser.add_argument("--internal-model", default=None,
+                        help="internal-force model from `fsv-bench train` (default: the model shipped in fsv/data)")
+
+
+def run(record: Run, options) -> StageResult:
+    """The ``learning`` block and one printed line: the estimate's final forces scored against the truth."""
+    est = record.estimate
+    kin, contacts, labels = estimate_inputs(est)
+    if est.forces is None:
+        return StageResult(blocks=(("learning", {**labels, "program": None}),),
+                           lines=(f"learning: the method has no internal-force stage ({est.labels['internal']})",))
+    block = score_episode(record.episode, est.forces, kin, contacts)
+    path = options["internal_model"]
+    model_info = {}
+    if est.labels["internal"].startswith("learned internal forces"):
+        model_info = {"internal_model": path or SHIPPED_MODEL,
+                      "model": model_block(default_model() if path is None else load(path))}
+        if model_info["model"]["grip_inputs"]:
+            grip = user_grip(record.episode.scenario.user)
+            model_info["grip_calibration"] = None if grip is None else {"baseline_n": grip.baseline_n, "gain": grip.gain}
+    block = {**labels, "program": est.labels["internal"], **model_info, **block}
+    line = (
+        f"learning [{oracle_tag(labels)}] (kinematics {labels['kinematics']}, contacts {labels['contacts']}): learned forces' "
+        f"relative error {block['rel_err_pct_mean']:.1f} ± {block['rel_err_pct_std']:.1f} % over {block['scored']} "
+        f"finger-frames kept by the sample rules (paper, Table 2: 9.7-10.9 %; {block['rel_err_pct_mean_all']:.1f} ± "
+        f"{block['rel_err_pct_std_all']:.1f} % over all {block['scored_all']}); {block['solver_failures']} solver failures"
+        + (f"; the user's grip calibration: {g['baseline_n']:.2f} N + {g['gain']:.2f} N per N of load"
+           if (g := block.get("grip_calibration")) else "")
+    )
+    return StageResult(blocks=(("learning", block),), lines=(line,))
+
+
+STAGE = Stage(name="learn", run=run, options=("internal_model",), add_arguments=add_arguments)

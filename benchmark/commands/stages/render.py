@@ -1,0 +1,41 @@
+"""The render stage: the episode's depth video from its sensor; the ``render`` block and the depth preview."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from benchmark.camera.render import LABEL_BOX, render
+from benchmark.commands.pictures.depth_preview import preview_paths, write_preview
+from benchmark.commands.stage import Picture, Run, Stage, StageResult
+
+
+def add_arguments(parser) -> None:
+    """Options of the render stage of ``fsv-bench``."""
+    parser.add_argument("--no-gif", action="store_true", help="write the PNG depth preview but no animated GIF")
+
+
+def run(record: Run, options) -> StageResult:
+    """Renders the run's episode; the depth preview is drawn beside the next stages."""
+    episode = render(record.episode)
+    depth = episode.depth
+    gif = not options["no_gif"]
+    paths = preview_paths(record.out, gif=gif)
+    T, H, W = depth.depth_m.shape
+    block = {
+        "frames": T,
+        "width": W,
+        "height": H,
+        "fps": depth.fps,
+        "noise_m": record.scenario.noise_m,
+        "valid_fraction": float(np.mean(depth.depth_m > 0)),
+        "box_pixels_median": float(np.median(np.sum(episode.labels == LABEL_BOX, axis=(1, 2)))),
+        "preview": [p.name for p in paths],
+    }
+    line = (f"render: {T} depth frames {W}x{H} at {depth.fps:g} Hz, noise {record.scenario.noise_m:g} m, "
+            f"{100 * block['valid_fraction']:.0f} % of pixels measured, box on {block['box_pixels_median']:.0f} px; "
+            f"preview {paths[0]}")
+    picture = Picture("depth preview", write_preview, (depth.depth_m, depth.fps, record.out), {"gif": gif})
+    return StageResult(blocks=(("render", block),), lines=(line,), pictures=(picture,), episode=episode)
+
+
+STAGE = Stage(name="render", run=run, options=("no_gif",), add_arguments=add_arguments)

@@ -1,0 +1,78 @@
+"""The track stage: the method on the episode's camera inputs; the ``tracking`` block and the overlay.
+
+It is the command's one entry into the method (:func:`benchmark.method.run_method`): the estimate
+(tracking, kinematics, forces) it returns is what the later stages score.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from benchmark.commands.pictures.overlay import plot_overlay
+from benchmark.commands.stage import Picture, Run, Stage, StageResult
+from benchmark.errors import ScenarioError
+from benchmark.method import camera_input, run_method
+from benchmark.method.init import INIT_PERTURBATION
+from benchmark.scores.tracking import gate_report, score_tracking
+from benchmark.world.contact_error import PAPER_CONTACT_ERROR_MEAN_M, PAPER_CONTACT_ERROR_STD_M
+
+PAPER_CONTACT_ERROR_MM = {"mean": round(PAPER_CONTACT_ERROR_MEAN_M * 1e3, 9), "std": round(PAPER_CONTACT_ERROR_STD_M * 1e3, 9)}
+"""The paper's contact-point error per axis, [mm] (mean -1.55, std 6.13), beside ours in the block."""
+
+
+def add_arguments(parser) -> None:
+    """Options of the track stage of ``fsv-bench``."""
+    parser.add_argument("--init-perturbation", type=float, default=1.0, metavar="SCALE",
+                        help="scale of the tracker's seeded first-frame perturbation (0 = the exact start; "
+                             "see benchmark.method.init.INIT_PERTURBATION)")
+
+
+def check_options(options) -> None:
+    """Raises ScenarioError for an init-perturbation scale that is not finite and >= 0."""
+    scale = options["init_perturbation"]
+    if not (np.isfinite(scale) and scale >= 0):
+        raise ScenarioError(f"--init-perturbation must be a scale >= 0, got {scale!r}")
+
+
+def run(record: Run, options) -> StageResult:
+    """Runs the method on the rendered episode; scores its tracking against the truth."""
+    check_options(options)
+    ep, scale = record.episode, float(options["init_perturbation"])
+    estimate = run_method(record.method_spec, ep, inputs=camera_input(ep, scale), progress=not record.quiet)
+    tracking = estimate.tracking
+    elapsed = estimate.timing_s["track"]
+    stages = dict(getattr(tracking, "timing_s", None) or {})
+    first = float(getattr(tracking, "first_frame_s", 0.0))
+    scores = score_tracking(tracking, ep.truth)
+    overlay = record.out / "tracking_overlay.png"
+    T = len(ep.truth.t)
+    block = {
+        **scores,
+        "paper_contact_err_mm": PAPER_CONTACT_ERROR_MM,
+        "gates": gate_report(scores),
+        "frames_per_s": T / elapsed,
+        "frames_per_s_after_first": (T - 1) / (elapsed - first) if T > 1 and elapsed > first else float("nan"),
+        "first_frame_s": first,
+        "stage_ms_per_frame": {k: 1e3 * v / T for k, v in stages.items()},
+        "tracker": estimate.labels.get("tracker"),
+        "init_perturbation": {k: float(v) * scale for k, v in INIT_PERTURBATION.items()},
+        "overlay": overlay.name,
+    }
+    failed = [k for k, g in block["gates"].items() if not g["pass"]]
+    paper = PAPER_CONTACT_ERROR_MM
+    line = (
+        f"tracking [{estimate.labels.get('tracker')}] ({block['frames_per_s_after_first']:.1f} frames/s after the "
+        f"first frame, which took {first:.1f} s with any compilation): box {scores['box_pos_err_mm_median']:.2f} mm / "
+        f"{scores['box_rot_err_deg_median']:.2f} deg (median), fingertips {scores['fingertip_err_mm_median']:.1f} mm, "
+        f"contact point {scores['contact_err_mm_mean']:+.2f} ± {scores['contact_err_mm_std']:.2f} mm per axis "
+        f"(paper {paper['mean']:g} ± {paper['std']:g}), median {scores['contact_err_mm_median_euclid']:.1f} mm, recall "
+        f"{scores['contact_recall']:.2f}, precision {scores['contact_precision']:.2f}; "
+        + ("all gates hold" if not failed else f"gates NOT met: {', '.join(failed)}")
+        + f"; overlay {overlay.name}"
+    )
+    picture = Picture("tracking overlay", plot_overlay,
+                      (ep.depth, ep.calib, tracking, ep.object_model, ep.hand_model, overlay), {"truth": ep.truth})
+    return StageResult(blocks=(("tracking", block),), lines=(line,), pictures=(picture,), estimate=estimate)
+
+
+STAGE = Stage(name="track", run=run, options=("init_perturbation",), add_arguments=add_arguments)

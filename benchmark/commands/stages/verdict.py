@@ -1,0 +1,45 @@
+"""The verdict stage: the scenario as a suite of one, scored and gated like ``fsv-bench eval``.
+
+The episode's metrics (:func:`benchmark.scores.episode.score_episode` on the method's estimate) are
+checked against the smoke suite's gates (CI's gates for the reference method), or ``--gates FILE``.
+``summary.json`` gets a ``verdict`` block (metrics, gates, pass/fail); the command exits 1 when a gate
+fails, after writing every file.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+from benchmark.commands.stage import Run, Stage, StageResult
+from benchmark.scores.aggregate import aggregate_all
+from benchmark.scores.episode import METRICS, score_episode
+from benchmark.scores.verdict import check_gates
+from benchmark.suites import get_suite
+from benchmark.suites.evaluate import load_gates
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--gates", default=None,
+                        help="JSON file of gates for the verdict (default: the smoke suite's; see fsv-bench eval)")
+
+
+def run(record: Run, options) -> StageResult:
+    """The episode's metrics against the gates; the ``verdict`` block and line."""
+    gates_file = options["gates"]
+    gates = load_gates(gates_file) if gates_file else get_suite("smoke").gates
+    metrics = score_episode(record.episode, record.estimate)
+    results = check_gates(gates, aggregate_all([metrics], METRICS))
+    failed = [r.name for r in results if not r.passed]
+    block = {
+        "verdict": "fail" if failed else "pass",
+        "gates_from": gates_file or "smoke suite",
+        "method": record.estimate.labels,
+        "metrics": metrics,
+        "gates": [{k: v for k, v in asdict(r).items() if k != "ci"} for r in results],
+    }
+    line = (f"verdict: {'FAIL' if failed else 'pass'} ({len(results) - len(failed)} of {len(results)} gates "
+            f"of the {gates_file or 'smoke suite'} hold" + (f"; failed: {'; '.join(failed)})" if failed else ")"))
+    return StageResult(blocks=(("verdict", block),), lines=(line,))
+
+
+STAGE = Stage(name="verdict", run=run, options=("gates",), add_arguments=add_arguments)
