@@ -31,35 +31,108 @@ for the cores the pool divides among them (a rendered frame is the same bits at 
 
 
 def one_core_worker() -> None:
-    """Pool initializer: limits this worker's native thread pools to one thread (:data:`ONE_CORE_ENV`)."""
+    """Limits this process's native thread pools to one thread (:data:`ONE_CORE_ENV`)."""
     import os
 
     os.environ.update(ONE_CORE_ENV)
 
 
-def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | None = None) -> Iterator[tuple]:
+_REPORT: Callable | None = None
+"""Where :func:`report_progress` sends its counts in this process (None: nowhere)."""
+
+
+def report_progress(count: int = 1) -> None:
+    """Reports ``count`` units of work done (e.g. tracked frames) to the caller of :func:`run_jobs`.
+
+    Called by a job's function anywhere: in the calling process, in a local worker (through a queue)
+    or on Ray (dropped); it costs nothing when nobody listens.
+    """
+    if _REPORT is not None:
+        _REPORT(count)
+
+
+def _worker(parent_pid: int, progress_queue) -> None:
+    """Local worker initializer: one core's work, :func:`report_progress` to the parent's queue, and
+    the worker ends when its parent dies (even by SIGKILL, which no cleanup code sees)."""
+    import os
+    import threading
+    import time
+
+    global _REPORT
+    one_core_worker()
+    _REPORT = progress_queue.put if progress_queue is not None else None
+
+    def watch():
+        while os.getppid() == parent_pid:
+            time.sleep(1.0)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="watch-parent", daemon=True).start()
+
+
+def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | None = None,
+             on_progress: Callable[[int], None] | None = None) -> Iterator[tuple]:
     """Yields ``(index, fn(jobs[index]))`` for every job, in the order they finish.
 
     Args:
         fn: A module-level function of one job.
         jobs: The jobs.
-        workers: Local worker processes (1: in this process); ignored with ``ray_address``.
+        workers: Local worker processes (1: in this process); ignored with ``ray_address``. Local
+            workers are spawned (no forked torch or OpenGL state), use one core each and end with
+            this process.
         ray_address: A Ray cluster's address ("auto", "host:port" or "ray://host:port").
+        on_progress: Called in this process with the counts the jobs report
+            (:func:`report_progress`); not on Ray.
     """
+    global _REPORT
     if ray_address is not None:
         yield from _ray(fn, jobs, ray_address)
     elif workers == 1:
-        for i, job in enumerate(jobs):
-            yield i, fn(job)
+        saved, _REPORT = _REPORT, on_progress
+        try:
+            for i, job in enumerate(jobs):
+                yield i, fn(job)
+        finally:
+            _REPORT = saved
     else:
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor, as_completed
+        yield from _pool(fn, jobs, workers, on_progress)
 
-        ctx = multiprocessing.get_context("spawn")  # no forked torch/OpenGL state in the workers
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=one_core_worker) as pool:
-            futures = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
-            for f in as_completed(futures):
+
+def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple]:
+    import multiprocessing
+    import os
+    import queue
+    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+    ctx = multiprocessing.get_context("spawn")
+    manager = ctx.Manager() if on_progress is not None else None
+    heard = manager.Queue() if manager is not None else None
+
+    def drain():
+        while heard is not None:
+            try:
+                on_progress(heard.get_nowait())
+            except queue.Empty:
+                return
+
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker, initargs=(os.getpid(), heard))
+    try:
+        futures = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
+        pending = set(futures)
+        while pending:
+            finished, pending = wait(pending, timeout=0.2, return_when=FIRST_COMPLETED)
+            drain()
+            for f in finished:
                 yield futures[f], f.result()
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        if manager is not None:
+            manager.shutdown()
+        raise
+    pool.shutdown(wait=True)
+    if manager is not None:
+        drain()
+        manager.shutdown()
 
 
 def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:

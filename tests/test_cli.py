@@ -179,7 +179,7 @@ def test_summary_json_is_strict_even_where_a_metric_has_nothing_to_score(tmp_pat
 @pytest.mark.parametrize("exc, code, needle", [(KeyboardInterrupt(), 130, "interrupted; complete files are kept"),
                                                 ("benchmark", 1, "failed: the box fell")])
 def test_subcommands_exit_130_on_ctrl_c_and_1_on_failure(monkeypatch, capsys, exc, code, needle):
-    import benchmark.paper.dataset as dataset
+    import benchmark.paper.dataset.cli as dataset
     from benchmark.errors import SimulationError
 
     err = SimulationError("the box fell") if exc == "benchmark" else exc

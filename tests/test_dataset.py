@@ -4,7 +4,9 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from benchmark.paper.dataset import DatasetSpec, _with_meta, episode_id, generate, load_dataset, _ints
+from benchmark.paper.dataset import DatasetSpec, episode_id, generate, load_dataset
+from benchmark.paper.dataset.build import _with_meta
+from benchmark.paper.dataset.cli import parse_ints
 from benchmark.errors import DatasetError
 
 CALLS = []
@@ -70,9 +72,9 @@ def test_ray_without_ray_installed_says_how_to_get_it(tmp_path):
 
 
 def test_bad_spec_and_ranges():
-    assert _ints("0,2,5-7") == (0, 2, 5, 6, 7)
+    assert parse_ints("0,2,5-7") == (0, 2, 5, 6, 7)
     with pytest.raises(DatasetError, match="'a-b'"):
-        _ints("a-b")
+        parse_ints("a-b")
     with pytest.raises(DatasetError, match="users"):
         DatasetSpec(users=(-1,))
     with pytest.raises(DatasetError, match="kinematics source"):
@@ -147,7 +149,7 @@ def test_tracker_source_uses_the_pipelines_contacts_and_poses(tracked_lift):
 
 
 def test_plausibility_rule_on_a_constructed_frame(learn_oracle_dataset):
-    from benchmark.paper.dataset import nominal_excess_n
+    from benchmark.scores.samples import nominal_excess_n
 
     nominal = [[3.0, 2.0, 9.0, 0.0], [3.0, 2.0, 1.0, 0.0]]
     measured = [[10.0, 5.0, np.nan, np.nan], [10.0, 0.5, 4.0, np.nan]]
@@ -402,10 +404,11 @@ def test_concurrent_runs_share_the_work_instead_of_repeating_it(tmp_path, monkey
     import threading
     import time
 
-    import benchmark.paper.dataset as dataset
-    from benchmark.paper.dataset import _run_one, _write_sealed
+    import benchmark.paper.dataset.claims as claims
+    from benchmark.paper.dataset.build import _run_one
+    from benchmark.paper.dataset.files import _write_sealed
 
-    monkeypatch.setattr(dataset, "CLAIM_POLL_S", 0.05)
+    monkeypatch.setattr(claims, "CLAIM_POLL_S", 0.05)
     spec = DatasetSpec(tasks=("lift",), seeds=(0, 1, 2))
     (tmp_path / "d" / "episodes").mkdir(parents=True)
     other = tmp_path / "d" / "episodes" / "lift_u0_g0_m0_s1.claim"

@@ -6,7 +6,7 @@ import json
 import pytest
 
 from benchmark.commands.cli import main
-from benchmark.paper.dataset import _ints
+from benchmark.paper.dataset.cli import parse_ints
 from benchmark.world.scenario import Scenario
 from benchmark.suites import SUITES, Gate, Suite
 from benchmark.world.assets import validate
@@ -195,7 +195,7 @@ def test_the_grip_calibration_recording_uses_seeds_no_suite_and_no_training_grid
     from benchmark.method.grip_file import read_calibration
     from benchmark.reproduce import DATASETS
 
-    seeds = lambda name: set(_ints(dict(zip(DATASETS[name][::2], DATASETS[name][1::2]))["--seeds"]))
+    seeds = lambda name: set(parse_ints(dict(zip(DATASETS[name][::2], DATASETS[name][1::2]))["--seeds"]))
     used = {sc.seed for suite in SUITES.values() for sc in suite.scenarios}
     for name in DATASETS:
         if name != "calibration":

@@ -36,7 +36,7 @@ from benchmark.world.scenario import Scenario
 from fsv.errors import InputError
 from fsv.provenance import provenance
 
-SUBCOMMANDS = {"generate": "benchmark.paper.dataset", "calibrate": "benchmark.paper.calibration",
+SUBCOMMANDS = {"generate": "benchmark.paper.dataset.cli", "calibrate": "benchmark.paper.calibration",
                "train": "benchmark.paper.training", "table2": "benchmark.paper.table2",
                "reproduce": "benchmark.reproduce", "eval": "benchmark.suites.evaluate",
                "compare": "benchmark.suites.compare", "export": "benchmark.exchange.export",

@@ -49,7 +49,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.paper.dataset import MAX_EXCESS_N, load_dataset
+    from benchmark.paper.dataset import load_dataset
+    from benchmark.scores.samples import MAX_EXCESS_N
 
     df = load_dataset(args.data, max_excess_n=MAX_EXCESS_N)
     with open(os.path.join(args.data, "dataset.json")) as fh:

@@ -44,7 +44,8 @@ import numpy as np
 import pandas as pd
 
 from benchmark.atomic import save_figure, write_text
-from benchmark.paper.dataset import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, finger_names_of, frames_of, load_dataset, training_set
+from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset, training_set
+from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N
 from benchmark.errors import DatasetError
 from fsv import ObjectModel
 from fsv.forces import FrameStatus, reconstruct_forces
@@ -351,13 +352,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> dict:
     """Runs ``fsv-bench table2``: prints the table and writes it to ``--out``."""
-    from benchmark.paper.dataset import _ints
+    from benchmark.paper.dataset.cli import parse_ints
 
-    users = _ints(args.users)
+    users = parse_ints(args.users)
     if len(users) != 2 or users[0] == users[1]:
         raise DatasetError(f"--users {args.users!r}: expected two different user indices, e.g. 0,4")
-    protocol = Table2Protocol(user=users[0], other_user=users[1], train_seeds=_ints(args.train_seeds),
-                              test_seeds=_ints(args.test_seeds))
+    protocol = Table2Protocol(user=users[0], other_user=users[1], train_seeds=parse_ints(args.train_seeds),
+                              test_seeds=parse_ints(args.test_seeds))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     result = score(args.data, protocol, LearnConfig(epochs=args.epochs, seed=args.seed, members=args.members), rule)
     write(result, args.out)

@@ -23,7 +23,9 @@ import time
 import numpy as np
 
 from benchmark.method.grip_file import CalibrationError, read_calibration
-from benchmark.paper.dataset import MAX_EXCESS_N, _ints, finger_names_of, load_dataset, training_set
+from benchmark.paper.dataset import finger_names_of, load_dataset, training_set
+from benchmark.paper.dataset.cli import parse_ints
+from benchmark.scores.samples import MAX_EXCESS_N
 from benchmark.paper.table2 import TABLE2_MEMBERS
 from fsv.errors import InputError
 from fsv.learn import AMOUNT_LOSSES, LearnConfig, cross_validate, train
@@ -50,7 +52,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace):
-    where = {} if args.seeds is None else dict(seed=list(_ints(args.seeds)))
+    where = {} if args.seeds is None else dict(seed=list(parse_ints(args.seeds)))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     try:
         grips = None if args.grip is None else read_calibration(args.grip)

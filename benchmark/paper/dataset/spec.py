@@ -1,0 +1,109 @@
+"""A dataset's grid of scenarios and its sources: :class:`DatasetSpec`, and the episodes' names."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+
+import numpy as np
+
+from benchmark.errors import ScenarioError, DatasetError
+from benchmark.world.scenario import Scenario
+
+
+FORMAT = "fsv-bench-dataset"
+VERSION = 2  # version 1 had no digests
+KINEMATICS = ("algebraic", "central", "gaussian", "oracle")
+CONTACTS = ("tracker", "error-model", "oracle")
+_AX = "xyz"
+
+
+@dataclass(frozen=True)
+class DatasetSpec:
+    """Which episodes a dataset holds and how its samples are made.
+
+    Attributes:
+        tasks: Task names (see ``benchmark.TASKS``).
+        users, grasps, masses: Indices into ``sim_assets`` lists.
+        seeds: Scenario seeds.
+        duration_s: Episode length in [s]; None takes each task's default.
+        fps: Frame rate in [Hz].
+        noise_m: Depth noise of the scenarios [m]; it sets the tracker-like pose errors that the
+            kinematics are differentiated from (``benchmark.world.pose_error``).
+        kinematics: Kinematics behind the features and the decomposition: a differentiator of
+            ``benchmark.world.motion`` ("algebraic", "central", "gaussian") on the observed poses, or
+            "oracle" (the truth). On tracked poses "algebraic" is the reference method's
+            (``fsv.method.reference.TRACKED_POSES``).
+        contacts: Source of the contacts (see the module docstring): "tracker" (render and track
+            each episode: the method's contacts and poses), "error-model" (the truth's with the
+            paper's contact-point errors) or "oracle" (the truth).
+        tactile_noise_n: Noise of the simulated tactile sensors (``benchmark.world.tactile``), [N].
+        max_gap_n: Samples whose vision and tactile net forces differ by more than this are dropped, [N].
+        min_fingers: Frames with fewer fingers in contact are dropped.
+    """
+
+    tasks: tuple = ("lift",)
+    users: tuple = (0,)
+    grasps: tuple = (0,)
+    masses: tuple = (0,)
+    seeds: tuple = (0,)
+    duration_s: float | None = None
+    fps: float = 30.0
+    noise_m: float = 0.01
+    kinematics: str = "algebraic"
+    contacts: str = "tracker"
+    tactile_noise_n: float = 0.1
+    max_gap_n: float = 1.5
+    min_fingers: int = 2
+
+    def __post_init__(self):
+        object.__setattr__(self, "tasks", tuple(str(t) for t in self.tasks))
+        for name in ("users", "grasps", "masses", "seeds"):
+            vals = tuple(getattr(self, name))
+            if not vals or any(isinstance(v, bool) or int(v) != v or v < 0 for v in vals):
+                raise DatasetError(f"{name} must be a non-empty list of non-negative integers, got {vals!r}")
+            object.__setattr__(self, name, tuple(int(v) for v in vals))
+        if not self.tasks:
+            raise DatasetError("tasks must name at least one task")
+        for name, accepted in (("kinematics", KINEMATICS), ("contacts", CONTACTS)):
+            if getattr(self, name) not in accepted:
+                raise DatasetError(f"{name} source must be one of {accepted}, got {getattr(self, name)!r}")
+        if not (np.isfinite(self.tactile_noise_n) and self.tactile_noise_n >= 0):
+            raise DatasetError(f"tactile_noise_n must be >= 0 N, got {self.tactile_noise_n!r}")
+        if not (np.isfinite(self.noise_m) and self.noise_m >= 0):
+            raise DatasetError(f"noise_m must be >= 0 m, got {self.noise_m!r}")
+        if not (np.isfinite(self.max_gap_n) and self.max_gap_n > 0):
+            raise DatasetError(f"max_gap_n must be > 0 N, got {self.max_gap_n!r}")
+        if int(self.min_fingers) < 2:
+            raise DatasetError(f"min_fingers must be >= 2 (internal forces need two fingers), got {self.min_fingers!r}")
+        self._check_grid()
+
+    def _check_grid(self) -> None:
+        """Every task, user, grasp and mass exists and the duration suits every task (before any work)."""
+        from benchmark.world.assets import validate
+
+        try:
+            base = Scenario(noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)
+            for t in self.tasks:
+                validate(replace(base, task=t))
+            for name, values in (("user", self.users), ("grasp", self.grasps), ("mass", self.masses)):
+                for v in values:
+                    validate(replace(base, task=self.tasks[0], **{name: v}))
+        except ScenarioError as e:
+            raise DatasetError(str(e)) from None
+
+    def scenarios(self) -> list[Scenario]:
+        """Every scenario of the grid, in a fixed order."""
+        return [
+            Scenario(task=t, user=u, grasp=g, mass=m, seed=s, noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)
+            for t in self.tasks for u in self.users for g in self.grasps for m in self.masses for s in self.seeds
+        ]
+
+    def as_dict(self) -> dict:
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+
+
+def episode_id(sc: Scenario) -> str:
+    """File stem of a scenario's table, e.g. ``lift_u0_g1_m2_s3``."""
+    return f"{sc.task}_u{sc.user}_g{sc.grasp}_m{sc.mass}_s{sc.seed}"
+
+

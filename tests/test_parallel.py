@@ -1,0 +1,79 @@
+"""benchmark.parallel: jobs in this process or a local pool, their progress, and workers that end with their parent."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from benchmark.parallel import report_progress, run_jobs
+
+
+def _square_reporting(x):
+    report_progress(x)
+    return x * x
+
+
+def test_in_process_jobs_give_their_results_and_report_their_progress():
+    heard = []
+    assert sorted(run_jobs(_square_reporting, [1, 2, 3], on_progress=heard.append)) == [(0, 1), (1, 4), (2, 9)]
+    assert heard == [1, 2, 3]
+    report_progress(5)  # nobody listens any more: nothing happens
+
+
+JOBS = textwrap.dedent("""
+    import os, sys, time
+    from benchmark.parallel import report_progress, run_jobs
+
+    def square(x):
+        report_progress(x)
+        return x * x
+
+    def sleep(x):
+        print(os.getpid(), flush=True)
+        time.sleep(60)
+
+    if __name__ == "__main__":
+        if sys.argv[1] == "square":
+            heard = []
+            print(sorted(run_jobs(square, [1, 2, 3, 4], workers=2, on_progress=heard.append)), sorted(heard))
+        else:
+            list(run_jobs(sleep, [0, 1], workers=2))
+""")
+
+
+def test_a_pool_gives_every_result_and_hears_the_workers_progress(tmp_path):
+    (tmp_path / "jobs.py").write_text(JOBS)
+    out = subprocess.run([sys.executable, "jobs.py", "square"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[(0, 1), (1, 4), (2, 9), (3, 16)] [1, 2, 3, 4]"
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
+def test_no_worker_outlives_its_parent_killed_by_sigkill(tmp_path):
+    (tmp_path / "jobs.py").write_text(JOBS)
+    parent = subprocess.Popen([sys.executable, "jobs.py", "sleep"], cwd=tmp_path, stdout=subprocess.PIPE, text=True,
+                              env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    try:
+        workers = [int(parent.stdout.readline()) for _ in range(2)]
+    finally:
+        os.kill(parent.pid, signal.SIGKILL)
+        parent.wait(timeout=10)
+    deadline = time.monotonic() + 10
+    alive = workers
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.2)
+        alive = [p for p in workers if os.path.exists(f"/proc/{p}") and "Z" not in _state(p)]
+    assert not alive, f"workers {alive} outlived their parent"
+
+
+def _state(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "gone"
