@@ -42,3 +42,9 @@ def finite(name: str, arr: np.ndarray) -> None:
     """Raises :class:`InputError` if ``arr`` holds NaN or inf."""
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} must be finite; it holds {int(np.sum(~np.isfinite(arr)))} NaN/inf values")
+
+
+def positive(name: str, value, what: str = "a finite number > 0", error: type = InputError) -> None:
+    """Raises ``error`` ("``name`` must be ``what``, got ``value``") unless ``value`` is finite and > 0."""
+    if not (np.isfinite(value) and value > 0):
+        raise error(f"{name} must be {what}, got {value!r}")

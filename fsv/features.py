@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsv._check import as_array, finite, same_length
+from fsv._check import as_array, finite, positive, same_length
 from fsv.errors import InputError
 from fsv.linalg import rows_mt
 from fsv.models import ObjectModel
@@ -145,8 +145,7 @@ def grasp_features(
     if len(kinematics) != len(contacts):
         raise InputError(f"kinematics has {len(kinematics)} frames but contacts has {len(contacts)}")
     for name, v in (("min_force_n", min_force_n), ("min_torque_nm", min_torque_nm)):
-        if not (np.isfinite(v) and v > 0):
-            raise InputError(f"{name} must be a positive number, got {v!r}")
+        positive(name, v, "a positive number")
     F_c, tau_c = contact_wrench(kinematics, model, gravity)
     finite("net contact force", F_c)
     finite("net contact torque", tau_c)

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsv._check import as_array, finite
+from fsv._check import as_array, finite, positive
 from fsv.errors import InputError
 
 
@@ -39,8 +39,7 @@ class ObjectModel:
         finite("ObjectModel.inertia", inertia)
         if np.any(size <= 0):
             raise InputError(f"ObjectModel.size_m must be positive, got {size}")
-        if not (np.isfinite(self.mass_kg) and self.mass_kg > 0):
-            raise InputError(f"ObjectModel.mass_kg must be > 0, got {self.mass_kg!r}")
+        positive("ObjectModel.mass_kg", self.mass_kg, "> 0")
         if not np.allclose(inertia, inertia.T) or np.any(np.linalg.eigvalsh(inertia) <= 0):
             raise InputError("ObjectModel.inertia must be symmetric positive definite")
         for name in ("friction", "table_friction"):

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsv._check import as_array, finite, same_length
+from fsv._check import as_array, finite, positive, same_length
 from fsv.errors import InputError
 
 
@@ -32,8 +32,7 @@ class DepthVideo:
         depth = as_array("DepthVideo.depth_m", self.depth_m, (None, None, None), np.float32)
         if not np.all(np.isfinite(depth)) or np.any(depth < 0):
             raise InputError("DepthVideo.depth_m must be finite and >= 0 (0 = no measurement)")
-        if not (np.isfinite(self.fps) and self.fps > 0):
-            raise InputError(f"DepthVideo.fps must be a positive number of Hz, got {self.fps!r}")
+        positive("DepthVideo.fps", self.fps, "a positive number of Hz")
         object.__setattr__(self, "depth_m", depth)
         object.__setattr__(self, "fps", float(self.fps))
 

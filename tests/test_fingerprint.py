@@ -2,8 +2,14 @@
 
 import pathlib
 
-from benchmark.fingerprint import (RESULTS_ENTRY_POINTS, ROOT, WORLD_ENTRY_POINTS, code_of, results_fingerprint,
-                                   world_fingerprint)
+from benchmark.fingerprint import (
+    RESULTS_ENTRY_POINTS,
+    ROOT,
+    WORLD_ENTRY_POINTS,
+    code_of,
+    results_fingerprint,
+    world_fingerprint,
+)
 
 
 def _tree(tmp_path) -> pathlib.Path:

@@ -277,7 +277,7 @@ def _same_state(a, b) -> bool:
 
 def _rewrite(state, path):
     """Writes a model file's state as it is (a consistent zip, whatever the digest says)."""
-    from fsv.learn import _to_arrays
+    from fsv.learn.model import _to_arrays
 
     with open(path, "wb") as fh:
         np.savez(fh, **_to_arrays(state))
@@ -332,7 +332,8 @@ def test_the_forward_pass_equals_torchs(small_file):
     """fsv.learn.forward on the stored layers equals the torch network they came from."""
     import torch
 
-    from fsv.learn import LearnConfig, _mlp, forward
+    from fsv.learn import LearnConfig, forward
+    from fsv.learn.nets import _mlp
 
     m = load(small_file)
     z = np.random.default_rng(0).normal(size=(50, 14))

@@ -14,6 +14,9 @@ from benchmark.errors import RenderError  # noqa: E402
 
 # The module: the attribute `benchmark.camera.render` is the function render() of the public API.
 R = importlib.import_module("benchmark.camera.render")
+C = importlib.import_module("benchmark.camera.camera")
+S = importlib.import_module("benchmark.camera.scene")
+G = importlib.import_module("benchmark.camera.gl")
 
 FINGERS = ("thumb", "index")
 BOX_HALF = np.array([0.0855, 0.0555, 0.03])
@@ -49,8 +52,8 @@ def scene_labels(model):
         name = model.body(model.geom_bodyid[g]).name
         fingers = [k for k, f in enumerate(FINGERS) if name.startswith(f)]
         labels[g] = (
-            R.LABEL_TABLE if name == "world" else R.LABEL_BOX if name == "box" else 0 if name == "marker"
-            else R.LABEL_FINGER0 + fingers[0] if fingers else R.LABEL_PALM
+            S.LABEL_TABLE if name == "world" else S.LABEL_BOX if name == "box" else 0 if name == "marker"
+            else S.LABEL_FINGER0 + fingers[0] if fingers else S.LABEL_PALM
         )
     return labels
 
@@ -60,8 +63,8 @@ def world():
     model = mujoco.MjModel.from_xml_string(scene_xml())
     data = mujoco.MjData(model)
     # the DS325 intrinsics, posed in front of the test scene (the hand stays clear of the box)
-    camera = dataclasses.replace(R.load_camera(), T_world_cam=R.look_at([0.2, -0.48, 0.36], [0.0, 0.0, 0.08]))
-    return model, data, camera, R.DepthRenderer(model, camera, scene_labels(model))
+    camera = dataclasses.replace(C.load_camera(), T_world_cam=C.look_at([0.2, -0.48, 0.36], [0.0, 0.0, 0.08]))
+    return model, data, camera, G.DepthRenderer(model, camera, scene_labels(model))
 
 
 def set_box(model, data, pos, quat):
@@ -79,7 +82,7 @@ def rays_world(camera):
 
 
 def test_camera_from_yaml_has_the_ds325_field_of_view_and_looks_at_the_target():
-    cam = R.load_camera()
+    cam = C.load_camera()
     assert (cam.width, cam.height) == (320, 240)
     assert np.rad2deg(2 * np.arctan(cam.width / 2 / cam.K[0, 0])) == pytest.approx(74.0)
     assert np.rad2deg(2 * np.arctan(cam.height / 2 / cam.K[1, 1])) == pytest.approx(58.0)
@@ -90,19 +93,19 @@ def test_camera_from_yaml_has_the_ds325_field_of_view_and_looks_at_the_target():
     np.testing.assert_allclose(cam.K @ p[:3] / p[2], [cam.K[0, 2], cam.K[1, 2], 1.0], atol=1e-9)
     # image "up" is world up: the camera's y axis (down in the image) points down in the world
     assert cam.T_world_cam[2, 1] < 0
-    calib = R.camera_calibration()
+    calib = C.camera_calibration()
     np.testing.assert_array_equal(calib.K, cam.K)
     np.testing.assert_array_equal(calib.T_world_cam, cam.T_world_cam)
 
 
 def test_gl_from_cv_flips_y_and_z():
-    np.testing.assert_array_equal(R.GL_FROM_CV @ [0.1, 0.2, 0.5, 1.0], [0.1, -0.2, -0.5, 1.0])
-    np.testing.assert_array_equal(R.GL_FROM_CV @ R.GL_FROM_CV, np.eye(4))
+    np.testing.assert_array_equal(C.GL_FROM_CV @ [0.1, 0.2, 0.5, 1.0], [0.1, -0.2, -0.5, 1.0])
+    np.testing.assert_array_equal(C.GL_FROM_CV @ C.GL_FROM_CV, np.eye(4))
 
 
 def test_clip_from_cam_puts_the_opencv_pixel_at_the_gl_pixel_centre_with_rows_top_first():
-    cam = R.load_camera()
-    P = R.clip_from_cam(cam)
+    cam = C.load_camera()
+    P = C.clip_from_cam(cam)
     rng = np.random.default_rng(0)
     X = np.column_stack([rng.uniform(-0.3, 0.3, 50), rng.uniform(-0.2, 0.2, 50), rng.uniform(0.2, 2.0, 50)])
     clip = np.column_stack([X, np.ones(50)]) @ P.T
@@ -131,7 +134,7 @@ def test_a_point_appears_where_the_opencv_calibration_projects_it(world, u, v):
     mujoco.mj_kinematics(model, data)
     depth, labels = renderer.render(data.xpos, data.xmat)
     data.mocap_pos[probe] = [0, 0, -1]
-    seen = labels == R.LABEL_PALM  # the probe is a collidable geom of a non-box body
+    seen = labels == S.LABEL_PALM  # the probe is a collidable geom of a non-box body
     seen &= depth < 0.45
     oc = origin - centre
     p, dd = rays @ oc, np.sum(rays * rays, axis=-1)
@@ -153,13 +156,13 @@ def test_capsule_depth_is_the_exact_ray_capsule_distance(world):
     set_box(model, data, [0, 0, -1], [1, 0, 0, 0])
     depth, labels = renderer.render(data.xpos, data.xmat)
     origin, rays = camera.T_world_cam[:3, 3], rays_world(camera)
-    fingers = labels >= R.LABEL_FINGER0
+    fingers = labels >= S.LABEL_FINGER0
     assert fingers.sum() > 150
     d = rays[fingers]
     dd = np.sum(d * d, axis=-1)
     best = np.full(len(d), np.inf)
     for g in range(model.ngeom):
-        if R.LABEL_FINGER0 <= scene_labels(model)[g]:
+        if S.LABEL_FINGER0 <= scene_labels(model)[g]:
             half = model.geom_size[g, 1] if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_CAPSULE else 0.0
             axis = data.geom_xmat[g].reshape(3, 3)[:, 2]
             r = model.geom_size[g, 0]
@@ -193,7 +196,7 @@ def test_top_face_depth_equals_ray_plane_distance(world, pos, quat):
     on_top = (np.abs(local[..., 0]) < BOX_HALF[0] - margin) & (np.abs(local[..., 1]) < BOX_HALF[1] - margin)
     on_top &= (t > 0) & ((o - c) @ n > BOX_HALF[2])  # the top face faces the camera
     assert on_top.sum() > 800
-    assert np.all(labels[on_top] == R.LABEL_BOX)
+    assert np.all(labels[on_top] == S.LABEL_BOX)
     err = np.abs(depth[on_top] - t[on_top])
     assert err.max() < 1e-3, err.max()
     assert np.median(err) < 1e-4
@@ -205,7 +208,7 @@ def test_backprojected_box_pixels_lie_on_the_box_surface(world, pos, quat):
     set_box(model, data, pos, quat)
     depth, labels = renderer.render(data.xpos, data.xmat)
     calib = camera.calibration()
-    pts_cam = calib.backproject(depth)[labels == R.LABEL_BOX]
+    pts_cam = calib.backproject(depth)[labels == S.LABEL_BOX]
     pts = pts_cam @ calib.T_world_cam[:3, :3].T + calib.T_world_cam[:3, 3]
     c, Rb = data.xpos[model.body("box").id], data.xmat[model.body("box").id].reshape(3, 3)
     local = np.abs((pts - c) @ Rb)
@@ -222,14 +225,14 @@ def test_world_labels_mark_table_box_palm_and_each_finger():
     from benchmark.world.assets import build_world
 
     w = build_world(Scenario())
-    labels = R.world_labels(w)
-    assert labels[w.table_geom] == R.LABEL_TABLE and labels[w.box_geom] == R.LABEL_BOX
+    labels = S.world_labels(w)
+    assert labels[w.table_geom] == S.LABEL_TABLE and labels[w.box_geom] == S.LABEL_BOX
     palm = w.model.body_geomadr[w.palm_body]
-    assert labels[palm] == R.LABEL_PALM
+    assert labels[palm] == S.LABEL_PALM
     for k, finger in enumerate(w.hand.finger_names):
         tip = w.model.site_bodyid[w.tip_site[k]]
         tip_geoms = np.flatnonzero(w.model.geom_bodyid == tip)
-        assert len(tip_geoms) > 0 and np.all(labels[tip_geoms] == R.LABEL_FINGER0 + k), finger
+        assert len(tip_geoms) > 0 and np.all(labels[tip_geoms] == S.LABEL_FINGER0 + k), finger
     assert sorted(np.unique(labels)) == [1, 2, 9, 10, 11, 12, 13, 14]
 
 
@@ -261,12 +264,12 @@ def test_depth_agrees_with_mujocos_own_renderer_from_the_same_camera(world):
     data.qpos[3:7] /= np.linalg.norm(data.qpos[3:7])
     mujoco.mj_kinematics(model, data)
     mujoco.mj_camlight(model, data)  # MuJoCo's camera pose
-    ours, labels = R.DepthRenderer(model, camera, scene_labels(model)).render(data.xpos, data.xmat)
+    ours, labels = G.DepthRenderer(model, camera, scene_labels(model)).render(data.xpos, data.xmat)
     with mujoco.Renderer(model, camera.height, camera.width) as peer:
         peer.enable_depth_rendering()
         peer.update_scene(data, camera="ds325")
         theirs = peer.render()
-    both = (ours > 0) & (ours < 1.5) & (labels != R.LABEL_NONE)
+    both = (ours > 0) & (ours < 1.5) & (labels != S.LABEL_NONE)
     diff = np.abs(ours - theirs)[both]
     assert both.sum() > 30000
     assert np.median(diff) < 1e-5
@@ -277,7 +280,7 @@ def test_renderers_share_one_gl_context_and_stay_usable(world):
     model, data, camera, renderer = world
     set_box(model, data, *BOX_POSES[0])
     before = renderer.render(data.xpos, data.xmat)[0]
-    other = R.DepthRenderer(model, camera, scene_labels(model))
+    other = G.DepthRenderer(model, camera, scene_labels(model))
     assert other._gl is renderer._gl
     other.render(data.xpos, data.xmat)
     del other
@@ -290,7 +293,7 @@ def test_a_collected_renderer_frees_its_gl_objects(world):
     from OpenGL import GL
 
     model, data, camera, renderer = world
-    other = R.DepthRenderer(model, camera, scene_labels(model))
+    other = G.DepthRenderer(model, camera, scene_labels(model))
     objects = other._objects
     assert len(objects.buffers) == 8 and len(objects.programs) == 2  # meshes: 2 attributes + indices; capsules: 4 + 1
     del other
@@ -314,7 +317,7 @@ def test_rendering_is_deterministic(world):
 def test_labels_must_match_the_model(world):
     model, _, camera, _ = world
     with pytest.raises(Exception, match=f"shape \\({model.ngeom},\\)"):
-        R.DepthRenderer(model, camera, np.ones(3, dtype=np.uint8))
+        G.DepthRenderer(model, camera, np.ones(3, dtype=np.uint8))
 
 
 def test_missing_gl_gives_a_render_error_naming_the_library_and_packages(monkeypatch):
@@ -324,11 +327,11 @@ def test_missing_gl_gives_a_render_error_naming_the_library_and_packages(monkeyp
         raise OSError("libEGL.so.1: cannot open shared object file")
 
     monkeypatch.setattr(pyrender, "OffscreenRenderer", no_egl)
-    monkeypatch.setattr(R, "_OFFSCREEN", {})
-    monkeypatch.setattr(R, "_missing_libraries", lambda: ["libEGL.so.1"])
+    monkeypatch.setattr(G, "_OFFSCREEN", {})
+    monkeypatch.setattr(G, "_missing_libraries", lambda: ["libEGL.so.1"])
     model = mujoco.MjModel.from_xml_string(scene_xml())
     with pytest.raises(RenderError) as info:
-        R.DepthRenderer(model, R.load_camera(), scene_labels(model))
+        G.DepthRenderer(model, C.load_camera(), scene_labels(model))
     msg = str(info.value)
     assert "libEGL.so.1 cannot be loaded" in msg
     assert "apt-get install libegl1 libgl1-mesa-dri" in msg
@@ -336,7 +339,7 @@ def test_missing_gl_gives_a_render_error_naming_the_library_and_packages(monkeyp
 
 
 def test_missing_libraries_is_empty_on_this_machine():
-    assert R._missing_libraries() == []
+    assert G._missing_libraries() == []
 
 
 # --- render(episode): the whole stage on the benchmark's world ---------------------------------
@@ -370,7 +373,7 @@ def test_render_gives_one_frame_per_truth_frame_with_calibration_and_labels(rend
     assert ep.depth.depth_m.dtype == np.float32 and ep.labels.dtype == np.uint8
     assert ep.depth.fps == 30.0
     np.testing.assert_allclose(ep.depth.t, ep.truth.t)
-    np.testing.assert_array_equal(ep.calib.K, R.camera_calibration().K)
+    np.testing.assert_array_equal(ep.calib.K, C.camera_calibration().K)
     seen = set(np.unique(ep.labels).tolist())
     assert {1, 2, 9}.issubset(seen) and len(seen & {10, 11, 12, 13, 14}) >= 3
     valid = ep.depth.depth_m > 0
@@ -421,13 +424,13 @@ def test_a_simulated_lift_renders_one_frame_per_truth_frame_and_shows_box_and_fi
     T = int(round(sc.duration_s * sc.fps)) + 1  # frames at t = k / fps from 0 to the duration
     assert ep.depth.num_frames == len(ep.truth.t) == T == ep.labels.shape[0]
     np.testing.assert_allclose(ep.depth.t, ep.truth.t, atol=1e-9)
-    box_px = (ep.labels == R.LABEL_BOX).sum(axis=(1, 2))
+    box_px = (ep.labels == S.LABEL_BOX).sum(axis=(1, 2))
     assert box_px.min() > 1500  # the box is in view all along the lift
-    fingers = {int(v) for v in np.unique(ep.labels[-1]) if v >= R.LABEL_FINGER0}
+    fingers = {int(v) for v in np.unique(ep.labels[-1]) if v >= S.LABEL_FINGER0}
     assert len(fingers) >= 4  # the camera faces the fingers on the box's far face
     # the box's depth pixels back-project near the box's true pose (noise 1 cm, so a loose bound)
     k = T - 1
-    pts = ep.calib.backproject(ep.depth.depth_m[k])[(ep.labels[k] == R.LABEL_BOX) & (ep.depth.depth_m[k] > 0)]
+    pts = ep.calib.backproject(ep.depth.depth_m[k])[(ep.labels[k] == S.LABEL_BOX) & (ep.depth.depth_m[k] > 0)]
     world_pts = pts @ ep.calib.T_world_cam[:3, :3].T + ep.calib.T_world_cam[:3, 3]
     local = np.abs((world_pts - ep.truth.box_pos[k]) @ ep.truth.box_rot[k])
     half = ep.object_model.half_extents

@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy import optimize, stats
 
-from benchmark.camera.sensor import PRESETS, SENSORS, SensorModel, _incidence_cos, sensor_preset
+from benchmark.camera.sensor import PRESETS, SENSORS, SensorModel, sensor_preset
+from benchmark.camera.sensor_kernels import _incidence_cos
 from benchmark.errors import BenchmarkError
 
 H, W = 240, 320

@@ -19,7 +19,11 @@ from benchmark.atomic import write_text
 from benchmark.suites import get_suite
 from benchmark.world import living
 from benchmark.world.humanness import suite_humanness
-from benchmark.world.tasks.human import ROTATION_PEAK_ALPHA, SHAKE_PEAK_ACC, TRANSPORT_PEAK_ACC
+from benchmark.world.tasks.human import (
+    ROTATION_PEAK_ALPHA,
+    SHAKE_PEAK_ACC,
+    TRANSPORT_PEAK_ACC,
+)
 from fsv.provenance import provenance
 
 

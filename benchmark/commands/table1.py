@@ -16,8 +16,18 @@ from pathlib import Path
 from benchmark.atomic import write_bytes
 from benchmark.commands.pictures.fig4 import plot_fig4
 from benchmark.errors import ScenarioError
-from benchmark.paper.table1 import (MAX_SUPPORT_FRAMES, POSES_LABEL, SIX_AXIS_TASKS, Table1, episode_set,
-                                    pose_error_stats, rms_errors, score_episodes, support_sweep, tune)
+from benchmark.paper.table1 import (
+    MAX_SUPPORT_FRAMES,
+    POSES_LABEL,
+    SIX_AXIS_TASKS,
+    Table1,
+    episode_set,
+    pose_error_stats,
+    rms_errors,
+    score_episodes,
+    support_sweep,
+    tune,
+)
 from benchmark.world.motion import CALIBRATION_SEEDS, DECLARED
 from benchmark.world.truth import Truth
 

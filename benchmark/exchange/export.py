@@ -21,13 +21,9 @@ from benchmark.atomic import swap_folder
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites import SUITES
+    from benchmark.suites.options import add_suite_arguments
 
-    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
-    p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
-    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (suite.json, <episode>.npz)")
-    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz)", workers=False)
 
 
 def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True) -> dict:

@@ -18,15 +18,11 @@ import time
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites import SUITES
+    from benchmark.suites.options import add_suite_arguments
 
-    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
-    p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
+    add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
     p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
-    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (scores.json, report.md, junit.xml)")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
-    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def estimate_paths(suite, folder: pathlib.Path) -> dict:

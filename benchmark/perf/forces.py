@@ -15,7 +15,7 @@ included; call time over frames, median of ``repeats`` runs). cvxpy is timed per
 (``problem.solve``), its runs interleaved with ours; median over frames. The ratio is the median
 over runs of cvxpy's median frame time over ours. Both wall-clock and process CPU time are printed: the machine is shared, so the CPU times
 and the ratios are the steadier numbers.
-Targets (issue 5): <= 0.15 ms per frame and >= 10x faster than cvxpy.
+Targets: <= 0.15 ms per frame and >= 10x faster than cvxpy.
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 Run: ``python -m benchmark.perf.render [--frames N]``. It simulates a short lift of the
 default scenario, then renders its frames at 320 x 240 three ways in this process:
 
-- this benchmark's renderer (:class:`benchmark.camera.render.DepthRenderer`, in pyrender's EGL
+- this benchmark's renderer (:class:`benchmark.camera.gl.DepthRenderer`, in pyrender's EGL
   context): exact depth + label image per frame;
 - the same + the sensor model (what ``render()`` does per frame);
 - MuJoCo's ``mujoco.Renderer`` with depth rendering (EGL) from an identical camera (same
@@ -28,7 +28,8 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
-from benchmark.camera.render import GL_FROM_CV, Camera, DepthRenderer, load_camera  # noqa: E402
+from benchmark.camera.camera import GL_FROM_CV, Camera, load_camera  # noqa: E402
+from benchmark.camera.gl import DepthRenderer  # noqa: E402
 
 
 def add_mujoco_camera(spec, camera: Camera, name: str = "depth_camera"):
@@ -95,7 +96,7 @@ def scene_frames(num: int):
 
 def main(argv=None) -> dict:
     """Measures and prints renderer speeds; returns them as a dict."""
-    from benchmark.camera.render import world_labels
+    from benchmark.camera.scene import world_labels
     from benchmark.camera.sensor import SENSORS, sensor_preset
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])

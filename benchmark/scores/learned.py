@@ -1,13 +1,12 @@
-"""The learning block of ``fsv-bench``: learned human-like forces on the command's scenario.
+"""The learned forces against the truth: a method's final forces (nominal plus learned internal forces).
 
-The shipped model (:func:`fsv.learn.default_model`, or ``--internal-model FILE``) predicts the
-internal forces from the episode's kinematics and contacts (the same inputs as the force stage,
-``benchmark.scores.forces.stage_inputs``, labelled the same way); the reconstruction SOCP (eq. 14)
-turns them into full forces (:func:`fsv.learn.learned_forces`). The score is the paper's Table 2
-metric on the frames the dataset's sample rules keep (valid kinematics, at least two fingers in
-contact, vision and tactile net forces within 1.5 N, see :func:`benchmark.paper.dataset.sample_mask`,
-and the plausibility rule on the decomposition's nominal forces,
-:func:`benchmark.paper.dataset.nominal_excess_n`) and whose program was solved: for finger k at frame i
+The method's internal-force stage (the shipped model, :func:`fsv.learn.default_model`, or another)
+predicts the internal forces from the episode's kinematics and contacts; the reconstruction SOCP
+(eq. 14) turns them into full forces. The score is the paper's Table 2 metric on the frames the
+dataset's sample rules keep (valid kinematics, at least two fingers in contact, vision and tactile
+net forces within 1.5 N, see :func:`benchmark.scores.samples.sample_mask`, and the plausibility
+rule on the decomposition's nominal forces, :func:`benchmark.scores.samples.nominal_excess_n`) and
+whose program was solved: for finger k at frame i
 with true normal force f >= 1 N, |f̂ - f| / f in percent, mean and standard deviation. The same
 metric over every solved frame with at least two fingers in contact (no sample rule) is reported
 beside it (``rel_err_pct_mean_all``).

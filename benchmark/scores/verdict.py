@@ -1,9 +1,47 @@
-"""Gates on a suite's aggregates, and the verdict as a report and as JUnit XML for CI systems."""
+"""The one gate system: gates on aggregates of episodes' metrics (a suite's, or one episode's),
+the verdict as a report and as JUnit XML for CI systems."""
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+
+from benchmark.scores.aggregate import aggregate_all
+
+
+@dataclass(frozen=True)
+class Gate:
+    """A pass/fail rule on an aggregate of per-episode metrics (over a suite, or of one episode).
+
+    Attributes:
+        metric: Per-episode metric name (see :mod:`benchmark.scores.episode`).
+        op: ``"<="`` or ``">="``.
+        limit: The threshold, in the metric's unit.
+        statistic: ``"median"`` or ``"mean"`` over the suite's episodes.
+        measured: What the reference method measured when the gate was set (documentation).
+    """
+
+    metric: str
+    op: str
+    limit: float
+    statistic: str = "median"
+    measured: str = ""
+
+    def __post_init__(self):
+        if self.op not in ("<=", ">="):
+            raise ValueError(f"Gate.op must be '<=' or '>=', got {self.op!r}")
+        if self.statistic not in ("median", "mean"):
+            raise ValueError(f"Gate.statistic must be 'median' or 'mean', got {self.statistic!r}")
+
+    @property
+    def name(self) -> str:
+        return f"{self.statistic} {self.metric} {self.op} {self.limit:g}"
+
+    def holds(self, value: float) -> bool:
+        """Whether an aggregate value passes (NaN never does)."""
+        if value != value:
+            return False
+        return value <= self.limit if self.op == "<=" else value >= self.limit
 
 
 @dataclass(frozen=True)
@@ -85,3 +123,13 @@ def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_
     for r in rows:
         lines.append(f"| {r['episode']} | " + " | ".join(_fmt(r[m] if r[m] == r[m] else None) for m in metrics) + " |")
     return "\n".join(lines) + "\n"
+
+
+def check_values(gates, values: dict) -> list[GateResult]:
+    """Checks gates on one episode's values (``{metric: value}``): its median and mean are the value."""
+    return check_gates(gates, aggregate_all([values], sorted({g.metric for g in gates})))
+
+
+def gate_rows(results: list[GateResult]) -> list[dict]:
+    """The results as JSON rows ``{"name", "value", "passed"}`` (no interval: one episode has none)."""
+    return [{"name": r.name, "value": r.value, "passed": r.passed} for r in results]

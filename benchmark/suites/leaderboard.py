@@ -31,14 +31,9 @@ VARIANTS = {
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites import SUITES
+    from benchmark.suites.options import add_suite_arguments
 
-    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
-    p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
-    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (leaderboard.md, <variant>/)")
-    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
-    p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_suite_arguments(p, out_help="output folder (leaderboard.md, <variant>/)")
 
 
 def run(args: argparse.Namespace) -> list:

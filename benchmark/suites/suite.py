@@ -4,42 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from benchmark.scores.verdict import Gate  # noqa: F401 (a suite's gates; the one gate system is the scores')
 from benchmark.world.scenario import Scenario
-
-
-@dataclass(frozen=True)
-class Gate:
-    """A pass/fail rule on an aggregate of a suite.
-
-    Attributes:
-        metric: Per-episode metric name (see :mod:`benchmark.scores.episode`).
-        op: ``"<="`` or ``">="``.
-        limit: The threshold, in the metric's unit.
-        statistic: ``"median"`` or ``"mean"`` over the suite's episodes.
-        measured: What the reference method measured when the gate was set (documentation).
-    """
-
-    metric: str
-    op: str
-    limit: float
-    statistic: str = "median"
-    measured: str = ""
-
-    def __post_init__(self):
-        if self.op not in ("<=", ">="):
-            raise ValueError(f"Gate.op must be '<=' or '>=', got {self.op!r}")
-        if self.statistic not in ("median", "mean"):
-            raise ValueError(f"Gate.statistic must be 'median' or 'mean', got {self.statistic!r}")
-
-    @property
-    def name(self) -> str:
-        return f"{self.statistic} {self.metric} {self.op} {self.limit:g}"
-
-    def holds(self, value: float) -> bool:
-        """Whether an aggregate value passes (NaN never does)."""
-        if value != value:
-            return False
-        return value <= self.limit if self.op == "<=" else value >= self.limit
 
 
 @dataclass(frozen=True)

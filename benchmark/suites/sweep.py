@@ -37,15 +37,11 @@ PLOTTED = ("box_pos_err_mm", "contact_err_mm_std", "acc_err_rms", "net_force_err
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.evaluate import add_method_arguments
-    from benchmark.suites import SUITES
+    from benchmark.suites.options import add_suite_arguments
 
-    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    add_suite_arguments(p, out_help="output folder (sweep.json, sweep.md, sweep.png)", sensor=False)
     p.add_argument("--axis", required=True, help=f"one of {', '.join(AXES)}")
     p.add_argument("--values", required=True, help="comma-separated values along the axis")
-    p.add_argument("--out", required=True, type=pathlib.Path, help="output folder (sweep.json, sweep.md, sweep.png)")
-    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
-    p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_method_arguments(p)
 
 

@@ -7,8 +7,9 @@
 * ``"oracle"``: the simulator's true kinematics, labelled ``method="oracle"`` (an ablation: every
   report must say so).
 
-Observed poses: the tracker (issue 6) is not part of the benchmark yet, so the poses are the true
-ones corrupted by the tracker-like error model of ``benchmark.world.pose_error``.
+Observed poses, where no tracker runs (Table 1's command, the cheaper dataset sources): the true
+poses corrupted by the tracker-like error model of ``benchmark.world.pose_error``; where the method
+runs, its tracker's poses are passed in (``poses``).
 
 Declared parameters (``DECLARED``): central differences are the textbook three-point differences
 (step 1), declared in advance. The Gaussian (sigma, truncation) and the algebraic window and

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fsv._check import as_array, same_length
+from fsv._check import as_array, positive, same_length
 from fsv.errors import InputError
 from fsv.forces.environment import TableContacts, table_contacts
 from fsv.forces.program import OK, Layout, Program, Weights
@@ -144,8 +144,7 @@ class ForceSettings:
                 raise InputError(f"ForceSettings.{name} must be a finite number >= 0, got {v!r}")
         for name in ("table_weight", "slack_weight"):
             v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise InputError(f"ForceSettings.{name} must be a finite number > 0, got {v!r}")
+            positive(f"ForceSettings.{name}", v)
         if isinstance(self.max_iter, bool) or not isinstance(self.max_iter, (int, np.integer)) or self.max_iter < 1:
             raise InputError(f"ForceSettings.max_iter must be a positive integer, got {self.max_iter!r}")
         if not isinstance(self.static_retry, (bool, np.bool_)):

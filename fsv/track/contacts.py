@@ -39,6 +39,7 @@ from fsv.linalg import vm
 from fsv.models import ObjectModel
 from fsv.track.hand_system import box_signed_distance
 from fsv.types import Contacts, Poses
+from fsv._check import positive
 
 
 @dataclass(frozen=True)
@@ -95,8 +96,7 @@ class ContactConfig:
     def __post_init__(self):
         if not (np.isfinite(self.on_m) and np.isfinite(self.off_m) and self.off_m >= self.on_m):
             raise InputError(f"ContactConfig needs finite on_m <= off_m, got {self.on_m!r}, {self.off_m!r}")
-        if not (np.isfinite(self.slide_speed_m_s) and self.slide_speed_m_s > 0):
-            raise InputError(f"slide_speed_m_s must be > 0, got {self.slide_speed_m_s!r}")
+        positive("slide_speed_m_s", self.slide_speed_m_s, "> 0")
         if int(self.slide_frames) < 1:
             raise InputError(f"slide_frames must be >= 1 frame, got {self.slide_frames!r}")
         if not (np.isfinite(self.slide_stop_m_s) and 0 < self.slide_stop_m_s <= self.slide_speed_m_s):
@@ -104,8 +104,7 @@ class ContactConfig:
                              f"got {self.slide_stop_m_s!r}")
         if int(self.slide_window) < 1:
             raise InputError(f"slide_window must be >= 1 frame, got {self.slide_window!r}")
-        if not (np.isfinite(self.opposition_range_m) and self.opposition_range_m > 0):
-            raise InputError(f"opposition_range_m must be > 0, got {self.opposition_range_m!r}")
+        positive("opposition_range_m", self.opposition_range_m, "> 0")
         if int(self.opposition_min_fingers) < 1:
             raise InputError(f"opposition_min_fingers must be >= 1, got {self.opposition_min_fingers!r}")
         share = dict(self.finger_share)

@@ -1,6 +1,6 @@
 """The hand fit's normal equations in one compiled pass: data, free space, no interpenetration, closure.
 
-:meth:`fsv.track.hand.HandTracker._system` describes the residuals; this module evaluates them
+:meth:`fsv.track.hand.tracker.HandTracker._system` describes the residuals; this module evaluates them
 for one hand configuration, accumulating ``A = sum w J^T J`` (upper triangle), ``g = -sum w J^T r``,
 the robust cost and the count of explained points row by row, in a fixed order (scalar loops, no
 BLAS, no fast-math: the same bits on every BLAS kernel). The temporal-smoothness rows, which need

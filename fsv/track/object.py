@@ -38,6 +38,7 @@ from fsv.models import ObjectModel
 from fsv.track.camera import CameraRays
 from fsv.rotation import exp_so3, log_so3, project_to_so3
 from fsv.types import Calibration, DepthVideo, Poses
+from fsv._check import positive
 
 _FAR_M = 1.0  # background depth behind the box where no table is seen, [m] past the box
 
@@ -92,9 +93,7 @@ class BoxTrackerConfig:
             raise InputError(f"sigma_m must be None or > 0 metres, got {self.sigma_m!r}")
         for name in ("robust_k", "occluder_k", "silhouette_px", "prior_pos_m", "prior_rot_rad",
                      "search_pos_m", "search_rot_rad"):
-            v = getattr(self, name)
-            if not (np.isfinite(v) and v > 0):
-                raise InputError(f"BoxTrackerConfig.{name} must be > 0, got {v!r}")
+            positive(f"BoxTrackerConfig.{name}", getattr(self, name), "> 0")
         for name in ("iterations", "max_pixels", "particles"):
             if int(getattr(self, name)) < 1:
                 raise InputError(f"BoxTrackerConfig.{name} must be >= 1, got {getattr(self, name)!r}")

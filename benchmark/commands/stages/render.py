@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.camera.render import LABEL_BOX, render
+from benchmark.camera.render import render
+from benchmark.camera.scene import LABEL_BOX
 from benchmark.commands.pictures.depth_preview import preview_paths, write_preview
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 

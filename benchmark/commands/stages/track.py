@@ -14,7 +14,11 @@ from benchmark.errors import ScenarioError
 from benchmark.method import camera_input, run_method
 from benchmark.method.init import INIT_PERTURBATION
 from benchmark.scores.tracking import gate_report, score_tracking
-from benchmark.world.contact_error import PAPER_CONTACT_ERROR_MEAN_M, PAPER_CONTACT_ERROR_STD_M
+from benchmark.scores.verdict import gate_rows
+from benchmark.world.contact_error import (
+    PAPER_CONTACT_ERROR_MEAN_M,
+    PAPER_CONTACT_ERROR_STD_M,
+)
 
 PAPER_CONTACT_ERROR_MM = {"mean": round(PAPER_CONTACT_ERROR_MEAN_M * 1e3, 9), "std": round(PAPER_CONTACT_ERROR_STD_M * 1e3, 9)}
 """The paper's contact-point error per axis, [mm] (mean -1.55, std 6.13), beside ours in the block."""
@@ -49,7 +53,7 @@ def run(record: Run, options) -> StageResult:
     block = {
         **scores,
         "paper_contact_err_mm": PAPER_CONTACT_ERROR_MM,
-        "gates": gate_report(scores),
+        "gates": gate_rows(gate_report(scores)),
         "frames_per_s": T / elapsed,
         "frames_per_s_after_first": (T - 1) / (elapsed - first) if T > 1 and elapsed > first else float("nan"),
         "first_frame_s": first,
@@ -58,7 +62,7 @@ def run(record: Run, options) -> StageResult:
         "init_perturbation": {k: float(v) * scale for k, v in INIT_PERTURBATION.items()},
         "overlay": overlay.name,
     }
-    failed = [k for k, g in block["gates"].items() if not g["pass"]]
+    failed = [g["name"] for g in block["gates"] if not g["passed"]]
     paper = PAPER_CONTACT_ERROR_MM
     line = (
         f"tracking [{estimate.labels.get('tracker')}] ({block['frames_per_s_after_first']:.1f} frames/s after the "

@@ -8,12 +8,10 @@ fails, after writing every file.
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
 from benchmark.commands.stage import Run, Stage, StageResult
 from benchmark.scores.aggregate import aggregate_all
 from benchmark.scores.episode import METRICS, score_episode
-from benchmark.scores.verdict import check_gates
+from benchmark.scores.verdict import check_gates, gate_rows
 from benchmark.suites import get_suite
 from benchmark.suites.evaluate import load_gates
 
@@ -35,7 +33,7 @@ def run(record: Run, options) -> StageResult:
         "gates_from": gates_file or "smoke suite",
         "method": record.estimate.labels,
         "metrics": metrics,
-        "gates": [{k: v for k, v in asdict(r).items() if k != "ci"} for r in results],
+        "gates": gate_rows(results),
     }
     line = (f"verdict: {'FAIL' if failed else 'pass'} ({len(results) - len(failed)} of {len(results)} gates "
             f"of the {gates_file or 'smoke suite'} hold" + (f"; failed: {'; '.join(failed)})" if failed else ")"))

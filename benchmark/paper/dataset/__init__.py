@@ -61,10 +61,24 @@ same command again does the missing ones. A failed episode (e.g. the box was dro
 as an empty table whose metadata holds the error, so it is neither lost nor retried forever.
 """
 
-from benchmark.paper.dataset.spec import CONTACTS, FORMAT, KINEMATICS, VERSION, DatasetSpec, episode_id
-from benchmark.paper.dataset.files import (finger_names_of, frames_of, load_dataset, read_episode_file, read_manifest,
-                                           training_set, write_manifest)
 from benchmark.paper.dataset.build import build_episode, generate
+from benchmark.paper.dataset.files import (
+                                           finger_names_of,
+                                           frames_of,
+                                           load_dataset,
+                                           read_episode_file,
+                                           read_manifest,
+                                           training_set,
+                                           write_manifest,
+)
+from benchmark.paper.dataset.spec import (
+                                           CONTACTS,
+                                           FORMAT,
+                                           KINEMATICS,
+                                           VERSION,
+                                           DatasetSpec,
+                                           episode_id,
+)
 
 __all__ = ["CONTACTS", "FORMAT", "KINEMATICS", "VERSION", "DatasetSpec", "build_episode", "episode_id", "finger_names_of",
            "frames_of", "generate", "load_dataset", "read_episode_file", "read_manifest", "training_set", "write_manifest"]

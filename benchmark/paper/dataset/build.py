@@ -14,16 +14,35 @@ import pyarrow as pa
 
 from benchmark.atomic import write_text
 from benchmark.errors import BenchmarkError, DatasetError
-from benchmark.parallel import RayUnavailable, check_ray_address, report_progress, run_jobs
-from benchmark.world.scenario import Scenario
+from benchmark.paper.dataset.claims import Claims
+from benchmark.paper.dataset.files import (
+    TIMING_SUFFIX,
+    _check_existing,
+    _prepare,
+    _write_sealed,
+    write_manifest,
+)
+from benchmark.paper.dataset.spec import (
+    _AX,
+    CONTACTS,
+    FORMAT,
+    VERSION,
+    DatasetSpec,
+    episode_id,
+)
+from benchmark.parallel import (
+    RayUnavailable,
+    check_ray_address,
+    report_progress,
+    run_jobs,
+)
 from benchmark.scores.forces import true_normal_forces
-from benchmark.scores.samples import (DATASET_FORCE_SETTINGS, sample_mask,
-                                      take_contacts as _take_con, take_kinematics as _take_kin)
+from benchmark.scores.samples import DATASET_FORCE_SETTINGS, sample_mask
+from benchmark.scores.samples import take_contacts as _take_con
+from benchmark.scores.samples import take_kinematics as _take_kin
+from benchmark.world.scenario import Scenario
 from fsv import Contacts
 from fsv.features import grasp_features
-from benchmark.paper.dataset.spec import FORMAT, VERSION, CONTACTS, _AX, DatasetSpec, episode_id
-from benchmark.paper.dataset.claims import Claims
-from benchmark.paper.dataset.files import (_write_sealed, _prepare, _check_existing, TIMING_SUFFIX, write_manifest)
 
 
 def track_episode(episode):

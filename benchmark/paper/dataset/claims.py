@@ -7,9 +7,7 @@ import json
 import os
 import time
 
-
 from benchmark.paper.dataset.spec import episode_id
-
 
 CLAIM_POLL_S = 0.5
 """How often a run checks on the episodes another run is making [s]."""

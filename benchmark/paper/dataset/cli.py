@@ -12,8 +12,8 @@ import time
 import pandas as pd
 
 from benchmark.errors import DatasetError
-from benchmark.paper.dataset.spec import KINEMATICS, CONTACTS, DatasetSpec
 from benchmark.paper.dataset.build import generate
+from benchmark.paper.dataset.spec import CONTACTS, KINEMATICS, DatasetSpec
 
 
 def parse_ints(text: str) -> tuple:

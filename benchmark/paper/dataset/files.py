@@ -16,12 +16,12 @@ import pyarrow.parquet as pq
 
 from benchmark.atomic import write_bytes, write_text
 from benchmark.errors import DatasetError, DatasetFileError
-from benchmark.scores.samples import (nominal_excess_n)
+from benchmark.paper.dataset.claims import Claims
+from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec, episode_id
+from benchmark.scores.samples import nominal_excess_n
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from fsv import Contacts, InputError, Kinematics
 from fsv.provenance import provenance
-from benchmark.paper.dataset.spec import FORMAT, VERSION, _AX, DatasetSpec, episode_id
-from benchmark.paper.dataset.claims import Claims
 
 
 def _write_sealed(table: pa.Table, path: str) -> str:
@@ -283,7 +283,9 @@ def training_set(df: pd.DataFrame, grips: dict | None = None):
     """The networks' samples of a dataset table (:class:`fsv.learn.TrainingSet`): features,
     decomposition targets, episode groups, and with ``grips`` (``{user: fsv.grip.GripCalibration}``,
     :func:`benchmark.method.grip_file.read_calibration`) each sample's user's grip calibration."""
-    from fsv.learn import TrainingSet  # torch: imported only where it is used, not in the workers
+    from fsv.learn import (
+        TrainingSet,  # torch: imported only where it is used, not in the workers
+    )
     names = finger_names_of(df)
     grip = None
     if grips is not None:

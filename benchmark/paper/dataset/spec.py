@@ -6,9 +6,9 @@ from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
-from benchmark.errors import ScenarioError, DatasetError
+from benchmark.errors import DatasetError, ScenarioError
 from benchmark.world.scenario import Scenario
-
+from fsv._check import positive
 
 FORMAT = "fsv-bench-dataset"
 VERSION = 2  # version 1 had no digests
@@ -71,8 +71,7 @@ class DatasetSpec:
             raise DatasetError(f"tactile_noise_n must be >= 0 N, got {self.tactile_noise_n!r}")
         if not (np.isfinite(self.noise_m) and self.noise_m >= 0):
             raise DatasetError(f"noise_m must be >= 0 m, got {self.noise_m!r}")
-        if not (np.isfinite(self.max_gap_n) and self.max_gap_n > 0):
-            raise DatasetError(f"max_gap_n must be > 0 N, got {self.max_gap_n!r}")
+        positive("max_gap_n", self.max_gap_n, "> 0 N", DatasetError)
         if int(self.min_fingers) < 2:
             raise DatasetError(f"min_fingers must be >= 2 (internal forces need two fingers), got {self.min_fingers!r}")
         self._check_grid()

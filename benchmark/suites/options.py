@@ -1,0 +1,21 @@
+"""The command-line options every suite command shares, declared once: ``--suite --sensor --out --cache --workers --quiet``."""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+from benchmark.suites.registry import SUITES
+
+
+def add_suite_arguments(p: argparse.ArgumentParser, *, out_help: str, sensor: bool = True, workers: bool = True) -> None:
+    """Adds ``--suite``, ``--out`` (described by ``out_help``), ``--cache``, ``--quiet`` and, unless
+    turned off, ``--sensor`` and ``--workers``."""
+    p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
+    if sensor:
+        p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
+    p.add_argument("--out", required=True, type=pathlib.Path, help=out_help)
+    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    if workers:
+        p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
