@@ -253,6 +253,69 @@ def _upload(GL, gl: _GLObjects, attributes, faces) -> int:
     return int(vao)
 
 
+def _geometry(model, labels: np.ndarray) -> tuple:
+    """The drawn geoms' vertex attributes and triangles, ``(meshes, capsules)``: each a dict of lists
+    (``position``, ``body_label``, for capsules ``end_a_radius`` and ``end_b``, and ``faces``), in
+    each geom's body frame (in the world for geoms welded to it)."""
+    import mujoco
+    import trimesh
+
+    G = mujoco.mjtGeom
+    cube = trimesh.creation.box(extents=(2.0, 2.0, 2.0))  # corners at +-1, faces outward
+    meshes = {"position": [], "body_label": [], "faces": []}
+    capsules = {"position": [], "body_label": [], "end_a_radius": [], "end_b": [], "faces": []}
+    for g in np.flatnonzero(labels):
+        T = np.eye(4)  # pose of the geom in its body's frame (in the world for welded bodies)
+        mat = np.zeros(9)
+        mujoco.mju_quat2Mat(mat, model.geom_quat[g])
+        T[:3, :3] = mat.reshape(3, 3)
+        T[:3, 3] = model.geom_pos[g]
+        body = int(model.geom_bodyid[g])
+        if model.body_weldid[body] == 0 and model.body_mocapid[body] < 0:  # welded to the world
+            T = body_pose0(model, body) @ T
+            body = 0  # the world body: identity pose
+        kind = int(model.geom_type[g])
+        if kind in (G.mjGEOM_CAPSULE, G.mjGEOM_SPHERE):
+            r = float(model.geom_size[g, 0])
+            half = float(model.geom_size[g, 1]) if kind == G.mjGEOM_CAPSULE else 0.0
+            corners = cube.vertices * CAPSULE_BOX_MARGIN * np.array([r, r, half + r])
+            part = capsules
+            ends = np.array([[0.0, 0.0, -half], [0.0, 0.0, half]]) @ T[:3, :3].T + T[:3, 3]
+            part["end_a_radius"].append(np.tile(np.append(ends[0], r), (len(corners), 1)))
+            part["end_b"].append(np.tile(ends[1], (len(corners), 1)))
+            vertices, faces = corners @ T[:3, :3].T + T[:3, 3], cube.faces
+        else:
+            mesh = geom_trimesh(model, int(g))
+            mesh.apply_transform(T)
+            part = meshes
+            vertices, faces = mesh.vertices, mesh.faces
+        start = sum(len(p) for p in part["position"])
+        part["position"].append(vertices)
+        part["body_label"].append(np.tile([body, labels[g]], (len(vertices), 1)))
+        part["faces"].append(np.asarray(faces) + start)
+    return meshes, capsules
+
+
+def _framebuffer(GL, gl: _GLObjects, W: int, H: int) -> None:
+    """A single-sample framebuffer of depth along the optical axis (float), labels (byte) and a depth buffer."""
+    gl.renderbuffers = [int(b) for b in GL.glGenRenderbuffers(3)]
+    gl.fbo = GL.glGenFramebuffers(1)
+    GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, gl.fbo)
+    for rb, fmt, attachment in zip(
+        gl.renderbuffers,
+        (GL.GL_R32F, GL.GL_R8UI, GL.GL_DEPTH_COMPONENT32F),
+        (GL.GL_COLOR_ATTACHMENT0, GL.GL_COLOR_ATTACHMENT1, GL.GL_DEPTH_ATTACHMENT),
+    ):
+        GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
+        GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, W, H)
+        GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
+    GL.glDrawBuffers(2, [GL.GL_COLOR_ATTACHMENT0, GL.GL_COLOR_ATTACHMENT1])
+    status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
+    GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
+    if status != GL.GL_FRAMEBUFFER_COMPLETE:
+        raise RenderError(f"the GL driver cannot render depth and labels offscreen (framebuffer status {status:#x})")
+
+
 class DepthRenderer:
     """Exact depth and label images of a MuJoCo model's geoms from one camera.
 
@@ -284,8 +347,6 @@ class DepthRenderer:
     """
 
     def __init__(self, model, camera: Camera, labels: np.ndarray):
-        import mujoco
-        import trimesh
         from OpenGL import GL
 
         labels = np.asarray(labels)
@@ -293,39 +354,7 @@ class DepthRenderer:
             raise BenchmarkError(f"labels must have shape ({model.ngeom},), one per geom, got {labels.shape}")
         self._gl = _offscreen(camera.width, camera.height)
         self.camera = camera
-        G = mujoco.mjtGeom
-        cube = trimesh.creation.box(extents=(2.0, 2.0, 2.0))  # corners at +-1, faces outward
-        meshes = {"position": [], "body_label": [], "faces": []}
-        capsules = {"position": [], "body_label": [], "end_a_radius": [], "end_b": [], "faces": []}
-        for g in np.flatnonzero(labels):
-            T = np.eye(4)  # pose of the geom in its body's frame (in the world for welded bodies)
-            mat = np.zeros(9)
-            mujoco.mju_quat2Mat(mat, model.geom_quat[g])
-            T[:3, :3] = mat.reshape(3, 3)
-            T[:3, 3] = model.geom_pos[g]
-            body = int(model.geom_bodyid[g])
-            if model.body_weldid[body] == 0 and model.body_mocapid[body] < 0:  # welded to the world
-                T = body_pose0(model, body) @ T
-                body = 0  # the world body: identity pose
-            kind = int(model.geom_type[g])
-            if kind in (G.mjGEOM_CAPSULE, G.mjGEOM_SPHERE):
-                r = float(model.geom_size[g, 0])
-                half = float(model.geom_size[g, 1]) if kind == G.mjGEOM_CAPSULE else 0.0
-                corners = cube.vertices * CAPSULE_BOX_MARGIN * np.array([r, r, half + r])
-                part = capsules
-                ends = np.array([[0.0, 0.0, -half], [0.0, 0.0, half]]) @ T[:3, :3].T + T[:3, 3]
-                part["end_a_radius"].append(np.tile(np.append(ends[0], r), (len(corners), 1)))
-                part["end_b"].append(np.tile(ends[1], (len(corners), 1)))
-                vertices, faces = corners @ T[:3, :3].T + T[:3, 3], cube.faces
-            else:
-                mesh = geom_trimesh(model, int(g))
-                mesh.apply_transform(T)
-                part = meshes
-                vertices, faces = mesh.vertices, mesh.faces
-            start = sum(len(p) for p in part["position"])
-            part["position"].append(vertices)
-            part["body_label"].append(np.tile([body, labels[g]], (len(vertices), 1)))
-            part["faces"].append(np.asarray(faces) + start)
+        meshes, capsules = _geometry(model, labels)
         self.triangles = sum(len(f) for part in (meshes, capsules) for f in part["faces"])
         W, H = camera.width, camera.height
         cam_from_world = np.linalg.inv(camera.T_world_cam)
@@ -371,22 +400,7 @@ class DepthRenderer:
             vao = _upload(GL, gl, attributes, faces)
             self._draws.append((program, GL.glGetUniformLocation(program, "cam_from_body"), vao, faces.size))
         self.draw_calls = len(self._draws)
-        gl.renderbuffers = [int(b) for b in GL.glGenRenderbuffers(3)]
-        gl.fbo = GL.glGenFramebuffers(1)
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, gl.fbo)
-        for rb, fmt, attachment in zip(
-            gl.renderbuffers,
-            (GL.GL_R32F, GL.GL_R8UI, GL.GL_DEPTH_COMPONENT32F),
-            (GL.GL_COLOR_ATTACHMENT0, GL.GL_COLOR_ATTACHMENT1, GL.GL_DEPTH_ATTACHMENT),
-        ):
-            GL.glBindRenderbuffer(GL.GL_RENDERBUFFER, rb)
-            GL.glRenderbufferStorage(GL.GL_RENDERBUFFER, fmt, W, H)
-            GL.glFramebufferRenderbuffer(GL.GL_FRAMEBUFFER, attachment, GL.GL_RENDERBUFFER, rb)
-        GL.glDrawBuffers(2, [GL.GL_COLOR_ATTACHMENT0, GL.GL_COLOR_ATTACHMENT1])
-        status = GL.glCheckFramebufferStatus(GL.GL_FRAMEBUFFER)
-        GL.glBindFramebuffer(GL.GL_FRAMEBUFFER, 0)
-        if status != GL.GL_FRAMEBUFFER_COMPLETE:
-            raise RenderError(f"the GL driver cannot render depth and labels offscreen (framebuffer status {status:#x})")
+        _framebuffer(GL, gl, W, H)
 
     def render(self, xpos: np.ndarray, xmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Renders one frame.

@@ -95,10 +95,17 @@ def run(task: str = "lift", noise_m: float = 0.01, seed: int = 0, repeat: int = 
             )
         )
 
+    rows.append(_algdiff_row(alg, st1, x, dt, v_true, margin, repeat))
+    rows += _pynumdiff_rows(alg, x, dt, v_true, margin, repeat)
+    return rows
+
+
+def _algdiff_row(alg, st1, x: np.ndarray, dt: float, v_true: np.ndarray, margin: int, repeat: int) -> dict:
+    """The AlgDiff package's algebraic differentiator on the same channel (its row)."""
     try:
         from AlgDiff import AlgebraicDifferentiator
     except ImportError:
-        rows.append(dict(method="AlgDiff (not installed)", s=float("nan"), vel_rms=float("nan")))
+        return dict(method="AlgDiff (not installed)", s=float("nan"), vel_rms=float("nan"))
     else:
         L = alg.window_frames
         T = L * dt
@@ -115,12 +122,17 @@ def run(task: str = "lift", noise_m: float = 0.01, seed: int = 0, repeat: int = 
             v_ad, _ = algdiff_channel()
             shift = int(round(st1.delay_s / dt))  # AlgDiff's output is causal: re-centre it
             v_ad = np.concatenate([v_ad[shift:], np.zeros(shift)])
-            rows.append(dict(method="AlgDiff analytic, vel+acc", s=_best_time(algdiff_channel, repeat), vel_rms=_rms(v_ad, v_true, margin)))
+            return dict(method="AlgDiff analytic, vel+acc", s=_best_time(algdiff_channel, repeat), vel_rms=_rms(v_ad, v_true, margin))
 
+
+
+def _pynumdiff_rows(alg, x: np.ndarray, dt: float, v_true: np.ndarray, margin: int, repeat: int) -> list:
+    """pynumdiff's differentiators on the same channel (their rows)."""
+    rows = []
     try:
         import pynumdiff
     except ImportError:
-        rows.append(dict(method="pynumdiff (not installed)", s=float("nan"), vel_rms=float("nan")))
+        return [dict(method="pynumdiff (not installed)", s=float("nan"), vel_rms=float("nan"))]
     else:
         sigma = DECLARED["gaussian"].sigma_frames
         peers = {

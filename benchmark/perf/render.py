@@ -116,12 +116,7 @@ def main(argv=None) -> dict:
     sensors = {name: sensor_preset(name, 0.01) for name in SENSORS}
     rng = np.random.default_rng(0)
 
-    spec = mujoco.MjSpec.from_string(_model_xml(world))
-    add_mujoco_camera(spec, camera, "depth_camera")
-    peer_model = spec.compile()
-    peer_data = mujoco.MjData(peer_model)
-    peer = mujoco.Renderer(peer_model, camera.height, camera.width)
-    peer.enable_depth_rendering()
+    peer_model, peer_data, peer = _peer(world, camera)
 
     def posed(k):
         pose(data, k)
@@ -169,10 +164,27 @@ def main(argv=None) -> dict:
     diff = np.abs(mine - theirs)[both]
     rates["agreement_median_m"] = float(np.median(diff))
     rates["agreement_within_0.1mm"] = float(np.mean(diff < 1e-4))
-    print(
-        f"scene: {model.ngeom} geoms, {ours.triangles} triangles, {ours.draw_calls} draw calls per frame; "
-        f"{camera.width}x{camera.height}; {args.frames} frames per pass, {args.repeats} rounds"
-    )
+    _print_rates(rates, f"scene: {model.ngeom} geoms, {ours.triangles} triangles, {ours.draw_calls} draw calls "
+                        f"per frame; {camera.width}x{camera.height}; {args.frames} frames per pass, {args.repeats} rounds")
+    peer.close()
+    return rates
+
+
+def _peer(world, camera) -> tuple:
+    """MuJoCo's own depth renderer of the same world and camera: ``(model, data, renderer)``."""
+    spec = mujoco.MjSpec.from_string(_model_xml(world))
+    add_mujoco_camera(spec, camera, "depth_camera")
+    peer_model = spec.compile()
+    peer = mujoco.Renderer(peer_model, camera.height, camera.width)
+    peer.enable_depth_rendering()
+    return peer_model, mujoco.MjData(peer_model), peer
+
+
+def _print_rates(rates: dict, scene: str) -> None:
+    """The rates and ratios as a table."""
+    from benchmark.camera.sensor import SENSORS
+
+    print(scene)
     print("                                   best fps  median fps  CPU ms/frame (all threads)")
     for name, text in (
         ("pyrender_depth_labels", "depth + labels                 "),
@@ -190,8 +202,6 @@ def main(argv=None) -> dict:
         f"depth agreement with MuJoCo      : median {rates['agreement_median_m'] * 1e6:.2f} um, "
         f"{100 * rates['agreement_within_0.1mm']:.1f} % of pixels within 0.1 mm"
     )
-    peer.close()
-    return rates
 
 
 def _model_xml(world) -> str:

@@ -104,38 +104,13 @@ class _PlanProblem:
         hand, m = world.hand, world.model
         self.world, self.spec, self.d = world, spec, mujoco.MjData(m)
         self.user_name, self.grasp_name = str(user_of(sc)["name"]), str(spec["name"])
-        K = len(hand.finger_names)
-        unknown = set(spec["spots"]) - set(hand.finger_names)
-        if unknown:
-            raise ScenarioError(f"grasp {spec['name']!r} names unknown digits {sorted(unknown)}; accepted: {hand.finger_names}")
-        active = np.array([f in spec["spots"] for f in hand.finger_names])
-        spot = np.zeros((K, 3))
-        normal_in = np.zeros((K, 3))
-        for k, f in enumerate(hand.finger_names):
-            if active[k]:
-                spot[k] = spec["spots"][f]["point"]
-                normal_in[k] = -face_normal(spec["spots"][f]["face"])
-        self.active, self.spot, self.normal_in = active, spot, normal_in
+        self.active, self.spot, self.normal_in = active, spot, normal_in = _spots(hand, spec)
         self.box_pos = self.d.qpos[world.box_qadr : world.box_qadr + 3].copy()
         self.target = self.box_pos + spot - normal_in * hand.fingertip_radius[:, None]
-        prior = np.zeros(hand.num_joints)
-        for k, f in enumerate(hand.finger_names):
-            js = [j for j, n in enumerate(hand.joint_names) if n.startswith(f + "_")]
-            prior[js] = _PRIOR_ACTIVE["thumb" if k == 0 else "finger"] if active[k] else _PRIOR_FREE
         self.lo, self.hi = hand.joint_range[:, 0], hand.joint_range[:, 1]
-        self.prior = np.clip(prior, self.lo, self.hi)
-        pad_geoms = {int(np.flatnonzero((world.geom_segment == hand.fingertip_segment[k])
-                                        & (m.geom_type == mujoco.mjtGeom.mjGEOM_SPHERE))[0]) for k in range(K) if active[k]}
-        self.body_geoms = [g for g in np.flatnonzero(world.geom_segment >= 0) if g not in pad_geoms]
-        distal = {int(hand.fingertip_segment[k]) for k in range(K) if active[k]}
-        self.clearance = np.repeat([_SHAFT_CLEARANCE_M if world.geom_segment[g] in distal else _CLEARANCE_M
-                                    for g in self.body_geoms], 2)
-        digest = hashlib.sha256()
-        for arr in (m.body_pos, m.body_quat, m.geom_size, m.geom_pos, m.geom_quat, m.geom_type, m.jnt_axis,
-                    m.jnt_pos, m.jnt_range, self.target, self.prior, self.clearance, world.obj.half_extents):
-            digest.update(np.ascontiguousarray(arr).tobytes())
-        digest.update(json.dumps([spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]).encode())
-        self.fingerprint = digest.hexdigest()
+        self.prior = np.clip(_prior(hand, active), self.lo, self.hi)
+        self.body_geoms, self.clearance = _clearances(world, active)
+        self.fingerprint = _plan_fingerprint(world, spec, self.target, self.prior, self.clearance)
 
     def pose(self, x: np.ndarray) -> None:
         w, d = self.world, self.d
@@ -185,6 +160,56 @@ class _PlanProblem:
         return GraspPlan(active=self.active, spot=self.spot, normal_in=self.normal_in,
                          palm_pos=np.array([self.spec["palm_x"], x[0], x[1]]), palm_quat=_pitch_quat(x[2]),
                          q_grasp=q_grasp, q_open=q_open, tip_error_m=tip_err, clearance_m=gap)
+
+
+def _spots(hand, spec: dict) -> tuple:
+    """The grasp's digits on the box: ``(active (K,), spot (K, 3) in the box frame, inward normal (K, 3))``."""
+    K = len(hand.finger_names)
+    unknown = set(spec["spots"]) - set(hand.finger_names)
+    if unknown:
+        raise ScenarioError(f"grasp {spec['name']!r} names unknown digits {sorted(unknown)}; accepted: {hand.finger_names}")
+    active = np.array([f in spec["spots"] for f in hand.finger_names])
+    spot = np.zeros((K, 3))
+    normal_in = np.zeros((K, 3))
+    for k, f in enumerate(hand.finger_names):
+        if active[k]:
+            spot[k] = spec["spots"][f]["point"]
+            normal_in[k] = -face_normal(spec["spots"][f]["face"])
+    return active, spot, normal_in
+
+
+def _prior(hand, active: np.ndarray) -> np.ndarray:
+    """The joints' prior posture: the grasping digits' (thumb or finger) and the free digits'."""
+    prior = np.zeros(hand.num_joints)
+    for k, f in enumerate(hand.finger_names):
+        js = [j for j, n in enumerate(hand.joint_names) if n.startswith(f + "_")]
+        prior[js] = _PRIOR_ACTIVE["thumb" if k == 0 else "finger"] if active[k] else _PRIOR_FREE
+    return prior
+
+
+def _clearances(world, active: np.ndarray) -> tuple:
+    """The hand's geoms that must stay clear of the box and the table (every one but the grasping
+    pads), and their clearance, twice each (box, table): ``(geoms, clearance (2 G,))``."""
+    hand, m = world.hand, world.model
+    K = len(hand.finger_names)
+    pad_geoms = {int(np.flatnonzero((world.geom_segment == hand.fingertip_segment[k])
+                                    & (m.geom_type == mujoco.mjtGeom.mjGEOM_SPHERE))[0]) for k in range(K) if active[k]}
+    body_geoms = [g for g in np.flatnonzero(world.geom_segment >= 0) if g not in pad_geoms]
+    distal = {int(hand.fingertip_segment[k]) for k in range(K) if active[k]}
+    clearance = np.repeat([_SHAFT_CLEARANCE_M if world.geom_segment[g] in distal else _CLEARANCE_M
+                           for g in body_geoms], 2)
+    return body_geoms, clearance
+
+
+def _plan_fingerprint(world, spec: dict, target: np.ndarray, prior: np.ndarray, clearance: np.ndarray) -> str:
+    """sha256 of everything a grasp plan depends on (see :attr:`Human.fingerprint`)."""
+    m = world.model
+    digest = hashlib.sha256()
+    for arr in (m.body_pos, m.body_quat, m.geom_size, m.geom_pos, m.geom_quat, m.geom_type, m.jnt_axis,
+                m.jnt_pos, m.jnt_range, target, prior, clearance, world.obj.half_extents):
+        digest.update(np.ascontiguousarray(arr).tobytes())
+    digest.update(json.dumps([spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]).encode())
+    return digest.hexdigest()
 
 
 @functools.lru_cache(maxsize=1)

@@ -254,14 +254,28 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
 
     rec = _Recorder(world, n_frames)
     momentum = _Momentum(world, n_frames)
-    half = (spf + 1) // 2  # the boundary between frames k and k + 1 is this many steps after frame k
     bar = None
     if progress:
         from tqdm import tqdm
 
         bar = tqdm(total=n_frames, desc=f"simulate {scenario.task}", unit="frame", leave=False)
     t0 = time.perf_counter()
-    act, step_fn = human.act, mujoco.mj_step
+    _step_frames(m, d, human.act, rec, momentum, spf, n_frames, scenario, bar)
+    wall = time.perf_counter() - t0
+    if bar is not None:
+        bar.close()
+    truth = _truth(scenario, world, rec.arrays(), momentum, phases, motion, n_frames)
+    ep = Episode(scenario=scenario, truth=truth, object_model=world.obj, hand_model=world.hand)
+    stats = SimStats(steps=n_steps, timestep_s=float(m.opt.timestep), wall_s=wall)
+    return ep, stats
+
+
+def _step_frames(m, d, act, rec: _Recorder, momentum: _Momentum, spf: int, n_frames: int, scenario: Scenario,
+                 bar) -> None:
+    """Steps the simulation through every frame: the human acts every step; each frame's state and
+    the momentum at the frames' interval boundaries are recorded."""
+    half = (spf + 1) // 2  # the boundary between frames k and k + 1 is this many steps after frame k
+    step_fn = mujoco.mj_step
     for frame in range(n_frames):
         step = frame * spf
         act(d, step)
@@ -284,10 +298,11 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
             step_fn(m, d)
             if s + 1 == step + half:
                 momentum.record(frame + 1, s + 1, d)
-    wall = time.perf_counter() - t0
-    if bar is not None:
-        bar.close()
-    a = rec.arrays()
+
+
+def _truth(scenario: Scenario, world, a: dict, momentum: _Momentum, phases, motion, n_frames: int) -> Truth:
+    """The :class:`Truth` of the recorded arrays ``a`` (checked: finite, and the box where the task put it)."""
+    m = world.model
     if not np.all(np.isfinite(a["box_pos"])):
         raise SimulationError(f"the simulation diverged ({scenario})")
     g = m.opt.gravity.copy()
@@ -297,7 +312,7 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
     t = np.arange(n_frames) / scenario.fps
     held = (t >= phases.load_end) & (t <= phases.move_end)
     _check_outcome(scenario, t, held, a, motion.evaluate(t)[0])
-    truth = Truth(
+    return Truth(
         t=t, box_pos=a["box_pos"], box_quat=a["box_quat"], box_vel=a["box_vel"], box_omega=a["box_omega"],
         box_acc=a["box_acc"], box_alpha=a["box_alpha"], imu_acc=imu_acc, imu_gyro=imu_gyro,
         finger_names=np.array(world.hand.finger_names), contact_active=a["contact_active"],
@@ -307,9 +322,6 @@ def run(scenario: Scenario, progress: bool = False) -> tuple[Episode, SimStats]:
         net_wrench_mean=momentum.mean_wrench(m.opt.timestep, g), mass=float(m.body_mass[world.box_body]),
         inertia=np.diag(m.body_inertia[world.box_body]), gravity=g, held=held,
     )
-    ep = Episode(scenario=scenario, truth=truth, object_model=world.obj, hand_model=world.hand)
-    stats = SimStats(steps=n_steps, timestep_s=float(m.opt.timestep), wall_s=wall)
-    return ep, stats
 
 
 DROP_M = 0.03  # the hand has dropped the box if it is this far below its planned height while held

@@ -321,7 +321,8 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     sliding = contacts.sliding & use
     fitted = use & np.isfinite(target) & (kind != "nominal")
     target = np.where(fitted, target, 0.0)
-
+    frames = _Frames(kind=kind, K=K, weights=weights, bank=bank, required=required, target=target, use=use,
+                     sliding=sliding, fitted=fitted, corners_on=corners_on, candidates=candidates, settings=settings)
     # Per frame the rows of Program.solve: nominal fingers (K), internal fingers (K), nominal table
     # corners (8), internal corners (8); one row block per frame keeps the loop to a single copy.
     out = np.zeros((T, 2 * K + 16, 3))
@@ -329,23 +330,9 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     objective = np.zeros(T)
     iterations = np.zeros(T, np.int64)
     seconds = np.zeros(T)
-    programs: dict = {}
     keys = [row.tobytes() for row in np.concatenate([use, sliding, fitted, corners_on], axis=1)]
     touching = (use.any(axis=1) | corners_on.any(axis=1)).tolist()
-    # Assemble each layout's frames in one NumPy pass; its time is shared out over those frames.
-    prepared = [None] * T
-    groups: dict = {}
-    for t in np.flatnonzero(valid & np.array(touching, bool)).tolist():
-        groups.setdefault(keys[t], []).append(t)
-    for key, ts in groups.items():
-        t0 = time.perf_counter()
-        prog = programs[(key, False)] = _program(
-            False, kind, use[ts[0]], sliding[ts[0]], fitted[ts[0]], corners_on[ts[0]], weights, K
-        )
-        prepared_ts = prog.assemble(bank[ts], required[ts], target[ts])
-        for t, frame in zip(ts, prepared_ts):
-            prepared[t] = frame
-        seconds[ts] = (time.perf_counter() - t0) / len(ts)
+    prepared = frames.assemble(keys, np.flatnonzero(valid & np.array(touching, bool)).tolist(), seconds)
     for t, is_valid in enumerate(valid.tolist()):
         if not is_valid:
             status[t] = FrameStatus.NO_KINEMATICS
@@ -355,38 +342,7 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
             status[t] = FrameStatus.NO_CONTACTS
             continue
         t0 = time.perf_counter()
-        forces, code, objective[t], iterations[t] = programs[(keys[t], False)].run(prepared[t])
-        if code not in OK and settings.static_retry and sliding[t].any():
-            held = np.zeros(K, bool)
-            key = (np.concatenate([use[t], held, fitted[t], corners_on[t]]).tobytes(), False)
-            static = programs.get(key)
-            if static is None:
-                static = programs[key] = _program(False, kind, use[t], held, fitted[t], corners_on[t], weights, K)
-            forces, code, objective[t], iterations[t] = static.solve(bank[t], required[t], target[t])
-            if code in OK:
-                status[t] = FrameStatus.STATIC_FRICTION
-                sliding[t] = held
-        if code not in OK and candidates[t].any():
-            more = use[t] | candidates[t]
-            held = np.zeros(K, bool) if settings.static_retry else sliding[t]
-            key = (np.concatenate([more, held, fitted[t], corners_on[t]]).tobytes(), False)
-            added = programs.get(key)
-            if added is None:
-                added = programs[key] = _program(False, kind, more, held, fitted[t], corners_on[t], weights, K)
-            got = added.solve(bank[t], required[t], target[t])
-            if got[1] in OK:
-                forces, code, objective[t], iterations[t] = got
-                status[t] = FrameStatus.CONTACTS_ADDED
-                use[t], sliding[t] = more, held
-        if code not in OK:
-            retry = programs.get((keys[t], True))
-            if retry is None:
-                retry = programs[(keys[t], True)] = _program(True, kind, use[t], sliding[t], fitted[t], corners_on[t], weights, K)
-            forces, code, objective[t], iterations[t] = retry.solve(bank[t], required[t], target[t])
-            status[t] = FrameStatus.LEAST_VIOLATION if code in OK else FrameStatus.FAILED
-            if code not in OK:
-                forces, objective[t] = np.full((2 * K + 16, 3), np.nan), np.nan
-        out[t] = forces
+        out[t], status[t], objective[t], iterations[t] = frames.solve(t, keys[t], prepared[t])
         seconds[t] += time.perf_counter() - t0
     if kind == "nominal" and np.isfinite(settings.bound_factor):
         bound = force_bound(required, model.friction, float(np.min(model.size_m)) / 2, settings.bound_factor)
@@ -397,6 +353,82 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
         status[absurd] = FrameStatus.IMPLAUSIBLE
         out[absurd] = np.nan
         objective[absurd] = np.nan
+    return _solution(kind, contacts, frames, table, normals, out, status, objective, iterations, seconds)
+
+
+class _Frames:
+    """One sequence's programs, one per layout, built on first use and re-used across frames; and
+    the per-frame fallbacks. ``use`` and ``sliding`` are the caller's arrays: a fallback that adds
+    contacts or holds sliding ones writes its frame's row of them."""
+
+    def __init__(self, *, kind, K, weights, bank, required, target, use, sliding, fitted, corners_on, candidates,
+                 settings):
+        self.kind, self.K, self.weights, self.settings = kind, K, weights, settings
+        self.bank, self.required, self.target = bank, required, target
+        self.use, self.sliding, self.fitted, self.corners_on, self.candidates = use, sliding, fitted, corners_on, candidates
+        self.programs: dict = {}
+
+    def _program(self, slack: bool, key: bytes, use, sliding, fitted, corners_on):
+        prog = self.programs.get((key, slack))
+        if prog is None:
+            prog = self.programs[(key, slack)] = _program(slack, self.kind, use, sliding, fitted, corners_on,
+                                                          self.weights, self.K)
+        return prog
+
+    def assemble(self, keys: list, frames: list, seconds: np.ndarray) -> list:
+        """Each layout's frames assembled in one NumPy pass (its time shared out over those frames)."""
+        prepared = [None] * len(keys)
+        groups: dict = {}
+        for t in frames:
+            groups.setdefault(keys[t], []).append(t)
+        for key, ts in groups.items():
+            t0 = time.perf_counter()
+            t = ts[0]
+            prog = self._program(False, key, self.use[t], self.sliding[t], self.fitted[t], self.corners_on[t])
+            prepared_ts = prog.assemble(self.bank[ts], self.required[ts], self.target[ts])
+            for t, frame in zip(ts, prepared_ts):
+                prepared[t] = frame
+            seconds[ts] = (time.perf_counter() - t0) / len(ts)
+        return prepared
+
+    def solve(self, t: int, key: bytes, prepared) -> tuple:
+        """Frame ``t``: its layout's program, then the fallbacks (static friction, contacts added,
+        least violation); ``(forces (2K + 16, 3), status, objective, iterations)``."""
+        K, use, sliding, fitted, corners_on = self.K, self.use, self.sliding, self.fitted, self.corners_on
+        args = (self.bank[t], self.required[t], self.target[t])
+        status = FrameStatus.OPTIMAL
+        forces, code, objective, iterations = self.programs[(key, False)].run(prepared)
+        if code not in OK and self.settings.static_retry and sliding[t].any():
+            held = np.zeros(K, bool)
+            static = self._program(False, np.concatenate([use[t], held, fitted[t], corners_on[t]]).tobytes(),
+                                   use[t], held, fitted[t], corners_on[t])
+            forces, code, objective, iterations = static.solve(*args)
+            if code in OK:
+                status = FrameStatus.STATIC_FRICTION
+                sliding[t] = held
+        if code not in OK and self.candidates[t].any():
+            more = use[t] | self.candidates[t]
+            held = np.zeros(K, bool) if self.settings.static_retry else sliding[t]
+            added = self._program(False, np.concatenate([more, held, fitted[t], corners_on[t]]).tobytes(),
+                                  more, held, fitted[t], corners_on[t])
+            got = added.solve(*args)
+            if got[1] in OK:
+                forces, code, objective, iterations = got
+                status = FrameStatus.CONTACTS_ADDED
+                use[t], sliding[t] = more, held
+        if code not in OK:
+            retry = self._program(True, key, use[t], sliding[t], fitted[t], corners_on[t])
+            forces, code, objective, iterations = retry.solve(*args)
+            status = FrameStatus.LEAST_VIOLATION if code in OK else FrameStatus.FAILED
+            if code not in OK:
+                forces, objective = np.full((2 * K + 16, 3), np.nan), np.nan
+        return forces, status, objective, iterations
+
+
+def _solution(kind, contacts, frames: _Frames, table, normals, out, status, objective, iterations,
+              seconds) -> ForceSolution:
+    """The :class:`ForceSolution` of the frames' forces (the wrenches they achieve, the residuals)."""
+    K, use, required, settings = frames.K, frames.use, frames.required, frames.settings
     nominal, internal = out[:, :K], out[:, K : 2 * K]
     corner, corner_internal = out[:, 2 * K : 2 * K + 8], out[:, 2 * K + 8 :]
     env = np.concatenate([corner.sum(axis=1), np.cross(table.point, corner).sum(axis=1)], axis=1)
@@ -411,18 +443,17 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
         with np.errstate(invalid="ignore"):
             tiny = np.sqrt(np.sum(residual**2, axis=1)) <= settings.feasibility_tol * scale
         status[(status == FrameStatus.LEAST_VIOLATION) & tiny] = FrameStatus.OPTIMAL
-    total = nominal + internal
     return ForceSolution(
         kind=kind,
         finger_names=contacts.finger_names,
         active=use,
-        sliding=sliding,
+        sliding=frames.sliding,
         point=point,
         normal=np.where(use[..., None], normals, 0.0),
-        force=total,
+        force=nominal + internal,
         nominal=nominal,
         internal=internal,
-        env_active=corners_on.sum(axis=1),
+        env_active=frames.corners_on.sum(axis=1),
         env_wrench=env + env_internal,
         env_internal_wrench=env_internal,
         required=required,

@@ -73,7 +73,6 @@ def plot_fig5(solution: ForceSolution, truth: Truth, rot: np.ndarray, path, titl
     import matplotlib.pyplot as plt
 
     t = truth.t
-    K = len(solution.finger_names)
     fig, axes = plt.subplots(3, 1, figsize=(13, 10), sharex=True)
     ok = scored_frames(solution)
     bad = np.isin(solution.status, [int(s) for s in FALLBACKS])
@@ -89,51 +88,14 @@ def plot_fig5(solution: ForceSolution, truth: Truth, rot: np.ndarray, path, titl
         if learned is not None:
             _mark_frames(ax, t, np.isin(learned.status, [int(s) for s in FALLBACKS]),
                          "orange", "learned forces: least violation or failed")
-    lim = robust_limits(fn_true, fn_nom, *(() if fn_learn is None else (fn_learn,)))
-    clipped = 0
-    for k in range(K):
-        c = colors[k % len(colors)]
-        name = solution.finger_names[k]
-        axes[0].plot(t, fn_true[:, k], color=c, lw=1.6, label=f"{name}: true")
-        axes[0].plot(t, fn_nom[:, k], color=c, ls="--", lw=1.0, label=f"{name}: nominal")
-        clipped += _clip_outliers(axes[0], t, fn_nom[:, k:k + 1], lim, c)
-        if fn_learn is not None:
-            axes[0].plot(t, fn_learn[:, k], color=c, ls=":", lw=1.6, label=f"{name}: learned")
-            clipped += _clip_outliers(axes[0], t, fn_learn[:, k:k + 1], lim, c)
-    axes[0].set_ylim(*lim)
-    axes[0].set_ylabel("normal force per finger [N]")
-    axes[0].set_title("normal forces: true (solid), nominal (dashed)" + (", learned (dotted)" if learned is not None else "")
-                      + (f"; {clipped} values beyond the axis drawn as triangles" if clipped else ""), fontsize=9)
-    axes[0].legend(ncol=1, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    net_est = np.where(ok[:, None], to_world_frame(rot, solution.net_wrench)[:, :3], np.nan)
-    net_true = true_net_wrench(truth)[:, :3]
-    lim = robust_limits(net_true, net_est)
-    clipped = 0
-    for i, ax_name in enumerate("xyz"):
-        c = colors[i]
-        axes[1].plot(t, net_true[:, i], color=c, lw=1.6, label=f"F{ax_name} true (frame mean)")
-        axes[1].plot(t, net_est[:, i], color=c, ls="--", label=f"F{ax_name} estimated (nominal)")
-        clipped += _clip_outliers(axes[1], t, net_est[:, i:i + 1], lim, c)
-    axes[1].set_ylim(*lim)
-    axes[1].set_ylabel("net contact force, world frame [N]")
-    axes[1].set_title("net force of every contact (fingers and table)"
-                      + (f"; {clipped} values beyond the axis drawn as triangles" if clipped else ""), fontsize=9)
-    axes[1].legend(ncol=1, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    _finger_panel(axes[0], t, solution.finger_names, fn_true, fn_nom, fn_learn, colors)
+    _net_force_panel(axes[1], t, np.where(ok[:, None], to_world_frame(rot, solution.net_wrench)[:, :3], np.nan),
+                     true_net_wrench(truth)[:, :3], colors)
     sos = {"true": np.einsum("tki,tki->t", truth.contact_force, truth.contact_force),
            "nominal (L2-minimal)": np.where(ok, solution.sum_of_squares, np.nan)}
     if learned is not None:
         sos["learned"] = np.where(np.isin(learned.status, [int(s) for s in SOLVED]), learned.sum_of_squares, np.nan)
-    lim = robust_limits(*sos.values())
-    clipped = 0
-    for (label, y), ls in zip(sos.items(), ("-", "--", ":")):
-        axes[2].plot(t, y, ls=ls, lw=1.6 if ls != "--" else 1.0, color="k" if ls == "-" else None, label=label)
-        clipped += _clip_outliers(axes[2], t, y[:, None], lim, "k")
-    axes[2].set_ylim(*lim)
-    axes[2].set_ylabel("sum over fingers of |F|² [N²]")
-    axes[2].set_title("sum of squares (eq. 6)" + (f"; {clipped} values beyond the axis drawn as triangles" if clipped else ""),
-                      fontsize=9)
-    axes[2].set_xlabel("time [s]")
-    axes[2].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    _sum_of_squares_panel(axes[2], t, sos)
     if title:
         fig.suptitle(title, fontsize=9)
     fig.tight_layout()
@@ -143,4 +105,54 @@ def plot_fig5(solution: ForceSolution, truth: Truth, rot: np.ndarray, path, titl
         plt.close(fig)
 
 
-# --- the ``forces`` stage of fsv-bench -----------------------------------------------------------
+def _beyond(clipped: int) -> str:
+    return f"; {clipped} values beyond the axis drawn as triangles" if clipped else ""
+
+
+def _finger_panel(ax, t, names, fn_true, fn_nom, fn_learn, colors) -> None:
+    """Per finger: the true normal force (solid), the nominal (dashed) and the learned (dotted)."""
+    lim = robust_limits(fn_true, fn_nom, *(() if fn_learn is None else (fn_learn,)))
+    clipped = 0
+    for k, name in enumerate(names):
+        c = colors[k % len(colors)]
+        ax.plot(t, fn_true[:, k], color=c, lw=1.6, label=f"{name}: true")
+        ax.plot(t, fn_nom[:, k], color=c, ls="--", lw=1.0, label=f"{name}: nominal")
+        clipped += _clip_outliers(ax, t, fn_nom[:, k:k + 1], lim, c)
+        if fn_learn is not None:
+            ax.plot(t, fn_learn[:, k], color=c, ls=":", lw=1.6, label=f"{name}: learned")
+            clipped += _clip_outliers(ax, t, fn_learn[:, k:k + 1], lim, c)
+    ax.set_ylim(*lim)
+    ax.set_ylabel("normal force per finger [N]")
+    ax.set_title("normal forces: true (solid), nominal (dashed)" + (", learned (dotted)" if fn_learn is not None else "")
+                 + _beyond(clipped), fontsize=9)
+    ax.legend(ncol=1, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+
+
+def _net_force_panel(ax, t, net_est, net_true, colors) -> None:
+    """The net contact force's components (world frame), true against estimated."""
+    lim = robust_limits(net_true, net_est)
+    clipped = 0
+    for i, ax_name in enumerate("xyz"):
+        c = colors[i]
+        ax.plot(t, net_true[:, i], color=c, lw=1.6, label=f"F{ax_name} true (frame mean)")
+        ax.plot(t, net_est[:, i], color=c, ls="--", label=f"F{ax_name} estimated (nominal)")
+        clipped += _clip_outliers(ax, t, net_est[:, i:i + 1], lim, c)
+    ax.set_ylim(*lim)
+    ax.set_ylabel("net contact force, world frame [N]")
+    ax.set_title("net force of every contact (fingers and table)" + _beyond(clipped), fontsize=9)
+    ax.legend(ncol=1, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+
+
+def _sum_of_squares_panel(ax, t, sos: dict) -> None:
+    """The sums of squares of the finger forces (eq. 6): true, nominal, learned."""
+    lim = robust_limits(*sos.values())
+    clipped = 0
+    for (label, y), ls in zip(sos.items(), ("-", "--", ":")):
+        ax.plot(t, y, ls=ls, lw=1.6 if ls != "--" else 1.0, color="k" if ls == "-" else None, label=label)
+        clipped += _clip_outliers(ax, t, y[:, None], lim, "k")
+    ax.set_ylim(*lim)
+    ax.set_ylabel("sum over fingers of |F|² [N²]")
+    ax.set_title("sum of squares (eq. 6)" + _beyond(clipped), fontsize=9)
+    ax.set_xlabel("time [s]")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+

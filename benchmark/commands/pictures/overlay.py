@@ -49,19 +49,45 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.collections import LineCollection
 
     T = depth.num_frames
     idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
     fig, axes = plt.subplots(1, len(idx), figsize=(3.2 * len(idx), 3.4), squeeze=False)
+    lo, hi = _crop(calib, tracking, object_model, hand_model, idx)
+    for ax, i in zip(axes[0], idx):
+        d = np.where(depth.depth_m[i] > 0, depth.depth_m[i], np.nan)
+        crop = d[int(lo[1]) : int(hi[1]) + 1, int(lo[0]) : int(hi[0]) + 1]
+        vmin, vmax = (np.nanpercentile(crop, 1), np.nanpercentile(crop, 99)) if np.isfinite(crop).any() else (0, 1)
+        ax.imshow(d, cmap="Greys_r", vmin=vmin, vmax=vmax)
+        if truth is not None:
+            _draw_truth(ax, calib, truth, object_model, hand_model, i)
+        _draw_estimate(ax, calib, tracking, object_model, hand_model, i)
+        ax.set_title(f"t = {depth.t[i]:.2f} s", fontsize=8)
+        ax.set_xlim(lo[0], hi[0])
+        ax.set_ylim(hi[1], lo[1])
+        ax.axis("off")
+    fig.legend(handles=_legend(truth is not None), loc="lower center", ncol=8 if truth is not None else 5, fontsize=7,
+               frameon=False)
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    path = write_bytes(path, buf.getvalue())
+    return path
+
+
+_SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+"""The box's eight corners as signs of its half extents."""
+
+
+def _crop(calib: Calibration, tracking, object_model: ObjectModel, hand_model: HandModel, idx) -> tuple:
+    """One crop for the whole strip: the tracked box and hand over the shown frames, plus a margin,
+    ``(lo, hi)`` pixel corners."""
     half = object_model.half_extents
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-    # One crop for the whole strip: the tracked box and hand over the shown frames, plus a margin.
     hand_qpos = getattr(tracking, "hand_qpos", None)  # a tracker other than the reference may have no hand
-    tips_all = getattr(tracking, "fingertips", None)
     pts = []
     for i in idx:
-        pts.append(_project(calib, tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T))
+        pts.append(_project(calib, tracking.box.pos[i] + (_SIGNS * half) @ tracking.box.rot[i].T))
         if hand_qpos is not None:
             ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, hand_qpos[i]))
             pts.append(_project(calib, ends.reshape(-1, 3)))
@@ -70,47 +96,57 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
     lo = np.maximum(np.floor(uv.min(0)) - 25, 0) if uv.size else np.zeros(2)
     hi = np.minimum(np.ceil(uv.max(0)) + 25, [calib.width - 1, calib.height - 1]) if uv.size else np.array(
         [calib.width - 1, calib.height - 1])
-    for ax, i in zip(axes[0], idx):
-        d = np.where(depth.depth_m[i] > 0, depth.depth_m[i], np.nan)
-        crop = d[int(lo[1]) : int(hi[1]) + 1, int(lo[0]) : int(hi[0]) + 1]
-        vmin, vmax = (np.nanpercentile(crop, 1), np.nanpercentile(crop, 99)) if np.isfinite(crop).any() else (0, 1)
-        ax.imshow(d, cmap="Greys_r", vmin=vmin, vmax=vmax)
-        if truth is not None:
-            corners = truth.box_pos[i] + (signs * half) @ truth.box_rot[i].T
-            uv = _project(calib, corners)
-            ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors="white", linewidths=1.0,
-                                             linestyles="--", alpha=0.8))
-            ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, truth.hand_qpos[i]))
-            uv = _project(calib, ends.reshape(-1, 3)).reshape(-1, 2, 2)
-            ax.add_collection(LineCollection(uv, colors="white", linewidths=2.5, alpha=0.3, capstyle="round"))
-            act_t = np.asarray(truth.contact_active[i], bool)
-            if act_t.any():
-                uv = _project(calib, truth.box_pos[i] + truth.contact_point[i, act_t] @ truth.box_rot[i].T)
-                ax.scatter(uv[:, 0], uv[:, 1], marker="+", s=40, c="magenta", zorder=3, linewidths=1.0)
-        corners = tracking.box.pos[i] + (signs * half) @ tracking.box.rot[i].T
-        uv = _project(calib, corners)
-        ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors="lime", linewidths=1.2))
-        if hand_qpos is not None:
-            ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, hand_qpos[i]))
-            depth_mid = ((ends[:, 0] + ends[:, 1]) / 2 - calib.T_world_cam[:3, 3]) @ calib.T_world_cam[:3, 2]
-            px = hand_model.geom_radius * calib.K[0, 0] / np.maximum(1e-3, depth_mid)  # capsule radius in pixels
-            uv = _project(calib, ends.reshape(-1, 3)).reshape(-1, 2, 2)
-            ax.add_collection(LineCollection(uv, colors="orange", linewidths=np.maximum(1.0, 1.4 * px), alpha=0.55,
-                                             capstyle="round"))
-        if tips_all is not None:
-            tips = _project(calib, tips_all[i])
-            seen = getattr(tracking, "observed", np.ones(tips_all.shape[:2], bool))[i]
-            ax.scatter(tips[seen, 0], tips[seen, 1], s=12, c="red", zorder=3)
-            ax.scatter(tips[~seen, 0], tips[~seen, 1], s=12, c="white", edgecolors="red", zorder=3)
-        act = tracking.contacts.active[i]
-        if act.any():
-            pts = tracking.box.pos[i] + tracking.contacts.point[i, act] @ tracking.box.rot[i].T
-            uv = _project(calib, pts)
-            ax.scatter(uv[:, 0], uv[:, 1], marker="x", s=30, c="cyan", zorder=4)
-        ax.set_title(f"t = {depth.t[i]:.2f} s", fontsize=8)
-        ax.set_xlim(lo[0], hi[0])
-        ax.set_ylim(hi[1], lo[1])
-        ax.axis("off")
+    return lo, hi
+
+
+def _draw_truth(ax, calib: Calibration, truth: Truth, object_model: ObjectModel, hand_model: HandModel, i: int) -> None:
+    """The true box (white dashed), hand (faint white) and contact points (magenta plus signs) of frame ``i``."""
+    from matplotlib.collections import LineCollection
+
+    corners = truth.box_pos[i] + (_SIGNS * object_model.half_extents) @ truth.box_rot[i].T
+    uv = _project(calib, corners)
+    ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors="white", linewidths=1.0,
+                                     linestyles="--", alpha=0.8))
+    ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, truth.hand_qpos[i]))
+    uv = _project(calib, ends.reshape(-1, 3)).reshape(-1, 2, 2)
+    ax.add_collection(LineCollection(uv, colors="white", linewidths=2.5, alpha=0.3, capstyle="round"))
+    act_t = np.asarray(truth.contact_active[i], bool)
+    if act_t.any():
+        uv = _project(calib, truth.box_pos[i] + truth.contact_point[i, act_t] @ truth.box_rot[i].T)
+        ax.scatter(uv[:, 0], uv[:, 1], marker="+", s=40, c="magenta", zorder=3, linewidths=1.0)
+
+
+def _draw_estimate(ax, calib: Calibration, tracking, object_model: ObjectModel, hand_model: HandModel, i: int) -> None:
+    """The tracked box (green), hand capsules (orange), fingertips (red: seen, white: hidden) and
+    active contact points (cyan crosses) of frame ``i``."""
+    from matplotlib.collections import LineCollection
+
+    corners = tracking.box.pos[i] + (_SIGNS * object_model.half_extents) @ tracking.box.rot[i].T
+    uv = _project(calib, corners)
+    ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors="lime", linewidths=1.2))
+    hand_qpos = getattr(tracking, "hand_qpos", None)
+    if hand_qpos is not None:
+        ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, hand_qpos[i]))
+        depth_mid = ((ends[:, 0] + ends[:, 1]) / 2 - calib.T_world_cam[:3, 3]) @ calib.T_world_cam[:3, 2]
+        px = hand_model.geom_radius * calib.K[0, 0] / np.maximum(1e-3, depth_mid)  # capsule radius in pixels
+        uv = _project(calib, ends.reshape(-1, 3)).reshape(-1, 2, 2)
+        ax.add_collection(LineCollection(uv, colors="orange", linewidths=np.maximum(1.0, 1.4 * px), alpha=0.55,
+                                         capstyle="round"))
+    tips_all = getattr(tracking, "fingertips", None)
+    if tips_all is not None:
+        tips = _project(calib, tips_all[i])
+        seen = getattr(tracking, "observed", np.ones(tips_all.shape[:2], bool))[i]
+        ax.scatter(tips[seen, 0], tips[seen, 1], s=12, c="red", zorder=3)
+        ax.scatter(tips[~seen, 0], tips[~seen, 1], s=12, c="white", edgecolors="red", zorder=3)
+    act = tracking.contacts.active[i]
+    if act.any():
+        pts = tracking.box.pos[i] + tracking.contacts.point[i, act] @ tracking.box.rot[i].T
+        uv = _project(calib, pts)
+        ax.scatter(uv[:, 0], uv[:, 1], marker="x", s=30, c="cyan", zorder=4)
+
+
+def _legend(with_truth: bool) -> list:
+    """The legend's handles: every mark of the strip."""
     from matplotlib.lines import Line2D
 
     marks = [Line2D([], [], color="lime", lw=1.2, label="tracked box"),
@@ -118,14 +154,9 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
              Line2D([], [], color="red", marker="o", ls="", ms=4, label="fingertip (seen)"),
              Line2D([], [], color="white", markeredgecolor="red", marker="o", ls="", ms=4, label="fingertip (hidden)"),
              Line2D([], [], color="cyan", marker="x", ls="", ms=6, label="tracked contact")]
-    if truth is not None:
+    if with_truth:
         marks += [Line2D([], [], color="grey", lw=1.0, ls="--", label="true box"),
                   Line2D([], [], color="grey", lw=2.5, alpha=0.4, label="true hand"),
                   Line2D([], [], color="magenta", marker="+", ls="", ms=7, label="true contact")]
-    fig.legend(handles=marks, loc="lower center", ncol=len(marks), fontsize=7, frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    path = write_bytes(path, buf.getvalue())
-    return path
+    return marks
+
