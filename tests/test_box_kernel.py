@@ -1,7 +1,7 @@
 """The box tracker's compiled kernels against the vectorised NumPy model they replace.
 
 ``_reference_box_depth`` below is the NumPy implementation the box tracker used before its hot path
-was compiled with numba (``fsv.track.object._box_depth_kernel``): the prediction of the depth, the
+was compiled with numba (``fsv.track.box_kernels._box_depth_kernel``): the prediction of the depth, the
 soft coverage, the extended face plane and the depth's Jacobian must agree with it to rounding;
 the Jacobian must agree with central differences of the depth away from silhouette corners and face
 edges; the fused normal equations (``_box_normal_equations``) must equal ``gram`` and ``tmv`` of
@@ -15,7 +15,8 @@ from fsv import ObjectModel
 from fsv.linalg import dot, gram, mv, tmv, vm
 from fsv.rotation import cross, exp_so3
 from fsv.track.camera import CameraRays
-from fsv.track.object import _FAR_M, BoxTracker, _box_depth, _box_normal_equations, _box_rays, predict_box_depth
+from fsv.track.box_kernels import _FAR_M, _box_depth, _box_normal_equations, _box_rays
+from fsv.track.object import BoxTracker, predict_box_depth
 from raycast import look_at_calibration
 
 SIZE = np.array([0.171, 0.111, 0.060])
@@ -27,7 +28,7 @@ ALL = np.arange(RAYS.ray.shape[0])
 
 
 def _reference_box_depth(o, d, bg, pos, rot, half, fx, silhouette_px, jacobian, details=False):
-    """The NumPy model (fsv.track.object._box_depth before numba), verbatim; ``details`` also returns
+    """The NumPy model (fsv.track.box_kernels._box_depth before numba), verbatim; ``details`` also returns
     per pixel the (face, edge axis, edge sign) that set the depth and the coverage margin, and
     whether the pixel is covered (the branches of the model, for the finite differences)."""
     N = d.shape[0]
@@ -322,7 +323,7 @@ def test_fit_follows_the_numpy_gauss_newton(with_prior, monkeypatch):
 
 
 def test_flying_pixels_lie_between_the_face_plane_and_the_background():
-    from fsv.track.object import _flying_pixels
+    from fsv.track.box_kernels import _flying_pixels
 
     inf = np.inf
     z = np.array([1.20, 1.01, 1.49, 1.50, 1.50, 1.20])

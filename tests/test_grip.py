@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from benchmark.world.grip import GripPolicy, plan_grasp
+from benchmark.world.grasp_plan import plan_grasp
+from benchmark.world.grip import GripPolicy
 from benchmark.world.scenario import Scenario
 from benchmark.world.assets import build_world, users
 
@@ -128,7 +129,7 @@ def test_table2_pair_grips_alike_and_a_careful_user_harder(episode_factory):
 def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
     """Every (user, grasp) has a stored plan whose inputs still match (else the world would fall back
     to a kernel-dependent solve); solving u0/g0 again lands on the stored solution."""
-    from benchmark.world.grip import _PlanProblem, stored_plans
+    from benchmark.world.grasp_plan import _PlanProblem, stored_plans
     from benchmark.world.assets import grasps, users
 
     stored = stored_plans()
@@ -137,7 +138,7 @@ def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
         for g in range(len(grasps())):
             problem = _PlanProblem(u, g)
             entry = stored[f"{problem.user_name}/{problem.grasp_name}"]
-            assert entry["fingerprint"] == problem.fingerprint, f"stale plan for user {u}, grasp {g}: run python -m benchmark.world.grip --write-plans"
+            assert entry["fingerprint"] == problem.fingerprint, f"stale plan for user {u}, grasp {g}: run python -m benchmark.world.grasp_plan --write-plans"
     problem = _PlanProblem(0, 0)
     x = np.array(stored[f"{problem.user_name}/{problem.grasp_name}"]["x"])
     # kernels move the solve by <= 3e-6 rad (measured: Haswell vs Sandybridge on the 20 plans)

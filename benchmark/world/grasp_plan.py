@@ -1,0 +1,273 @@
+"""Where the hand goes for a grasp: :func:`plan_grasp` places it on the box.
+
+For a grasp of ``sim_assets/grasps.yaml`` it solves for the palm's pose (height, setback, pitch
+above the box) and the 20 joint angles so that each active pad touches its spot on the box face,
+no other part of the hand comes closer than a few millimetres to the box or the table, and the
+posture stays close to a relaxed human one (a regularised least-squares inverse kinematics, with
+MuJoCo's kinematics and distances). The solutions are stored in ``sim_assets/grasp_plans.json``
+with a fingerprint of their inputs, so that every machine builds the same world
+(``python -m benchmark.world.grasp_plan --write-plans`` solves them again)."""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.resources
+import json
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+from scipy.optimize import least_squares
+
+from benchmark.errors import ScenarioError
+from benchmark.world.assets import build_world, grasp_of, user_of
+from benchmark.world.scenario import Scenario
+
+# Relaxed postures (radians): [abduction, flexion, flexion, flexion] per digit.
+_PRIOR_ACTIVE = {"thumb": [0.0, 0.3, 0.4, 0.3], "finger": [0.0, 0.25, 1.4, 0.5]}
+_PRIOR_FREE = [0.0, 0.2, 0.3, 0.15]
+_CLEARANCE_M = 0.007  # keep every non-pad part of the hand this far from the box and the table
+_SHAFT_CLEARANCE_M = 0.0025  # ... except the distal shafts of the active digits, next to their pads
+
+
+def face_normal(face: str) -> np.ndarray:
+    """Outward unit normal of a box face named ``+x``, ``-x``, ``+y``, ``-y``, ``+z`` or ``-z``."""
+    if len(face) != 2 or face[0] not in "+-" or face[1] not in "xyz":
+        raise ScenarioError(f"face {face!r} is not one of +x, -x, +y, -y, +z, -z")
+    n = np.zeros(3)
+    n["xyz".index(face[1])] = 1.0 if face[0] == "+" else -1.0
+    return n
+
+
+@dataclass(frozen=True)
+class GraspPlan:
+    """A grasp fitted to one hand, with the box lying at its start pose.
+
+    Attributes:
+        active: Whether each finger (thumb first) touches the box, (K,) bool.
+        spot: Pad contact point on the box surface, object frame, (K, 3), [m] (zero if inactive).
+        normal_in: Unit normal into the box at the spot, object frame, (K, 3).
+        palm_pos: Palm position in the object frame, (3,), [m].
+        palm_quat: Palm orientation in the object frame (w, x, y, z), (4,).
+        q_grasp: Joint angles with every active pad on its spot, (n,), [rad].
+        q_open: Pre-shape: the same posture opened so that the pads clear the box, (n,), [rad].
+        tip_error_m: Largest distance of an active pad centre from its target, [m].
+        clearance_m: Smallest margin of the other hand parts over their required gap to the box
+            and the table, expressed as a distance, [m]: ``min(distance - required gap) + 7 mm``,
+            where the gap is 7 mm, or 2.5 mm for the distal shafts next to the active pads.
+            Positive: no part other than the pads touches the box or the table.
+    """
+
+    active: np.ndarray
+    spot: np.ndarray
+    normal_in: np.ndarray
+    palm_pos: np.ndarray
+    palm_quat: np.ndarray
+    q_grasp: np.ndarray
+    q_open: np.ndarray
+    tip_error_m: float
+    clearance_m: float
+
+
+def _pitch_quat(pitch: float) -> np.ndarray:
+    return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
+
+
+PLANS_FILE = "grasp_plans.json"  # in sim_assets: the solved plans, so every machine builds the same world
+_PLANS_FORMAT = "fsv-bench grasp plans"
+
+
+class _PlanProblem:
+    """The least-squares problem that fits one grasp to one hand (palm y, z, pitch and 20 joints).
+
+    Attributes:
+        fingerprint: sha256 of everything the solution depends on (the compiled hand and box, the
+            grasp's spots, the priors and clearances): a stored solution is used only while it matches.
+    """
+
+    def __init__(self, user: int, grasp: int):
+        sc = Scenario(user=user, grasp=grasp)
+        world = build_world(sc)
+        spec = grasp_of(sc)
+        hand, m = world.hand, world.model
+        self.world, self.spec, self.d = world, spec, mujoco.MjData(m)
+        self.user_name, self.grasp_name = str(user_of(sc)["name"]), str(spec["name"])
+        self.active, self.spot, self.normal_in = active, spot, normal_in = _spots(hand, spec)
+        self.box_pos = self.d.qpos[world.box_qadr : world.box_qadr + 3].copy()
+        self.target = self.box_pos + spot - normal_in * hand.fingertip_radius[:, None]
+        self.lo, self.hi = hand.joint_range[:, 0], hand.joint_range[:, 1]
+        self.prior = np.clip(_prior(hand, active), self.lo, self.hi)
+        self.body_geoms, self.clearance = _clearances(world, active)
+        self.fingerprint = _plan_fingerprint(world, spec, self.target, self.prior, self.clearance)
+
+    def pose(self, x: np.ndarray) -> None:
+        w, d = self.world, self.d
+        d.qpos[w.hand_qadr[:3]] = self.box_pos + [self.spec["palm_x"], x[0], x[1]]
+        d.qpos[w.hand_qadr[3:7]] = _pitch_quat(x[2])
+        d.qpos[w.joint_qadr] = x[3:]
+        mujoco.mj_kinematics(w.model, d)
+
+    def distances(self) -> np.ndarray:
+        w, d, m = self.world, self.d, self.world.model
+        out = []
+        for g in self.body_geoms:
+            out.append(mujoco.mj_geomDistance(m, d, int(g), w.box_geom, 0.05, None))
+            out.append(d.geom_xpos[g][2] - m.geom_rbound[g])
+        return np.array(out)
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        self.pose(x)
+        tips = self.d.site_xpos[self.world.tip_site]
+        r_tip = (tips - self.target)[self.active].ravel() / 0.001
+        r_post = (x[3:] - self.prior) / 0.5
+        r_pitch = [(x[2] - 0.3) / 0.5]
+        r_col = np.maximum(0.0, self.clearance - self.distances()) / 0.0005
+        return np.concatenate([r_tip, r_post, r_pitch, r_col])
+
+    def solve(self) -> np.ndarray:
+        """Fits the plan from scratch (scipy's least squares: its last digits depend on the BLAS kernel)."""
+        half = self.world.obj.half_extents
+        x0 = np.concatenate([[0.0, half[2] + 0.03, 0.3], self.prior])  # palm y, z (object frame), pitch; joints
+        bounds = (np.concatenate([[-0.1, half[2], -0.6], self.lo]), np.concatenate([[0.1, 0.15, 1.2], self.hi]))
+        x_scale = np.concatenate([[0.01, 0.01, 0.1], np.full(len(self.prior), 0.1)])
+        return least_squares(self.residual, x0, bounds=bounds, x_scale=x_scale, max_nfev=400).x
+
+    def plan(self, x: np.ndarray) -> GraspPlan:
+        hand = self.world.hand
+        self.pose(x)
+        tip_err = float(np.max(np.linalg.norm(self.d.site_xpos[self.world.tip_site] - self.target, axis=1)[self.active]))
+        gap = float(np.min(self.distances() - self.clearance + _CLEARANCE_M))
+        q_grasp = x[3:].copy()
+        # Pre-shape: open every flexion of the active digits by 0.5 rad (pads swing away from the faces).
+        q_open = q_grasp.copy()
+        for k, f in enumerate(hand.finger_names):
+            if self.active[k]:
+                for j, n in enumerate(hand.joint_names):
+                    if n.startswith(f + "_") and n.endswith("flex"):
+                        q_open[j] = np.clip(q_grasp[j] - 0.5, self.lo[j], self.hi[j])
+        return GraspPlan(active=self.active, spot=self.spot, normal_in=self.normal_in,
+                         palm_pos=np.array([self.spec["palm_x"], x[0], x[1]]), palm_quat=_pitch_quat(x[2]),
+                         q_grasp=q_grasp, q_open=q_open, tip_error_m=tip_err, clearance_m=gap)
+
+
+def _spots(hand, spec: dict) -> tuple:
+    """The grasp's digits on the box: ``(active (K,), spot (K, 3) in the box frame, inward normal (K, 3))``."""
+    K = len(hand.finger_names)
+    unknown = set(spec["spots"]) - set(hand.finger_names)
+    if unknown:
+        raise ScenarioError(f"grasp {spec['name']!r} names unknown digits {sorted(unknown)}; accepted: {hand.finger_names}")
+    active = np.array([f in spec["spots"] for f in hand.finger_names])
+    spot = np.zeros((K, 3))
+    normal_in = np.zeros((K, 3))
+    for k, f in enumerate(hand.finger_names):
+        if active[k]:
+            spot[k] = spec["spots"][f]["point"]
+            normal_in[k] = -face_normal(spec["spots"][f]["face"])
+    return active, spot, normal_in
+
+
+def _prior(hand, active: np.ndarray) -> np.ndarray:
+    """The joints' prior posture: the grasping digits' (thumb or finger) and the free digits'."""
+    prior = np.zeros(hand.num_joints)
+    for k, f in enumerate(hand.finger_names):
+        js = [j for j, n in enumerate(hand.joint_names) if n.startswith(f + "_")]
+        prior[js] = _PRIOR_ACTIVE["thumb" if k == 0 else "finger"] if active[k] else _PRIOR_FREE
+    return prior
+
+
+def _clearances(world, active: np.ndarray) -> tuple:
+    """The hand's geoms that must stay clear of the box and the table (every one but the grasping
+    pads), and their clearance, twice each (box, table): ``(geoms, clearance (2 G,))``."""
+    hand, m = world.hand, world.model
+    K = len(hand.finger_names)
+    pad_geoms = {int(np.flatnonzero((world.geom_segment == hand.fingertip_segment[k])
+                                    & (m.geom_type == mujoco.mjtGeom.mjGEOM_SPHERE))[0]) for k in range(K) if active[k]}
+    body_geoms = [g for g in np.flatnonzero(world.geom_segment >= 0) if g not in pad_geoms]
+    distal = {int(hand.fingertip_segment[k]) for k in range(K) if active[k]}
+    clearance = np.repeat([_SHAFT_CLEARANCE_M if world.geom_segment[g] in distal else _CLEARANCE_M
+                           for g in body_geoms], 2)
+    return body_geoms, clearance
+
+
+def _plan_fingerprint(world, spec: dict, target: np.ndarray, prior: np.ndarray, clearance: np.ndarray) -> str:
+    """sha256 of everything a grasp plan depends on (see :attr:`Human.fingerprint`)."""
+    m = world.model
+    digest = hashlib.sha256()
+    for arr in (m.body_pos, m.body_quat, m.geom_size, m.geom_pos, m.geom_quat, m.geom_type, m.jnt_axis,
+                m.jnt_pos, m.jnt_range, target, prior, clearance, world.obj.half_extents):
+        digest.update(np.ascontiguousarray(arr).tobytes())
+    digest.update(json.dumps([spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]).encode())
+    return digest.hexdigest()
+
+
+@functools.lru_cache(maxsize=1)
+def stored_plans() -> dict:
+    """The solved plans shipped in ``sim_assets/grasp_plans.json``: ``{"user/grasp": {fingerprint, x}}``."""
+    path = importlib.resources.files("sim_assets") / PLANS_FILE
+    if not path.is_file():
+        return {}
+    data = json.loads(path.read_text())
+    if data.get("format") != _PLANS_FORMAT:
+        raise ScenarioError(f"{path} is not a {_PLANS_FORMAT!r} file")
+    return data["plans"]
+
+
+@functools.lru_cache(maxsize=64)
+def _plan(user: int, grasp: int) -> GraspPlan:
+    problem = _PlanProblem(user, grasp)
+    entry = stored_plans().get(f"{problem.user_name}/{problem.grasp_name}")
+    if entry is not None and entry["fingerprint"] == problem.fingerprint:
+        x = np.array(entry["x"], dtype=float)
+    else:  # a user or grasp edited since the plans were stored: solved here, machine-dependent in the last digits
+        x = problem.solve()
+    return problem.plan(x)
+
+
+def solve_all_plans() -> dict:
+    """Solves every (user, grasp) plan from scratch: the content of ``sim_assets/grasp_plans.json``."""
+    from benchmark.world.assets import grasps, users
+
+    plans = {}
+    for u in range(len(users())):
+        for g in range(len(grasps())):
+            problem = _PlanProblem(u, g)
+            plans[f"{problem.user_name}/{problem.grasp_name}"] = {"fingerprint": problem.fingerprint,
+                                                                  "x": [float(v) for v in problem.solve()]}
+    return {"format": _PLANS_FORMAT, "version": 1,
+            "note": "Grasp plans solved by benchmark.world.grasp_plan (python -m benchmark.world.grasp_plan --write-plans); "
+                    "stored so that every machine and BLAS kernel builds bit-identical worlds.",
+            "plans": plans}
+
+
+def plan_grasp(scenario: Scenario) -> GraspPlan:
+    """Fits the scenario's grasp to its user's hand (cached per user and grasp).
+
+    Raises:
+        ScenarioError: If the user or grasp does not exist.
+    """
+    user_of(scenario)
+    grasp_of(scenario)
+    return _plan(scenario.user, scenario.grasp)
+
+
+def main(argv=None) -> int:
+    """``python -m benchmark.world.grasp_plan --write-plans``: re-solves and stores every grasp plan."""
+    import argparse
+
+    from benchmark.atomic import write_text
+
+    parser = argparse.ArgumentParser(prog="python -m benchmark.world.grasp_plan", description=main.__doc__)
+    parser.add_argument("--write-plans", action="store_true", help="solve every plan and write sim_assets/" + PLANS_FILE)
+    args = parser.parse_args(argv)
+    if not args.write_plans:
+        parser.print_help()
+        return 0
+    path = importlib.resources.files("sim_assets") / PLANS_FILE
+    write_text(str(path), json.dumps(solve_all_plans(), indent=1) + "\n")
+    print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
