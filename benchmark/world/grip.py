@@ -158,63 +158,15 @@ class Human:
                                     baseline_grip_n=pol.baseline_grip_n * living.trial_scale)
         self.ctrl_every = ctrl_every
         self._jac = np.zeros((3, world.model.nv))
-        m = world.model
-        mass = float(m.body_mass[world.box_body])
-        inertia = np.diag(m.body_inertia[world.box_body])
-        gravity = m.opt.gravity.copy()
         self.R_palm_obj = _rot(plan.palm_quat)
         self.approach = np.array([0.0, -0.06, 0.12])
-        ph = phases
         t = np.asarray(times, dtype=float)
-
-        # Palm target and finger posture targets at every step.
-        pos, rot, *_ = motion.evaluate(t)
-        palm_pos = pos + mv(rot, plan.palm_pos)
-        palm_rot = mm(rot, self.R_palm_obj)
-        reach = _mj(t / ph.reach_end)
-        palm_pos += ((1 - reach) * (t < ph.reach_end))[:, None] * self.approach
-        closing = _mj((t - ph.reach_end) / (ph.close_end - ph.reach_end))
-        q = plan.q_open + closing[:, None] * (plan.q_grasp - plan.q_open)
-        if releases:
-            opening = _mj((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
-            q = np.where((t >= ph.unload_end)[:, None], plan.q_grasp + opening[:, None] * (plan.q_open - plan.q_grasp), q)
-            leave = _mj((t - ph.open_end) / max(ph.duration - ph.open_end, 1e-9))
-            palm_pos += (leave * (t >= ph.open_end))[:, None] * self.approach
-        self.palm_pos = palm_pos
-        self.palm_quat = np.array([_quat_of(R) for R in palm_rot])
+        self.palm_pos, self.palm_quat, q = _palm_and_posture(t, motion, plan, phases, releases, self.R_palm_obj,
+                                                             self.approach)
         self.ctrl = q[:, world.actuator_joint]
-
-        # Grip forces at every control tick, object frame. The grip follows the load planned
-        # anticipation_s ahead of its own response (an internal model of the grip's lag), so that
-        # it leads or matches the load.
         tk = t[::ctrl_every]
-        ta = tk + pol.anticipation_s + pol.response_s
-        _, rot_a, _, acc, omega, alpha = motion.evaluate(ta)
-        load = np.ones_like(ta)
-        load = np.where(ta < ph.close_end, 0.0, load)
-        load = np.where((ta >= ph.close_end) & (ta < ph.load_end), _mj((ta - ph.close_end) / (ph.load_end - ph.close_end)), load)
-        if releases:
-            load = np.where(ta >= ph.move_end, 1 - _mj((ta - ph.move_end) / max(ph.unload_end - ph.move_end, 1e-9)), load)
-        # wrench in the object frame: R^T m (a - g), and J_box R^T alpha + w_b x J_box w_b
-        force_obj = np.einsum("nji,nj->ni", rot_a, mass * (acc - gravity))
-        w_b = np.einsum("nji,nj->ni", rot_a, omega)
-        a_b = np.einsum("nji,nj->ni", rot_a, alpha)
-        torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
-        wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
-        # The grip is the sum of the baseline (relaxing in holds), the grip at which every digit
-        # presses with min_finger_force_n without load, and the grip the load's slip limit needs:
-        # a sum, so that the grip follows the load at light loads too.
-        f_nom, f_int, grip_slip = replace(pol, min_finger_force_n=0.0).distribute(
-            wrench, plan.spot, plan.normal_in, plan.active)
-        n_int = np.einsum("kj,kj->k", f_int, plan.normal_in)[plan.active]
-        grip_floor = float(np.max(pol.min_finger_force_n / np.maximum(n_int, 1e-9)))
-        moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
-        target = pol.baseline_grip_n * living.relaxation(tk, moving) + grip_floor + grip_slip
-        ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
-        target = np.where(tk < ph.close_end, pol.baseline_grip_n * ramp, target)
-        if releases:
-            fade = 1 - _mj((tk - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
-            target = np.where(tk >= ph.unload_end, pol.baseline_grip_n * fade, target)
+        target, f_nom, f_int = _grip_target(tk, world, motion, plan, pol, living, phases, releases)
+        self.grip_target = target
         grip = np.zeros_like(target)
         keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
         g = 0.0
@@ -225,17 +177,16 @@ class Human:
         forces = f_nom + grip[:, None, None] * f_int
         norm = np.linalg.norm(forces, axis=2, keepdims=True)
         forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
-        off = (tk < ph.reach_end) | ((tk >= ph.open_end) if releases else False)
+        off = (tk < phases.reach_end) | ((tk >= phases.open_end) if releases else False)
         forces[off] = 0.0
         self.forces_obj = forces
+        self.grip = grip
         self._views = None
         self._fingers = []
         for k in np.flatnonzero(plan.active):
             dofs = world.finger_dofs[k]
             contiguous = np.array_equal(dofs, np.arange(dofs[0], dofs[-1] + 1))
             self._fingers.append((int(k), int(world.tip_site[k]), slice(int(dofs[0]), int(dofs[-1]) + 1) if contiguous else dofs))
-        self.grip = grip
-        self.grip_target = target
 
     def palm_start(self) -> tuple[np.ndarray, np.ndarray]:
         """Palm pose at the first step."""
@@ -258,6 +209,64 @@ class Human:
         for k, site, dofs in self._fingers:
             mujoco.mj_jacSite(m, data, jac, None, site)
             qfrc[dofs] = vm(f[k], jac[:, dofs])
+
+
+def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_obj: np.ndarray, approach: np.ndarray):
+    """The palm's target pose and the fingers' posture targets at the times ``t``:
+    ``(palm position (N, 3), palm quaternion (N, 4), joint targets (N, J))``."""
+    pos, rot, *_ = motion.evaluate(t)
+    palm_pos = pos + mv(rot, plan.palm_pos)
+    palm_rot = mm(rot, R_palm_obj)
+    reach = _mj(t / ph.reach_end)
+    palm_pos += ((1 - reach) * (t < ph.reach_end))[:, None] * approach
+    closing = _mj((t - ph.reach_end) / (ph.close_end - ph.reach_end))
+    q = plan.q_open + closing[:, None] * (plan.q_grasp - plan.q_open)
+    if releases:
+        opening = _mj((t - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
+        q = np.where((t >= ph.unload_end)[:, None], plan.q_grasp + opening[:, None] * (plan.q_open - plan.q_grasp), q)
+        leave = _mj((t - ph.open_end) / max(ph.duration - ph.open_end, 1e-9))
+        palm_pos += (leave * (t >= ph.open_end))[:, None] * approach
+    return palm_pos, np.array([_quat_of(R) for R in palm_rot]), q
+
+
+def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool) -> tuple:
+    """The grip the human aims at on every control tick ``tk``, and the per-finger nominal and unit
+    internal forces (object frame) it scales: ``(target (N,), f_nom (N, K, 3), f_int (N, K, 3))``.
+
+    The grip follows the load planned anticipation_s ahead of its own response (an internal model of
+    the grip's lag), so that it leads or matches the load. It is the sum of the baseline (relaxing in
+    holds), the grip at which every digit presses with min_finger_force_n without load, and the grip
+    the load's slip limit needs: a sum, so that the grip follows the load at light loads too.
+    """
+    m = world.model
+    mass = float(m.body_mass[world.box_body])
+    inertia = np.diag(m.body_inertia[world.box_body])
+    gravity = m.opt.gravity.copy()
+    ta = tk + pol.anticipation_s + pol.response_s
+    _, rot_a, _, acc, omega, alpha = motion.evaluate(ta)
+    load = np.ones_like(ta)
+    load = np.where(ta < ph.close_end, 0.0, load)
+    load = np.where((ta >= ph.close_end) & (ta < ph.load_end), _mj((ta - ph.close_end) / (ph.load_end - ph.close_end)), load)
+    if releases:
+        load = np.where(ta >= ph.move_end, 1 - _mj((ta - ph.move_end) / max(ph.unload_end - ph.move_end, 1e-9)), load)
+    # wrench in the object frame: R^T m (a - g), and J_box R^T alpha + w_b x J_box w_b
+    force_obj = np.einsum("nji,nj->ni", rot_a, mass * (acc - gravity))
+    w_b = np.einsum("nji,nj->ni", rot_a, omega)
+    a_b = np.einsum("nji,nj->ni", rot_a, alpha)
+    torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
+    wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
+    f_nom, f_int, grip_slip = replace(pol, min_finger_force_n=0.0).distribute(
+        wrench, plan.spot, plan.normal_in, plan.active)
+    n_int = np.einsum("kj,kj->k", f_int, plan.normal_in)[plan.active]
+    grip_floor = float(np.max(pol.min_finger_force_n / np.maximum(n_int, 1e-9)))
+    moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
+    target = pol.baseline_grip_n * living.relaxation(tk, moving) + grip_floor + grip_slip
+    ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
+    target = np.where(tk < ph.close_end, pol.baseline_grip_n * ramp, target)
+    if releases:
+        fade = 1 - _mj((tk - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
+        target = np.where(tk >= ph.unload_end, pol.baseline_grip_n * fade, target)
+    return target, f_nom, f_int
 
 
 def norm_rows(v: np.ndarray) -> np.ndarray:
