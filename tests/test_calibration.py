@@ -24,7 +24,7 @@ def _table(lines: dict, n=60, seed=0) -> pd.DataFrame:
         shares /= np.linalg.norm(shares, axis=1, keepdims=True)
         f = (baseline + gain * p1)[:, None] * shares
         for i in range(n):
-            row = {"episode": f"lift_u{user}", "user": user, "p1": p1[i], "p3": 0.1}
+            row = {"episode": f"lift-u{user}", "user": user, "p1": p1[i], "p3": 0.1}
             for k, name in enumerate(NAMES):
                 row |= {f"f_int_{name}": f[i, k], f"active_{name}": True, f"p2_{name}": 0.0, f"p4_{name}": 0.0}
             rows.append(row)

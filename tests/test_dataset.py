@@ -4,7 +4,8 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from benchmark.paper.dataset import DatasetSpec, episode_id, generate, load_dataset
+from benchmark.paper.dataset import DatasetSpec, generate, load_dataset
+from benchmark.world.scenario import episode_name
 from benchmark.paper.dataset.build import _with_meta
 from benchmark.paper.dataset.cli import parse_ints
 from benchmark.errors import DatasetError
@@ -14,11 +15,11 @@ CALLS = []
 
 def cheap_build(sc, spec):
     """A stand-in world for the bookkeeping tests: three rows per episode."""
-    CALLS.append(episode_id(sc))
+    CALLS.append(episode_name(sc))
     if len(CALLS) == 3 and os.environ.get("FSV_TEST_INTERRUPT") == "1":
         raise KeyboardInterrupt
     n = 3
-    t = pa.table(dict(episode=[episode_id(sc)] * n, user=[sc.user] * n, frame=np.arange(n), p1=np.full(n, sc.seed, float)))
+    t = pa.table(dict(episode=[episode_name(sc)] * n, user=[sc.user] * n, frame=np.arange(n), p1=np.full(n, sc.seed, float)))
     return _with_meta(t, sc, spec, ["thumb"], dict(frames=n, rows=n), status="ok")
 
 
@@ -31,12 +32,12 @@ def test_resume_after_interrupt_neither_duplicates_nor_loses(tmp_path, monkeypat
     with pytest.raises(KeyboardInterrupt):
         generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
     files = sorted(p.name for p in (tmp_path / "episodes").iterdir())
-    assert files == ["lift_u0_g0_m0_s0.parquet", "lift_u0_g0_m0_s0.seconds.json", "lift_u0_g0_m0_s1.parquet",
-                     "lift_u0_g0_m0_s1.seconds.json"]  # debris gone, nothing half-written
+    assert files == ["lift-u0-g0-m0-s0.parquet", "lift-u0-g0-m0-s0.seconds.json", "lift-u0-g0-m0-s1.parquet",
+                     "lift-u0-g0-m0-s1.seconds.json"]  # debris gone, nothing half-written
     monkeypatch.setenv("FSV_TEST_INTERRUPT", "0")
     man = generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
-    assert CALLS == [episode_id(sc) for sc in spec.scenarios()[:3]] + [episode_id(sc) for sc in spec.scenarios()[2:]]
-    assert sorted(man["episode"]) == sorted(episode_id(sc) for sc in spec.scenarios())
+    assert CALLS == [episode_name(sc) for sc in spec.scenarios()[:3]] + [episode_name(sc) for sc in spec.scenarios()[2:]]
+    assert sorted(man["episode"]) == sorted(episode_name(sc) for sc in spec.scenarios())
     assert man["rows"].sum() == 18
     df = load_dataset(tmp_path, user=1)
     assert len(df) == 9 and set(df["user"]) == {1}
@@ -117,7 +118,7 @@ def test_pool_output_equals_in_process_output(learn_oracle_dataset, tmp_path):
 
     spec, out, _ = learn_oracle_dataset
     man = generate(spec, tmp_path, workers=2, progress=False)
-    assert sorted(man["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1"]
+    assert sorted(man["episode"]) == ["lift-u0-g0-m0-s0", "lift-u0-g0-m0-s1"]
     pd.testing.assert_frame_equal(load_dataset(tmp_path), load_dataset(out))
 
 
@@ -240,7 +241,7 @@ def test_four_flipped_bytes_in_an_episode_file_are_refused_naming_it(oracle_copy
     from benchmark.errors import DatasetFileError
 
     spec, out = oracle_copy
-    path = out / "episodes" / "lift_u0_g0_m0_s1.parquet"
+    path = out / "episodes" / "lift-u0-g0-m0-s1.parquet"
     chunk = pq.ParquetFile(path).metadata.row_group(0).column(20)  # a float column's values
     _flip(path, chunk.data_page_offset + chunk.total_compressed_size // 2)
     with pytest.raises(DatasetFileError, match=str(path)):
@@ -257,10 +258,10 @@ def test_a_flip_that_leaves_the_content_intact_is_seen_by_the_manifest(oracle_co
     from benchmark.errors import DatasetFileError
 
     spec, out = oracle_copy
-    path = out / "episodes" / "lift_u0_g0_m0_s0.parquet"
+    path = out / "episodes" / "lift-u0-g0-m0-s0.parquet"
     _flip(path, 0)  # "PAR1" at the start: readers use the footer's copy
     _, meta, _ = read_episode_file(str(path))  # the content is intact
-    assert meta["episode"] == "lift_u0_g0_m0_s0"
+    assert meta["episode"] == "lift-u0-g0-m0-s0"
     with pytest.raises(DatasetFileError, match=f"{path} is corrupt: its bytes do not match the SHA-256 in the manifest"):
         load_dataset(out)
 
@@ -281,13 +282,13 @@ def test_a_damaged_manifest_is_refused_and_rebuilt_on_resume(tmp_path, capsys):
 
 def test_resume_rebuilds_a_truncated_episode_file_and_says_so(tmp_path, capsys):
     spec = _small(tmp_path)
-    path = tmp_path / "episodes" / "lift_u0_g0_m0_s1.parquet"
+    path = tmp_path / "episodes" / "lift-u0-g0-m0-s1.parquet"
     path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
     CALLS.clear()
     man = generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
     err = capsys.readouterr().err
     assert f"generate: {path} is truncated or corrupt" in err and "rebuilding it" in err
-    assert CALLS == ["lift_u0_g0_m0_s1"] and len(man) == 3
+    assert CALLS == ["lift-u0-g0-m0-s1"] and len(man) == 3
     assert sorted(load_dataset(tmp_path)["p1"].unique()) == [0.0, 1.0, 2.0]
 
 
@@ -298,17 +299,17 @@ def test_an_episode_file_copied_over_another_is_detected_and_rebuilt(tmp_path, c
     from benchmark.errors import DatasetFileError
 
     spec = _small(tmp_path)
-    a, b = (tmp_path / "episodes" / f"lift_u0_g0_m0_s{s}.parquet" for s in (0, 2))
+    a, b = (tmp_path / "episodes" / f"lift-u0-g0-m0-s{s}.parquet" for s in (0, 2))
     shutil.copyfile(a, b)
-    with pytest.raises(DatasetFileError, match=f"{b} holds episode 'lift_u0_g0_m0_s0'.*renamed or copied"):
+    with pytest.raises(DatasetFileError, match=f"{b} holds episode 'lift-u0-g0-m0-s0'.*renamed or copied"):
         read_episode_file(str(b))
     with pytest.raises(DatasetFileError, match=str(b)):
         load_dataset(tmp_path)
     CALLS.clear()
     generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
-    assert CALLS == ["lift_u0_g0_m0_s2"] and f"{b} holds episode 'lift_u0_g0_m0_s0'" in capsys.readouterr().err
+    assert CALLS == ["lift-u0-g0-m0-s2"] and f"{b} holds episode 'lift-u0-g0-m0-s0'" in capsys.readouterr().err
     df = load_dataset(tmp_path, seed=2)
-    assert set(df["p1"]) == {2.0} and set(df["episode"]) == {"lift_u0_g0_m0_s2"}
+    assert set(df["p1"]) == {2.0} and set(df["episode"]) == {"lift-u0-g0-m0-s2"}
 
 
 def test_an_episode_of_another_scenario_under_the_right_name_is_rebuilt(tmp_path, capsys):
@@ -317,12 +318,12 @@ def test_an_episode_of_another_scenario_under_the_right_name_is_rebuilt(tmp_path
     generate(DatasetSpec(seeds=(0,), duration_s=1.0), tmp_path / "one", workers=1, progress=False, build=cheap_build)
     spec = DatasetSpec(seeds=(0,), duration_s=2.0)
     generate(spec, tmp_path / "two", workers=1, progress=False, build=cheap_build)
-    name = "episodes/lift_u0_g0_m0_s0.parquet"
+    name = "episodes/lift-u0-g0-m0-s0.parquet"
     shutil.copyfile(tmp_path / "one" / name, tmp_path / "two" / name)
     (tmp_path / "two" / "manifest.parquet").unlink()  # as after an interrupted run: the file must speak for itself
     CALLS.clear()
     generate(spec, tmp_path / "two", workers=1, progress=False, build=cheap_build)
-    assert CALLS == ["lift_u0_g0_m0_s0"] and "made with another scenario" in capsys.readouterr().err
+    assert CALLS == ["lift-u0-g0-m0-s0"] and "made with another scenario" in capsys.readouterr().err
     assert len(load_dataset(tmp_path / "two")) == 3
 
 
@@ -336,7 +337,7 @@ def test_a_local_ray_cluster_makes_the_same_dataset_as_the_local_pool(learn_orac
     for f in pool["file"]:
         assert (tmp_path / "pool" / f).read_bytes() == (out / f).read_bytes(), f
     man = generate(spec, tmp_path, ray_address=ray_cluster, progress=False)
-    assert sorted(man["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1"] and (man["status"] == "ok").all()
+    assert sorted(man["episode"]) == ["lift-u0-g0-m0-s0", "lift-u0-g0-m0-s1"] and (man["status"] == "ok").all()
     pd.testing.assert_frame_equal(load_dataset(tmp_path), load_dataset(out))
     import json
 
@@ -389,11 +390,11 @@ def test_a_stale_claim_of_a_dead_run_is_taken_over(tmp_path):
 
     spec = DatasetSpec(tasks=("lift",), seeds=(0, 1))
     (tmp_path / "episodes").mkdir(parents=True)
-    claim = tmp_path / "episodes" / "lift_u0_g0_m0_s0.claim"
+    claim = tmp_path / "episodes" / "lift-u0-g0-m0-s0.claim"
     claim.write_text(json.dumps({"host": socket.gethostname(), "pid": _dead_pid()}))  # a killed run's claim
     CALLS.clear()
     man = generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
-    assert sorted(CALLS) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1"] and (man["status"] == "ok").all()
+    assert sorted(CALLS) == ["lift-u0-g0-m0-s0", "lift-u0-g0-m0-s1"] and (man["status"] == "ok").all()
     assert not list((tmp_path / "episodes").glob("*.claim"))
 
 
@@ -411,7 +412,7 @@ def test_concurrent_runs_share_the_work_instead_of_repeating_it(tmp_path, monkey
     monkeypatch.setattr(claims, "CLAIM_POLL_S", 0.05)
     spec = DatasetSpec(tasks=("lift",), seeds=(0, 1, 2))
     (tmp_path / "d" / "episodes").mkdir(parents=True)
-    other = tmp_path / "d" / "episodes" / "lift_u0_g0_m0_s1.claim"
+    other = tmp_path / "d" / "episodes" / "lift-u0-g0-m0-s1.claim"
     other.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getppid()}))  # a live "other run"
     CALLS.clear()
     result = {}
@@ -419,17 +420,17 @@ def test_concurrent_runs_share_the_work_instead_of_repeating_it(tmp_path, monkey
                                                                      build=cheap_build)))
     run.start()
     deadline = time.time() + 30
-    while sorted(CALLS) != ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s2"] and time.time() < deadline:
+    while sorted(CALLS) != ["lift-u0-g0-m0-s0", "lift-u0-g0-m0-s2"] and time.time() < deadline:
         time.sleep(0.05)
     time.sleep(0.3)
     assert run.is_alive()  # waiting for the other run's episode
     sc = next(s for s in spec.scenarios() if s.seed == 1)  # the other run finishes its episode
-    _write_sealed(_run_one(sc, spec, lambda s, p: cheap_build(s, p)), str(tmp_path / "d" / "episodes" / "lift_u0_g0_m0_s1.parquet"))
+    _write_sealed(_run_one(sc, spec, lambda s, p: cheap_build(s, p)), str(tmp_path / "d" / "episodes" / "lift-u0-g0-m0-s1.parquet"))
     other.unlink()
     run.join(30)
     assert not run.is_alive()
-    assert CALLS.count("lift_u0_g0_m0_s1") == 1  # made once, by the other run
-    assert sorted(result["man"]["episode"]) == ["lift_u0_g0_m0_s0", "lift_u0_g0_m0_s1", "lift_u0_g0_m0_s2"]
+    assert CALLS.count("lift-u0-g0-m0-s1") == 1  # made once, by the other run
+    assert sorted(result["man"]["episode"]) == ["lift-u0-g0-m0-s0", "lift-u0-g0-m0-s1", "lift-u0-g0-m0-s2"]
 
 
 def test_generate_shows_every_tracked_frame_across_the_worker_processes(tmp_path, capsys):

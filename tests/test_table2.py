@@ -93,7 +93,7 @@ def test_object_models_come_only_from_checked_files(learn_oracle_dataset, tmp_pa
 
     _, out, _ = learn_oracle_dataset
     shutil.copytree(out, tmp_path / "d")
-    path = tmp_path / "d" / "episodes" / "lift_u0_g0_m0_s0.parquet"
+    path = tmp_path / "d" / "episodes" / "lift-u0-g0-m0-s0.parquet"
     data = bytearray(path.read_bytes())
     data[len(data) // 2] ^= 0xFF
     path.write_bytes(bytes(data))

@@ -30,15 +30,9 @@ from benchmark.commands.report import write_json
 from benchmark.commands.stage import Run
 from benchmark.commands.stages import STAGES
 from benchmark.errors import BenchmarkError, ScenarioError
-from benchmark.suites.evaluate import (
-    add_method_arguments,
-    check_out,
-    episode_name,
-    load_gates,
-    spec_from_args,
-)
+from benchmark.suites.evaluate import add_method_arguments, check_out, load_gates, spec_from_args
 from benchmark.world.assets import validate
-from benchmark.world.scenario import Scenario
+from benchmark.world.scenario import Scenario, episode_name
 from fsv.errors import InputError
 from fsv.provenance import provenance
 

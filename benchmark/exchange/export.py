@@ -28,7 +28,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True) -> dict:
     """Writes the camera inputs of every episode of ``suite`` into ``out``; returns ``suite.json``'s content."""
-    from benchmark.suites.evaluate import cached_episode, default_cache, episode_name
+    from benchmark.suites.evaluate import cached_episode, default_cache
+    from benchmark.world.scenario import episode_name
     from benchmark.exchange import camera_file, estimates_file
     from benchmark.method import camera_input
     from fsv.provenance import provenance

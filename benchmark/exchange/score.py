@@ -27,7 +27,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def estimate_paths(suite, folder: pathlib.Path) -> dict:
     """``{scenario: path}`` of every episode's estimates file; ValueError naming the missing ones."""
-    from benchmark.suites.evaluate import episode_name
+    from benchmark.world.scenario import episode_name
 
     folder = pathlib.Path(folder)
     if not folder.is_dir():
@@ -47,7 +47,8 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     from benchmark.archive import read_archive
     from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, load_estimate
     from benchmark.scores.episode import score_episode
-    from benchmark.suites.evaluate import cached_episode, default_cache, episode_name, scores_document
+    from benchmark.suites.evaluate import cached_episode, default_cache, scores_document
+    from benchmark.world.scenario import episode_name
 
     paths = estimate_paths(suite, folder)
     metas = {sc: read_archive(p, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,

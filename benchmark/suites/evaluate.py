@@ -34,7 +34,7 @@ from dataclasses import asdict
 
 from benchmark.atomic import swap_folder
 from benchmark.errors import BenchmarkError, EpisodeFileError
-from benchmark.world.scenario import Scenario
+from benchmark.world.scenario import Scenario, episode_name
 from benchmark.suites import Gate, Suite, get_suite
 
 class GateFailure(BenchmarkError):
@@ -44,11 +44,6 @@ class GateFailure(BenchmarkError):
 def default_cache() -> pathlib.Path:
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return pathlib.Path(base) / "fsv-bench" / "episodes"
-
-
-def episode_name(scenario: Scenario) -> str:
-    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>``: how runs, cached episodes and score rows name a scenario."""
-    return f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
 
 
 def episode_key(suite: Suite, scenario: Scenario) -> str:

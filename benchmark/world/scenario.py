@@ -71,3 +71,9 @@ class Scenario:
     def rng_entropy(self, stream: str) -> list:
         """The entropy of :meth:`rng`'s generator for ``stream``: the seed, then the name's bytes."""
         return [int(self.seed), *[int(b) for b in stream.encode()]]
+
+
+def episode_name(scenario: Scenario) -> str:
+    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>``: how runs, cached episodes, score rows and dataset
+    files name a scenario."""
+    return f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"

@@ -20,10 +20,6 @@ from benchmark.world.contact_error import (
     PAPER_CONTACT_ERROR_STD_M,
 )
 
-PAPER_CONTACT_ERROR_MM = {"mean": round(PAPER_CONTACT_ERROR_MEAN_M * 1e3, 9), "std": round(PAPER_CONTACT_ERROR_STD_M * 1e3, 9)}
-"""The paper's contact-point error per axis, [mm] (mean -1.55, std 6.13), beside ours in the block."""
-
-
 def add_arguments(parser) -> None:
     """Options of the track stage of ``fsv-bench``."""
     parser.add_argument("--init-perturbation", type=float, default=1.0, metavar="SCALE",

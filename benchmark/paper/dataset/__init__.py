@@ -71,14 +71,10 @@ from benchmark.paper.dataset.files import (
                                            training_set,
                                            write_manifest,
 )
-from benchmark.paper.dataset.spec import (
-                                           CONTACTS,
-                                           FORMAT,
-                                           KINEMATICS,
-                                           VERSION,
-                                           DatasetSpec,
-                                           episode_id,
-)
+from benchmark.paper.dataset.build import build_episode, generate
+from benchmark.paper.dataset.files import (finger_names_of, frames_of, load_dataset, read_episode_file, read_manifest,
+                                           training_set, write_manifest)
+from benchmark.paper.dataset.spec import CONTACTS, FORMAT, KINEMATICS, VERSION, DatasetSpec
 
-__all__ = ["CONTACTS", "FORMAT", "KINEMATICS", "VERSION", "DatasetSpec", "build_episode", "episode_id", "finger_names_of",
-           "frames_of", "generate", "load_dataset", "read_episode_file", "read_manifest", "training_set", "write_manifest"]
+__all__ = ["CONTACTS", "FORMAT", "KINEMATICS", "VERSION", "DatasetSpec", "build_episode", "finger_names_of", "frames_of",
+           "generate", "load_dataset", "read_episode_file", "read_manifest", "training_set", "write_manifest"]

@@ -28,8 +28,8 @@ from benchmark.paper.dataset.spec import (
     FORMAT,
     VERSION,
     DatasetSpec,
-    episode_id,
 )
+from benchmark.world.scenario import episode_name
 from benchmark.parallel import (
     RayUnavailable,
     check_ray_address,
@@ -123,7 +123,7 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
 def _columns(sc, tr, kin, con, feats, measured, true_normal, gap, rows) -> dict:
     n = len(rows)
     cols = dict(
-        episode=np.full(n, episode_id(sc)), task=np.full(n, sc.task), user=np.full(n, sc.user),
+        episode=np.full(n, episode_name(sc)), task=np.full(n, sc.task), user=np.full(n, sc.user),
         grasp=np.full(n, sc.grasp), mass=np.full(n, sc.mass), seed=np.full(n, sc.seed),
         frame=rows.astype(np.int64), t=kin.t[rows],
     )
@@ -154,7 +154,7 @@ def _columns(sc, tr, kin, con, feats, measured, true_normal, gap, rows) -> dict:
 
 def _with_meta(table: pa.Table, sc: Scenario, spec: DatasetSpec, finger_names, stats: dict, status: str) -> pa.Table:
     meta = dict(
-        format=FORMAT, version=VERSION, episode=episode_id(sc), scenario=asdict(sc), finger_names=list(finger_names),
+        format=FORMAT, version=VERSION, episode=episode_name(sc), scenario=asdict(sc), finger_names=list(finger_names),
         kinematics=spec.kinematics, contacts=spec.contacts, status=status, **stats,
     )
     return table.replace_schema_metadata({b"fsv": json.dumps(meta).encode()})
@@ -202,7 +202,7 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
         check_ray_address(ray_address)
     episodes = _prepare(spec, out)
     written = _check_existing(spec, out, episodes)
-    todo = [sc for sc in spec.scenarios() if os.path.join("episodes", episode_id(sc) + ".parquet") not in written]
+    todo = [sc for sc in spec.scenarios() if os.path.join("episodes", episode_name(sc) + ".parquet") not in written]
     total = len(spec.scenarios())
     from tqdm.auto import tqdm
 
@@ -225,7 +225,7 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
 
     try:
         while todo:
-            mine = [sc for sc in todo if claims.take(episode_id(sc))]  # episodes another live run makes are skipped
+            mine = [sc for sc in todo if claims.take(episode_name(sc))]  # episodes another live run makes are skipped
             local = 1 if len(mine) <= 1 else min(int(workers or os.cpu_count() or 1), len(mine))
             jobs = [(sc, spec, build) for sc in mine]
             try:

@@ -7,7 +7,7 @@ import json
 import os
 import time
 
-from benchmark.paper.dataset.spec import episode_id
+from benchmark.world.scenario import episode_name
 
 CLAIM_POLL_S = 0.5
 """How often a run checks on the episodes another run is making [s]."""
@@ -90,7 +90,7 @@ class Claims:
             self.waited = True
             left = []
             for sc in todo:
-                e = episode_id(sc)
+                e = episode_name(sc)
                 if os.path.exists(os.path.join(self.folder, e + ".parquet")) and not os.path.exists(self._path(e)):
                     bar.update(1)
                 elif os.path.exists(self._path(e)) and not self._stale(self._path(e)):

@@ -17,7 +17,8 @@ import pyarrow.parquet as pq
 from benchmark.atomic import write_bytes, write_text
 from benchmark.errors import DatasetError, DatasetFileError
 from benchmark.paper.dataset.claims import Claims
-from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec, episode_id
+from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec
+from benchmark.world.scenario import episode_name
 from benchmark.scores.samples import nominal_excess_n
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from fsv import Contacts, InputError, Kinematics
@@ -69,7 +70,7 @@ def _expected_stem(meta: dict) -> str | None:
     sc = meta.get("scenario")
     if not isinstance(sc, dict):
         return None
-    return f"{sc.get('task')}_u{sc.get('user')}_g{sc.get('grasp')}_m{sc.get('mass')}_s{sc.get('seed')}"
+    return f"{sc.get('task')}-u{sc.get('user')}-g{sc.get('grasp')}-m{sc.get('mass')}-s{sc.get('seed')}"
 
 
 def read_episode_file(path: str, sha256: str | None = None, data: bytes | None = None) -> tuple[pa.Table, dict, str]:
@@ -126,7 +127,7 @@ def _check_existing(spec: DatasetSpec, out: str, episodes: str) -> dict:
             listed = dict(zip(man["file"], man["sha256"]))
         except DatasetFileError as e:
             print(f"generate: {e}; it is rebuilt from the episode files", file=sys.stderr)
-    expected = {episode_id(sc): sc for sc in spec.scenarios()}
+    expected = {episode_name(sc): sc for sc in spec.scenarios()}
     good, bad = {}, 0
     for path in sorted(glob.glob(os.path.join(episodes, "*.parquet"))):
         rel = os.path.relpath(path, out)

@@ -101,8 +101,4 @@ class DatasetSpec:
         return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
 
 
-def episode_id(sc: Scenario) -> str:
-    """File stem of a scenario's table, e.g. ``lift_u0_g1_m2_s3``."""
-    return f"{sc.task}_u{sc.user}_g{sc.grasp}_m{sc.mass}_s{sc.seed}"
-
 
