@@ -15,10 +15,7 @@ from benchmark.method import camera_input, run_method
 from benchmark.method.init import INIT_PERTURBATION
 from benchmark.scores.tracking import gate_report, score_tracking
 from benchmark.scores.verdict import gate_rows
-from benchmark.world.contact_error import (
-    PAPER_CONTACT_ERROR_MEAN_M,
-    PAPER_CONTACT_ERROR_STD_M,
-)
+from benchmark.world.contact_error import PAPER_CONTACT_ERROR_MM
 
 def add_arguments(parser) -> None:
     """Options of the track stage of ``fsv-bench``."""
