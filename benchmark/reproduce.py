@@ -345,5 +345,5 @@ def _replace(new: pathlib.Path, committed: pathlib.Path) -> None:
         for child in committed.iterdir():
             if child.is_dir() and not (staging / child.name).exists():
                 shutil.copytree(child, staging / child.name)
-    swap_folder(staging, committed)
+    swap_folder(staging, committed, replace_any=True)  # the committed results are replaced on purpose
 

@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from benchmark.atomic import OUTPUT_MARKER
 from benchmark.commands.cli import main
 from benchmark.camera.episode_file import load_episode
 
@@ -117,11 +118,13 @@ def test_ctrl_c_exits_130_and_leaves_the_previous_output_as_it_was(tmp_path, cap
     out = tmp_path / "run"
     out.mkdir()
     (out / "summary.json").write_text('{"previous": true}')
+    (out / OUTPUT_MARKER).write_text("")  # an earlier run's output
     _with_render_stage(monkeypatch, KeyboardInterrupt())
     code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--out", str(out)])
     assert code == 130
     assert "interrupted" in capsys.readouterr().err
-    assert [p.name for p in tmp_path.iterdir()] == ["run"] and [p.name for p in out.iterdir()] == ["summary.json"]
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]
+    assert sorted(p.name for p in out.iterdir()) == sorted([OUTPUT_MARKER, "summary.json"])
     assert (out / "summary.json").read_text() == '{"previous": true}'
 
 
@@ -131,14 +134,15 @@ def test_ctrl_c_exits_130_and_leaves_the_previous_output_as_it_was(tmp_path, cap
     (["--internal-model", "FILE"], "--internal-model FILE"),
     (["--out", "FILE"], "exists and is not a folder"),
     (["--out", "FILE/sub"], "is not a folder"),
+    (["--out", "OUT"], "a folder with files that fsv-bench did not write"),  # a folder of the user's: kept
 ])
 def test_bad_input_exits_2_in_seconds_with_one_line_and_touches_nothing(tmp_path, capsys, argv, needle):
     import time
 
     existing = tmp_path / "file.txt"
     existing.write_text("keep")
-    argv = [a.replace("FILE", str(existing)) for a in argv]
     out = tmp_path / "out"
+    argv = [a.replace("FILE", str(existing)).replace("OUT", str(out)) for a in argv]
     out.mkdir()
     (out / "summary.json").write_text("old")
     if "--out" not in argv:

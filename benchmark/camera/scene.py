@@ -17,7 +17,7 @@ PLANE_HALF_EXTENT_M = 5.0
 """Half size of the rendered table when its MuJoCo plane is infinite (size 0)."""
 
 def world_labels(world) -> np.ndarray:
-    """Which label each geom of a :class:`benchmark.world.World` gets in the label image.
+    """Which label each geom of a :class:`benchmark.world.assets.World` gets in the label image.
 
     The table geom is 1, the box geom 2, hand geoms 10 + k on finger k (thumb first) and 9 on the
     palm; any other geom that can collide is static environment and drawn as table (1); geoms

@@ -20,17 +20,16 @@ import importlib
 import pathlib
 import shutil
 import sys
-import tempfile
 import time
 
-from benchmark.atomic import swap_folder, write_bytes
+from benchmark.atomic import check_out, staging_folder, swap_folder, write_bytes
 from benchmark.background import Background
 from benchmark.camera.episode_file import save_episode
 from benchmark.commands.report import write_json
 from benchmark.commands.stage import Run
 from benchmark.commands.stages import STAGES
 from benchmark.errors import BenchmarkError, ScenarioError
-from benchmark.suites.evaluate import add_method_arguments, check_out, load_gates, spec_from_args
+from benchmark.suites.evaluate import add_method_arguments, load_gates, spec_from_args
 from benchmark.world.assets import validate
 from benchmark.world.scenario import Scenario, episode_name
 from fsv.errors import InputError
@@ -158,8 +157,7 @@ def main(argv: list | None = None) -> int:
         return 2
     # Every file goes into a temporary sibling folder, moved into place only when the run is complete:
     # an interrupted or failed run leaves the previous output folder as it was.
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp = staging_folder(out)
     background = Background()
     start = time.perf_counter()
     try:

@@ -15,9 +15,8 @@ import argparse
 import json
 import pathlib
 import shutil
-import tempfile
 
-from benchmark.atomic import swap_folder
+from benchmark.atomic import staging_folder, swap_folder
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -36,8 +35,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True)
 
     cache = pathlib.Path(cache or default_cache())
     out = pathlib.Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp = staging_folder(out)
     try:
         episodes = []
         scenarios = suite.scenarios
@@ -69,7 +67,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True)
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.suites.evaluate import check_out
+    from benchmark.atomic import check_out
     from benchmark.suites import get_suite
 
     suite = get_suite(args.suite, args.sensor)

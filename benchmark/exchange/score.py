@@ -75,7 +75,8 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.suites.evaluate import check_out, load_gates, print_verdict, write_outputs
+    from benchmark.atomic import check_out
+    from benchmark.suites.evaluate import load_gates, print_verdict, write_outputs
     from benchmark.suites import get_suite
 
     suite = get_suite(args.suite, args.sensor)

@@ -197,7 +197,7 @@ def score(data, protocol: Table2Protocol = Table2Protocol(), config: LearnConfig
         data: Dataset folder.
         protocol: Which slices train and evaluate.
         config: Networks and training.
-        max_excess_n: The plausibility rule (:func:`benchmark.paper.dataset.nominal_excess_n`) on the
+        max_excess_n: The plausibility rule (:func:`benchmark.scores.samples.nominal_excess_n`) on the
             training and evaluation samples, [N]; None keeps every sample of the paper's rule.
 
     Returns:

@@ -7,7 +7,7 @@ Runs k-fold cross-validation (folds made of whole episodes) to report the expect
 trains on every selected sample and saves the model with its normalisation and a description of
 the data and command (:meth:`fsv.learn.InternalForceModel.save`, atomic). Samples: those of the
 dataset (the paper's rule) that also pass the plausibility rule
-(:func:`benchmark.paper.dataset.nominal_excess_n`, ``--max-excess``; inf turns it off). With
+(:func:`benchmark.scores.samples.nominal_excess_n`, ``--max-excess``; inf turns it off). With
 ``--grip`` (a file of ``fsv-bench calibrate``), the networks also take the grip calibration of each
 sample's user (``LearnConfig.grip_inputs``).
 """

@@ -28,11 +28,10 @@ import os
 import pathlib
 import shutil
 import sys
-import tempfile
 import time
 from dataclasses import asdict
 
-from benchmark.atomic import swap_folder
+from benchmark.atomic import check_out, remove_stale_temporaries, staging_folder, swap_folder
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.world.scenario import Scenario, episode_name
 from benchmark.suites import Gate, Suite, get_suite
@@ -66,6 +65,8 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
     from benchmark.world.simulate import simulate
 
     path = cache / suite.name / f"{episode_name(scenario)}-{episode_key(suite, scenario)}.npz"
+    if path.parent.is_dir():
+        remove_stale_temporaries(path.parent)  # a killed run's half-written episodes
     if path.exists():
         try:
             return load_episode(path), False
@@ -207,8 +208,7 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path) -> None:
 
     results = [GateResult(**{**g, "ci": tuple(g["ci"]) if g["ci"] is not None else None}) for g in scores["gates"]]
     out = pathlib.Path(out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp = staging_folder(out)
     try:
         (tmp / "scores.json").write_text(json.dumps(strict(scores), indent=1, allow_nan=False) + "\n")
         (tmp / "report.md").write_text(report_markdown(suite, scores["method"], scores["episodes"], scores["aggregate"],
@@ -234,26 +234,6 @@ def load_gates(path) -> tuple:
     if bad:
         raise ValueError(f"--gates {path}: unknown metric {bad[0]!r}; accepted: {', '.join(METRICS)}")
     return gates
-
-
-def check_out(out: pathlib.Path, option: str = "--out") -> None:
-    """Refuses an output folder that is a file or cannot be created (ValueError, one line); writes nothing.
-
-    Writability is tested by creating (and removing) a temporary folder in the nearest existing
-    ancestor, which is where the output's temporary folder will be made.
-    """
-    out = pathlib.Path(out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"{option} {out}: exists and is not a folder")
-    probe = out.parent if str(out.parent) else pathlib.Path(".")
-    while not probe.exists():
-        probe = probe.parent
-    if not probe.is_dir():
-        raise ValueError(f"{option} {out}: {probe} is not a folder")
-    try:
-        pathlib.Path(tempfile.mkdtemp(prefix=".fsv-bench-probe.", dir=probe)).rmdir()
-    except OSError as e:
-        raise ValueError(f"{option} {out}: cannot write in {probe} ({e.strerror or e})") from None
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -14,9 +14,8 @@ from __future__ import annotations
 import argparse
 import pathlib
 import shutil
-import tempfile
 
-from benchmark.atomic import swap_folder
+from benchmark.atomic import staging_folder, swap_folder
 from benchmark.method import MethodSpec
 
 VARIANTS = {
@@ -37,7 +36,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> list:
-    from benchmark.suites.evaluate import GateFailure, check_out, evaluate_many, write_outputs
+    from benchmark.atomic import check_out
+    from benchmark.suites.evaluate import GateFailure, evaluate_many, write_outputs
     from benchmark.scores.leaderboard import leaderboard_markdown
     from benchmark.suites import get_suite
 
@@ -49,8 +49,7 @@ def run(args: argparse.Namespace) -> list:
                             workers=args.workers)
     entries = list(zip(VARIANTS, results))
     out = pathlib.Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp = staging_folder(out)
     try:
         for name, scores in entries:
             write_outputs(scores, suite, tmp / name)

@@ -19,7 +19,8 @@ import dataclasses
 import json
 import pathlib
 import shutil
-import tempfile
+
+from benchmark.atomic import staging_folder, swap_folder
 
 AXES = {
     "noise": ("noise_m", float, "depth noise std [m]"),
@@ -111,7 +112,8 @@ def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.suites.evaluate import check_out, evaluate, spec_from_args, strict
+    from benchmark.atomic import check_out
+    from benchmark.suites.evaluate import evaluate, spec_from_args, strict
     from benchmark.suites import get_suite
     from fsv.provenance import provenance
 
@@ -133,14 +135,11 @@ def run(args: argparse.Namespace) -> dict:
            "aggregate": [r["aggregate"] for r in results], "episodes": [r["episodes"] for r in results],
            "provenance": provenance()}
     out = pathlib.Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp = staging_folder(out)
     try:
         (tmp / "sweep.json").write_text(json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
         (tmp / "sweep.md").write_text(sweep_markdown(doc))
         plot_sweep(args.axis, values, results, tmp / "sweep.png")
-        from benchmark.atomic import swap_folder
-
         swap_folder(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -59,9 +59,9 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         grasps=parse_ints(args.grasps), masses=parse_ints(args.masses), seeds=parse_ints(args.seeds), duration_s=args.duration,
         noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
     )
-    from benchmark.suites.evaluate import check_out
+    from benchmark.atomic import check_out
 
-    check_out(pathlib.Path(args.out))
+    check_out(pathlib.Path(args.out), replace=False)  # a dataset folder is resumed, not replaced
     t0 = time.perf_counter()
     man = generate(spec, args.out, workers=args.workers, ray_address=args.ray_address, progress=not args.no_progress)
     failed = int((man["status"] != "ok").sum())
