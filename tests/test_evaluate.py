@@ -72,7 +72,7 @@ def test_a_failing_gate_exits_1_names_it_and_fails_its_junit_case(tiny, tmp_path
 
 @pytest.mark.parametrize("argv, needle", [
     (["--suite", "nope"], "--suite 'nope': no such suite; accepted: smoke"),
-    (["--suite", "smoke", "--gates", "missing.json"], "--gates missing.json: not a JSON list"),
+    (["--suite", "smoke", "--gates", "missing.json"], "--gates missing.json: not a non-empty JSON list"),
 ])
 def test_bad_input_exits_2_with_one_line_before_any_work(tmp_path, capsys, argv, needle, monkeypatch):
     monkeypatch.chdir(tmp_path)
@@ -88,6 +88,33 @@ def test_gates_file_with_an_unknown_metric_is_refused(tmp_path, capsys):
     gates.write_text(json.dumps([{"metric": "speed", "op": "<=", "limit": 1}]))
     assert main(["eval", "--suite", "smoke", "--gates", str(gates), "--out", str(tmp_path / "o")]) == 2
     assert "unknown metric 'speed'; accepted: box_pos_err_mm" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text, needle", [
+    ('[{"metric": "box_pos_err_mm", "op": "<=", "limit": 9, "statistics": "mean"}]',
+     "entry 0: unknown key 'statistics'; accepted: metric, op, limit, statistic"),
+    ("[]", "not a non-empty JSON list"),
+    ("{}", "not a non-empty JSON list"),
+    ('[{"metric": "box_pos_err_mm", "op": "<=", "limit": NaN}]', "entry 0: limit must be a finite number, got nan"),
+    ('[{"metric": "box_pos_err_mm", "op": "<=", "limit": Infinity}]', "limit must be a finite number, got inf"),
+    ('[{"metric": "box_pos_err_mm", "op": "<=", "limit": "2"}]', "entry 0: limit must be a number, got '2'"),
+    ('[{"metric": "box_pos_err_mm", "op": "<", "limit": 2}]', "entry 0: Gate.op must be '<=' or '>='"),
+    ('[{"metric": "box_pos_err_mm", "op": "<=", "limit": 2, "statistic": "max"}]', "Gate.statistic must be"),
+    ('[{"metric": "box_pos_err_mm", "limit": 2}]', "entry 0: missing key 'op'"),
+    ('[{"metric": "box_pos_err_mm", "op": "<=", "limit": 2}, 3]', "entry 1 is not an object"),
+])
+def test_a_bad_gates_file_exits_2_in_seconds_before_any_work(tmp_path, capsys, text, needle):
+    import time
+
+    gates = tmp_path / "g.json"
+    gates.write_text(text)
+    t0 = time.perf_counter()
+    assert main(["eval", "--suite", "smoke", "--gates", str(gates), "--out", str(tmp_path / "o"),
+                 "--cache", str(tmp_path / "cache")]) == 2
+    assert time.perf_counter() - t0 < 5
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and needle in err, err
+    assert not (tmp_path / "o").exists() and not (tmp_path / "cache").exists()
 
 
 def test_two_worker_processes_give_the_same_scores_as_one(tmp_path):

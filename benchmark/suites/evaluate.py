@@ -220,20 +220,51 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path) -> None:
         raise
 
 
+GATE_KEYS = {"metric": str, "op": str, "limit": (int, float), "statistic": str}
+"""A gates file's entries: these keys (``statistic`` optional, "median" by default) and no others."""
+
+
 def load_gates(path) -> tuple:
-    """Gates from a JSON file: a list of ``{"metric", "op", "limit"[, "statistic"]}``."""
+    """Gates from a JSON file: a non-empty list of ``{"metric", "op", "limit"[, "statistic"]}``.
+
+    Raises:
+        ValueError: One line naming the file, the entry and what is wrong (unreadable, not a
+            non-empty list, an unknown or missing key, a value of the wrong type, a non-finite
+            limit, an unknown metric, operator or statistic).
+    """
     from benchmark.scores.episode import METRICS
 
+    what = 'a non-empty JSON list of {"metric", "op", "limit"[, "statistic"]}'
     try:
-        data = json.loads(pathlib.Path(path).read_text())
-        gates = tuple(Gate(metric=g["metric"], op=g["op"], limit=float(g["limit"]),
-                           statistic=g.get("statistic", "median")) for g in data)
-    except (OSError, ValueError, KeyError, TypeError) as e:
-        raise ValueError(f"--gates {path}: not a JSON list of {{\"metric\", \"op\", \"limit\"[, \"statistic\"]}}: {e}") from e
-    bad = [g.metric for g in gates if g.metric not in METRICS]
-    if bad:
-        raise ValueError(f"--gates {path}: unknown metric {bad[0]!r}; accepted: {', '.join(METRICS)}")
-    return gates
+        data = json.loads(pathlib.Path(path).read_text(), parse_constant=float)
+    except (OSError, ValueError) as e:
+        raise ValueError(f"--gates {path}: not {what}: {e}") from e
+    if not isinstance(data, list) or not data:
+        raise ValueError(f"--gates {path}: not {what}: got {json.dumps(data)[:60]}")
+    gates = []
+    for i, g in enumerate(data):
+        where = f"--gates {path}: entry {i}"
+        if not isinstance(g, dict):
+            raise ValueError(f"{where} is not an object: {json.dumps(g)[:60]}")
+        unknown = sorted(set(g) - set(GATE_KEYS))
+        if unknown:
+            raise ValueError(f"{where}: unknown key {unknown[0]!r}; accepted: {', '.join(GATE_KEYS)}")
+        missing = [k for k in ("metric", "op", "limit") if k not in g]
+        if missing:
+            raise ValueError(f"{where}: missing key {missing[0]!r}")
+        for k, v in g.items():
+            if isinstance(v, bool) or not isinstance(v, GATE_KEYS[k]):
+                raise ValueError(f"{where}: {k} must be a {'number' if k == 'limit' else 'string'}, got {v!r}")
+        if not math.isfinite(g["limit"]):
+            raise ValueError(f"{where}: limit must be a finite number, got {g['limit']!r}")
+        if g["metric"] not in METRICS:
+            raise ValueError(f"{where}: unknown metric {g['metric']!r}; accepted: {', '.join(METRICS)}")
+        try:
+            gates.append(Gate(metric=g["metric"], op=g["op"], limit=float(g["limit"]),
+                              statistic=g.get("statistic", "median")))
+        except ValueError as e:
+            raise ValueError(f"{where}: {e}") from e
+    return tuple(gates)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
