@@ -97,3 +97,59 @@ def test_an_estimates_file_of_the_wrong_shape_names_the_array(tiny, tmp_path):
            {"format": "fsv-bench-estimates", "version": 1, "finger_names": names})
     with pytest.raises(EstimatesFileError, match=r"box/pos has shape \(4, 3\), expected \(5, 3\)"):
         load_estimate(tmp_path / "e.npz", t=t, finger_names=tuple(names))
+
+
+def _valid_arrays(T: int = 5, K: int = 2) -> dict:
+    """A physical estimates file's arrays: the box at rest, finger 0 in contact from frame 1."""
+    active = np.zeros((T, K), bool)
+    active[1:, 0] = True
+    normal = np.zeros((T, K, 3))
+    normal[:, 0] = [0.0, 1.0, 0.0]
+    return {"box/pos": np.zeros((T, 3)), "box/rot": np.repeat(np.eye(3)[None], T, 0),
+            "contacts/active": active, "contacts/sliding": np.zeros((T, K), bool),
+            "contacts/point": np.zeros((T, K, 3)), "contacts/normal": normal,
+            **{f"kinematics/{f}": np.zeros((T, 3)) for f in ("vel", "acc", "omega", "alpha")},
+            "kinematics/valid": np.ones(T, bool)}
+
+
+def _bent(arrays: dict, name: str, change) -> dict:
+    out = {k: np.array(v) for k, v in arrays.items()}
+    change(out[name])
+    return out
+
+
+@pytest.mark.parametrize("name, change, needle", [
+    ("box/rot", lambda a: a.__imul__(5.0), r"box/rot at frame 0 is not a rotation \(max \|R\^T R - I\| = 24"),
+    ("box/rot", lambda a: a[3].__setitem__((2, 2), -1.0), r"box/rot at frame 3 is not a rotation .*det = -1"),
+    ("box/pos", lambda a: a[2].__setitem__(0, np.nan), "box/pos at frame 2 is not finite"),
+    ("contacts/normal", lambda a: a[4, 0].__imul__(2.0), "contacts/normal at frame 4 is not a unit vector"),
+    ("contacts/sliding", lambda a: a[0].__setitem__(1, True), "contacts/sliding at frame 0 marks a finger that is not active"),
+    ("contacts/point", lambda a: a[2, 0].__setitem__(1, np.inf), "contacts/point at frame 2 is not finite for an active"),
+    ("kinematics/acc", lambda a: a[1].__setitem__(2, np.nan), "kinematics/acc at frame 1 is not finite where"),
+])
+def test_estimates_that_are_not_physical_are_refused_naming_the_array_and_frame(tmp_path, name, change, needle):
+    from benchmark.exchange import EstimatesFileError, load_estimate
+
+    t, names = np.arange(5) / 30.0, ("thumb", "index")
+    meta = {"format": "fsv-bench-estimates", "version": 1, "finger_names": list(names)}
+    _write(tmp_path / "ok.npz", _valid_arrays(), meta)
+    assert load_estimate(tmp_path / "ok.npz", t=t, finger_names=names).box.rot.shape == (5, 3, 3)
+    _write(tmp_path / "bad.npz", _bent(_valid_arrays(), name, change), meta)
+    with pytest.raises(EstimatesFileError, match=needle) as e:
+        load_estimate(tmp_path / "bad.npz", t=t, finger_names=names)
+    assert str(tmp_path / "bad.npz") in str(e.value)
+
+
+def test_nan_kinematics_where_invalid_and_nan_forces_are_accepted(tmp_path):
+    from benchmark.exchange import load_estimate
+
+    t, names = np.arange(5) / 30.0, ("thumb", "index")
+    arrays = _valid_arrays()
+    arrays["kinematics/valid"][:2] = False
+    arrays["kinematics/acc"][:2] = np.nan
+    arrays["nominal/force"] = np.full((5, 2, 3), np.nan)
+    arrays["nominal/env_wrench"] = np.zeros((5, 6))
+    arrays["nominal/status"] = np.full(5, 4, np.int8)
+    _write(tmp_path / "e.npz", arrays, {"format": "fsv-bench-estimates", "version": 1, "finger_names": list(names)})
+    est = load_estimate(tmp_path / "e.npz", t=t, finger_names=names)
+    assert np.isnan(est.nominal.force).all() and not est.kinematics.valid[:2].any()

@@ -39,6 +39,11 @@ files written by other programs; when present they are checked.
     forces/force, forces/env_wrench, forces/status   the method's final forces, as nominal/*  optional
     hand/fingertips    (T, K, 3)  float  fingertip pad centres in the world, [m]          optional
 
+Physics is checked before scoring: rotations orthonormal with determinant +1 (within 1e-5),
+positions finite, an active contact's point finite and its normal of unit length (within 1e-5),
+sliding only where active, the kinematics finite where valid, forces finite or NaN (unsolved),
+never infinite. A file that fails names the array and the first bad frame.
+
 ``meta.json``: ``{"format": "fsv-bench-estimates", "version": 1, "episode": NAME, "finger_names":
 [K names], "method": "one line naming the method", "stages": {"tracker": ..., ...}}``. Metrics of a
 missing optional group are not scored (NaN); a gate on them fails.
@@ -47,6 +52,63 @@ missing optional group are not scored (NaN); a gate on them fails.
 
 class EstimatesFileError(BenchmarkError, ValueError):
     """An estimates file is missing, damaged, of another format, or does not fit its episode."""
+
+
+ROTATION_TOL = 1e-5
+"""How far a rotation matrix of an estimates file may be from a rotation: max |R^T R - I| and
+|det R - 1| (a float32 writer's rounding is ~1e-7; a scaled or reflected matrix is far beyond)."""
+
+UNIT_TOL = 1e-5
+"""How far an active contact's normal may be from unit length."""
+
+
+def check_physics(path, box, contacts, kinematics, solutions: dict) -> None:
+    """Refuses estimates that are not physical, naming the file, the array and the first bad frame.
+
+    Rotations (``box/rot``, ``kinematics/rot``) orthonormal with determinant +1 within
+    :data:`ROTATION_TOL`; positions finite; an active contact's point finite and normal of unit
+    length (:data:`UNIT_TOL`); the kinematics finite where valid; forces
+    finite or NaN (an unsolved frame), never infinite.
+
+    Raises:
+        EstimatesFileError: The first violation found.
+    """
+    def bad(name, mask, what):
+        i = int(np.flatnonzero(mask)[0])
+        raise EstimatesFileError(f"{path}: {name} at frame {i} {what}")
+
+    for name, pos in (("box/pos", box.pos), ("kinematics/pos", kinematics.pos)):
+        if not np.all(np.isfinite(pos)):
+            bad(name, ~np.isfinite(pos).all(axis=1), "is not finite")
+    for name, rot in (("box/rot", box.rot), ("kinematics/rot", kinematics.rot)):
+        finite = np.isfinite(rot).all(axis=(1, 2))
+        if not finite.all():
+            bad(name, ~finite, "is not finite")
+        gram = np.abs(np.einsum("tki,tkj->tij", rot, rot) - np.eye(3)).max(axis=(1, 2))
+        det = np.linalg.det(rot)
+        wrong = (gram > ROTATION_TOL) | (np.abs(det - 1.0) > ROTATION_TOL)
+        if wrong.any():
+            i = int(np.flatnonzero(wrong)[0])
+            bad(name, wrong, f"is not a rotation (max |R^T R - I| = {gram[i]:.3g}, det = {det[i]:.6g}); "
+                             f"expected orthonormal with determinant +1 within {ROTATION_TOL:g}")
+    act = contacts.active
+    point_ok = np.isfinite(contacts.point).all(axis=2) | ~act
+    if not point_ok.all():
+        bad("contacts/point", ~point_ok.all(axis=1), "is not finite for an active finger")
+    length = np.linalg.norm(contacts.normal, axis=2)
+    unit = (np.abs(length - 1.0) <= UNIT_TOL) | ~act
+    if not unit.all():
+        bad("contacts/normal", ~unit.all(axis=1), f"is not a unit vector for an active finger (within {UNIT_TOL:g})")
+    for f in ("vel", "acc", "omega", "alpha"):
+        v = getattr(kinematics, f)
+        ok = np.isfinite(v).all(axis=1) | ~kinematics.valid
+        if not ok.all():
+            bad(f"kinematics/{f}", ~ok, "is not finite where kinematics/valid is true")
+    for group, sol in solutions.items():
+        for name, v in (("force", sol.force), ("env_wrench", sol.env_wrench)):
+            inf = np.isinf(v).reshape(len(v), -1).any(axis=1)
+            if inf.any():
+                bad(f"{group}/{name}", inf, "is infinite (NaN marks an unsolved frame)")
 
 
 def save_estimate(estimate, path, *, episode: str, method: str) -> pathlib.Path:
@@ -93,7 +155,7 @@ def load_estimate(path, *, t: np.ndarray, finger_names: tuple):
         raise EstimatesFileError(f"{path}: finger_names {list(names)} do not match the episode's {list(finger_names)}")
     T, K = len(t), len(names)
 
-    def get(section, name, shape, dtype=float, default=None):
+    def get(section, name, shape, dtype=float, default=None, finite=False):
         value = s.get(section, {}).get(name)
         if value is None:
             if default is not None:
@@ -104,17 +166,24 @@ def load_estimate(path, *, t: np.ndarray, finger_names: tuple):
             raise EstimatesFileError(f"{path}: {section}/{name} has shape {value.shape}, expected {shape}")
         if dtype is bool and not np.isin(value, (0, 1)).all():
             raise EstimatesFileError(f"{path}: {section}/{name} must hold booleans (0/1)")
-        return value.astype(dtype)
+        value = value.astype(dtype)
+        if finite and not np.isfinite(value).all():
+            i = int(np.flatnonzero(~np.isfinite(value).reshape(len(value), -1).all(axis=1))[0])
+            raise EstimatesFileError(f"{path}: {section}/{name} at frame {i} is not finite")
+        return value
 
     try:
-        box = Poses(t=t, pos=get("box", "pos", (T, 3)), rot=get("box", "rot", (T, 3, 3)))
+        box = Poses(t=t, pos=get("box", "pos", (T, 3), finite=True), rot=get("box", "rot", (T, 3, 3), finite=True))
         zeros = np.zeros((T, K, 3))
-        contacts = Contacts(finger_names=names, active=get("contacts", "active", (T, K), bool),
-                            sliding=get("contacts", "sliding", (T, K), bool),
+        active, sliding = get("contacts", "active", (T, K), bool), get("contacts", "sliding", (T, K), bool)
+        if (sliding & ~active).any():
+            i = int(np.flatnonzero((sliding & ~active).any(axis=1))[0])
+            raise EstimatesFileError(f"{path}: contacts/sliding at frame {i} marks a finger that is not active")
+        contacts = Contacts(finger_names=names, active=active, sliding=sliding,
                             point=get("contacts", "point", (T, K, 3)), normal=get("contacts", "normal", (T, K, 3)),
                             slide_dir=get("contacts", "slide_dir", (T, K, 3), default=zeros))
-        kin = Kinematics(t=t, pos=get("kinematics", "pos", (T, 3), default=box.pos),
-                         rot=get("kinematics", "rot", (T, 3, 3), default=box.rot),
+        kin = Kinematics(t=t, pos=get("kinematics", "pos", (T, 3), default=box.pos, finite=True),
+                         rot=get("kinematics", "rot", (T, 3, 3), default=box.rot, finite=True),
                          **{f: get("kinematics", f, (T, 3)) for f in ("vel", "acc", "omega", "alpha")},
                          valid=get("kinematics", "valid", (T,), bool), method=str(meta.get("stages", {}).get(
                              "differentiator", "")))
@@ -128,6 +197,7 @@ def load_estimate(path, *, t: np.ndarray, finger_names: tuple):
                                fingertips=None if tips is None else get("hand", "fingertips", (T, K, 3)))
     except FsvError as e:
         raise EstimatesFileError(f"{path}: {e}") from e
+    check_physics(path, box, contacts, kin, solutions)
     return Estimate(tracking=tracking, contacts=contacts, kinematics=kin, nominal=solutions.get("nominal"),
                     forces=solutions.get("forces"), internal_pred=None, oracle=tuple(meta.get("oracle", ())),
                     timing_s={}, labels=dict(meta.get("stages", {})))
