@@ -153,3 +153,36 @@ def test_nan_kinematics_where_invalid_and_nan_forces_are_accepted(tmp_path):
     _write(tmp_path / "e.npz", arrays, {"format": "fsv-bench-estimates", "version": 1, "finger_names": list(names)})
     est = load_estimate(tmp_path / "e.npz", t=t, finger_names=names)
     assert np.isnan(est.nominal.force).all() and not est.kinematics.valid[:2].any()
+
+
+def test_an_estimates_file_renamed_to_another_episode_is_refused(tiny, tmp_path, capsys):
+    est = tmp_path / "est"
+    est.mkdir()
+    _write(est / "lift-u0-g0-m0-s21.npz", _valid_arrays(),
+           {"format": "fsv-bench-estimates", "version": 1, "episode": "lift-u0-g0-m0-s22", "finger_names": ["thumb"]})
+    code = main(["score", "--suite", "tiny", "--estimates", str(est), "--out", str(tmp_path / "o"),
+                 "--cache", str(tmp_path / "cache")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "meta.json names episode 'lift-u0-g0-m0-s22', not 'lift-u0-g0-m0-s21'" in err
+    assert not (tmp_path / "o").exists() and not (tmp_path / "cache").exists()  # refused before any work
+
+
+def test_a_cached_episode_copied_under_another_name_is_not_used(tmp_path, capsys):
+    import shutil
+
+    from benchmark.suites import Suite
+    from benchmark.suites.evaluate import cached_episode, episode_identity, episode_key
+    from benchmark.world.scenario import Scenario, episode_name
+
+    a, b = (Scenario(task="lift", seed=s, duration_s=2.0) for s in (31, 32))
+    suite = Suite(name="pair", version=1, scenarios=(a, b), gates=(), description="two short episodes")
+    cache = tmp_path / "cache"
+    ep_b, made = cached_episode(suite, b, cache)
+    assert made and cached_episode(suite, b, cache)[1] is False  # the second time from the cache
+    path_a = cache / "pair" / f"{episode_name(a)}-{episode_key(suite, a)}.npz"
+    path_b = cache / "pair" / f"{episode_name(b)}-{episode_key(suite, b)}.npz"
+    shutil.copyfile(path_b, path_a)  # seed 32 under seed 31's name
+    ep_a, made = cached_episode(suite, a, cache)
+    assert made and ep_a.scenario == a and "a renamed or copied file" in capsys.readouterr().err
+    assert episode_identity(suite, a)["scenario"]["seed"] == 31

@@ -168,12 +168,14 @@ def _sections(ep: Episode) -> dict:
     return out
 
 
-def save_episode(episode: Episode, path) -> pathlib.Path:
+def save_episode(episode: Episode, path, identity: dict | None = None) -> pathlib.Path:
     """Writes an episode file (format: see ``FORMAT_DOC``), replacing ``path`` atomically.
 
     Args:
         episode: The episode to write.
         path: Destination; ``.npz`` is appended if missing.
+        identity: What the file is for (e.g. the cache's suite, version and world fingerprint),
+            stored as ``meta["identity"]`` and checked by :func:`load_episode` (``expect``).
 
     Returns:
         The path written.
@@ -183,6 +185,8 @@ def save_episode(episode: Episode, path) -> pathlib.Path:
         path = path.with_name(path.name + ".npz")
     sections = _sections(episode)
     meta = {"scenario": dataclasses.asdict(episode.scenario), "sections": list(sections)}
+    if identity is not None:
+        meta["identity"] = identity
     arrays = {}
     for name, (arrs, scalars) in sections.items():
         meta[name] = scalars
@@ -191,15 +195,27 @@ def save_episode(episode: Episode, path) -> pathlib.Path:
     return write_archive(path, FORMAT, VERSION, meta, arrays)
 
 
-def load_episode(path) -> Episode:
+def load_episode(path, *, scenario: Scenario | None = None, identity: dict | None = None) -> Episode:
     """Reads an episode file written by :func:`save_episode` and checks its digests.
+
+    Args:
+        path: The file.
+        scenario: The scenario the file must hold, if known (a renamed or copied file holds another).
+        identity: The ``identity`` the file must carry, if any (see :func:`save_episode`).
 
     Raises:
         EpisodeFileError: If the file is missing, truncated or corrupt (the message names the file
-            and, if it can, the damaged array), of another format, or of another version.
+            and, if it can, the damaged array), of another format, or of another version, or holds
+            another scenario or identity than expected.
     """
     path = pathlib.Path(path)
     meta, arrays = read_archive(path, FORMAT, VERSION, kind="episode", error=EpisodeFileError)
+    if scenario is not None and meta.get("scenario") != dataclasses.asdict(scenario):
+        raise EpisodeFileError(f"{path} holds the episode of scenario {meta.get('scenario')}, not of "
+                               f"{dataclasses.asdict(scenario)} (a renamed or copied file)")
+    if identity is not None and meta.get("identity") != identity:
+        raise EpisodeFileError(f"{path} was written for {meta.get('identity')}, not for {identity} (a renamed or "
+                               "copied file)")
     try:
         scenario = Scenario(**meta["scenario"])
         truth = _truth_from(arrays["truth"], meta["truth"])

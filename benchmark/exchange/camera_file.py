@@ -40,7 +40,7 @@ with the table top at z = 0 and z up; rotations are 3x3 matrices (world_R_object
     grip/samples              ()        int64    absent if the user has none
 
 ``meta.json``: ``{"format": "fsv-bench-camera", "version": 1, "episode": NAME, "suite": {"name",
-"version"}, "frames": T, "object": {"mass_kg", "friction", "table_friction"}, "hand":
+"version"}, "world": the world's fingerprint, "frames": T, "object": {"mass_kg", "friction", "table_friction"}, "hand":
 {"segment_names", "joint_names", "finger_names"}, "rng_seed": [ints], "array_sha256": {...},
 "meta_sha256": ...}``. ``rng_seed`` is the entropy of the generator the benchmark hands an in-process
 method (``numpy.random.default_rng(numpy.random.SeedSequence(rng_seed))``); a method that uses it
@@ -74,7 +74,9 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list) -> p
     i = inputs.init
     arrays.update({"init/box_pos": i.box_pos, "init/box_rot": i.box_rot, "init/palm_pos": i.palm_pos,
                    "init/palm_rot": i.palm_rot, "init/joints": i.joints, "init/gravity": inputs.gravity})
-    meta = {"episode": episode, "suite": {"name": suite.name, "version": suite.version},
+    from benchmark.fingerprint import world_fingerprint
+
+    meta = {"episode": episode, "suite": {"name": suite.name, "version": suite.version}, "world": world_fingerprint(),
             "frames": inputs.num_frames, "rng_seed": [int(v) for v in rng_seed]}
     if inputs.grip is not None:
         arrays.update({"grip/baseline_n": np.float64(inputs.grip.baseline_n), "grip/gain": np.float64(inputs.grip.gain),

@@ -45,7 +45,9 @@ sliding only where active, the kinematics finite where valid, forces finite or N
 never infinite. A file that fails names the array and the first bad frame.
 
 ``meta.json``: ``{"format": "fsv-bench-estimates", "version": 1, "episode": NAME, "finger_names":
-[K names], "method": "one line naming the method", "stages": {"tracker": ..., ...}}``. Metrics of a
+[K names], "method": "one line naming the method", "stages": {"tracker": ..., ...}}``; ``episode``
+(required) must be the name the file is found under; ``suite`` and ``world``, copied from the
+camera-input file's meta, are optional and checked when present. Metrics of a
 missing optional group are not scored (NaN); a gate on them fails.
 """
 
@@ -60,6 +62,26 @@ ROTATION_TOL = 1e-5
 
 UNIT_TOL = 1e-5
 """How far an active contact's normal may be from unit length."""
+
+
+def check_identity(path, meta: dict, *, episode: str, suite, world: str | None = None) -> None:
+    """Refuses an estimates file of another episode: ``meta["episode"]`` must be ``episode`` (the name
+    the file is found under); ``meta["suite"]`` (``{"name", "version"}``) and ``meta["world"]``, copied
+    from the camera-input file, must match where the file carries them.
+
+    Raises:
+        EstimatesFileError: Naming the file and what it holds instead.
+    """
+    held = meta.get("episode")
+    if held != episode:
+        raise EstimatesFileError(f"{path}: meta.json names episode {held!r}, not {episode!r}: the estimates of "
+                                 "another episode (a renamed or copied file), or no \"episode\" entry")
+    if "suite" in meta and meta["suite"] != {"name": suite.name, "version": suite.version}:
+        raise EstimatesFileError(f"{path}: meta.json names suite {meta['suite']}, not "
+                                 f"{{'name': {suite.name!r}, 'version': {suite.version}}}")
+    if world is not None and "world" in meta and meta["world"] != world:
+        raise EstimatesFileError(f"{path}: made for another world (meta.json world {str(meta['world'])[:12]}..., this "
+                                 f"benchmark's {world[:12]}...): export the camera inputs again")
 
 
 def check_physics(path, box, contacts, kinematics, solutions: dict) -> None:

@@ -45,7 +45,8 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     from dataclasses import asdict
 
     from benchmark.archive import read_archive
-    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, load_estimate
+    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, check_identity, load_estimate
+    from benchmark.fingerprint import world_fingerprint
     from benchmark.scores.episode import score_episode
     from benchmark.suites.evaluate import cached_episode, default_cache, scores_document
     from benchmark.world.scenario import episode_name
@@ -53,6 +54,9 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     paths = estimate_paths(suite, folder)
     metas = {sc: read_archive(p, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
                               digests_required=False)[0] for sc, p in paths.items()}  # every header before any work
+    world = world_fingerprint()
+    for sc, meta in metas.items():
+        check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world)
     cache = pathlib.Path(cache or default_cache())
     t0 = time.perf_counter()
     rows = []

@@ -45,13 +45,16 @@ def default_cache() -> pathlib.Path:
     return pathlib.Path(base) / "fsv-bench" / "episodes"
 
 
-def episode_key(suite: Suite, scenario: Scenario) -> str:
-    """Cache key of a rendered episode: scenario, suite name and version, world code."""
+def episode_identity(suite: Suite, scenario: Scenario) -> dict:
+    """What a cached episode is: its scenario, the suite's name and version, the world's fingerprint."""
     from benchmark.fingerprint import world_fingerprint
 
-    text = json.dumps({"scenario": asdict(scenario), "suite": suite.name, "version": suite.version,
-                       "world": world_fingerprint()}, sort_keys=True)
-    return hashlib.sha256(text.encode()).hexdigest()[:20]
+    return {"scenario": asdict(scenario), "suite": suite.name, "version": suite.version, "world": world_fingerprint()}
+
+
+def episode_key(suite: Suite, scenario: Scenario) -> str:
+    """Cache key of a rendered episode: a digest of its :func:`episode_identity`."""
+    return hashlib.sha256(json.dumps(episode_identity(suite, scenario), sort_keys=True).encode()).hexdigest()[:20]
 
 
 def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
@@ -67,13 +70,14 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
     path = cache / suite.name / f"{episode_name(scenario)}-{episode_key(suite, scenario)}.npz"
     if path.parent.is_dir():
         remove_stale_temporaries(path.parent)  # a killed run's half-written episodes
+    identity = episode_identity(suite, scenario)
     if path.exists():
         try:
-            return load_episode(path), False
+            return load_episode(path, scenario=scenario, identity=identity), False
         except EpisodeFileError as e:
-            print(f"fsv-bench eval: rebuilding a damaged cached episode: {e}", file=sys.stderr)
+            print(f"fsv-bench eval: rebuilding a damaged or foreign cached episode: {e}", file=sys.stderr)
     episode = render(simulate(scenario))
-    save_episode(episode, path)
+    save_episode(episode, path, identity=identity)
     return episode, True
 
 
