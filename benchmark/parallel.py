@@ -16,7 +16,7 @@ from typing import Callable, Iterator
 from benchmark.errors import DatasetError
 
 
-class RayUnavailable(ValueError):
+class RayUnavailable(DatasetError):
     """A Ray address was given but Ray is not installed."""
 
 
@@ -137,11 +137,8 @@ def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple
 
 def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
     check_ray_address(address)
-    try:
-        import ray
-    except ImportError as e:
-        raise RayUnavailable(f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
-                         "(or run without --ray-address to use the local process pool)") from e
+    import ray
+
     host = (address[len("ray://"):] if address.startswith("ray://") else address).rpartition(":")[0]
     local = {"_node_ip_address": "127.0.0.1"} if host in ("127.0.0.1", "localhost") else {}  # stay on loopback
     ray.init(address=address, ignore_reinit_error=True, log_to_driver=False, **local)
@@ -158,28 +155,64 @@ def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
         raise
 
 
-RAY_CONNECT_TIMEOUT_S = 5.0  # a cluster's head node answers at once; Ray's own client retries for minutes
+RAY_CONNECT_TIMEOUT_S = 5.0
+"""How long the check of a Ray address waits for a connection and for the server's first answer [s]:
+a cluster's head node answers at once, while Ray's own client retries for minutes."""
+
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+"""An HTTP/2 client's connection preface and an empty SETTINGS frame: a gRPC server (a Ray
+cluster's GCS, or its client server behind ``ray://``) answers with a SETTINGS frame of its own."""
 
 
 def check_ray_address(address: str) -> None:
-    """Fails within seconds when nothing listens at a ``host:port`` or ``ray://host:port`` address.
+    """Fails within seconds, before any work, unless a Ray cluster answers at ``address``.
 
-    ``"auto"`` (a cluster started on this machine) is left to Ray.
+    ``"auto"`` is resolved as Ray resolves it (``RAY_ADDRESS``, or the cluster ``ray start`` started
+    on this machine); ``host:port`` and ``ray://host:port`` are connected to and must answer an
+    HTTP/2 handshake as Ray's gRPC servers do, so that another service on that port is refused at
+    once instead of Ray retrying for minutes.
 
     Raises:
-        RayAddressError: Naming the address when it is malformed or nothing answers there.
+        RayUnavailable: Ray is not installed.
+        RayAddressError: Naming the address when it is malformed, nothing answers there, what
+            answers is not a Ray cluster, or ``auto`` finds no cluster.
     """
     import socket
 
+    try:
+        import ray  # noqa: F401
+    except ImportError as e:
+        raise RayUnavailable(f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
+                             "(or run without --ray-address to use the local process pool)") from e
+    shown = address
     if address == "auto":
-        return
+        from ray._private.services import get_ray_address_from_environment
+
+        try:
+            address = get_ray_address_from_environment("auto", None) or "auto"
+        except ConnectionError:  # Ray's own word for "no cluster found"
+            address = "auto"
+        if address == "auto":
+            raise RayAddressError("--ray-address auto: no Ray cluster runs on this machine; start one with "
+                                  "`ray start --head` or run without --ray-address to use the local process pool")
     hostport = address[len("ray://"):] if address.startswith("ray://") else address
     host, _, port = hostport.rpartition(":")
     if not host or not port.isdigit():
-        raise RayAddressError(f"--ray-address {address!r}: expected 'auto', 'host:port' or 'ray://host:port'")
+        raise RayAddressError(f"--ray-address {shown!r}: expected 'auto', 'host:port' or 'ray://host:port'")
     try:
-        with socket.create_connection((host, int(port)), timeout=RAY_CONNECT_TIMEOUT_S):
-            pass
+        with socket.create_connection((host, int(port)), timeout=RAY_CONNECT_TIMEOUT_S) as sock:
+            sock.sendall(_HTTP2_PREFACE)
+            answer = b""
+            while len(answer) < 9:
+                chunk = sock.recv(9 - len(answer))
+                if not chunk:
+                    break
+                answer += chunk
+    except socket.timeout:
+        answer = b""
     except OSError as e:
-        raise RayAddressError(f"--ray-address {address!r}: no Ray cluster answers there ({e}); start one with "
-                           "`ray start --head` or run without --ray-address to use the local process pool") from e
+        raise RayAddressError(f"--ray-address {shown!r}: no Ray cluster answers there ({e}); start one with "
+                              "`ray start --head` or run without --ray-address to use the local process pool") from e
+    if len(answer) < 9 or answer[3] != 4:
+        raise RayAddressError(f"--ray-address {shown!r}: something listens there but it is not a Ray cluster (no gRPC "
+                              f"answer within {RAY_CONNECT_TIMEOUT_S:g} s); give the address `ray start --head` printed")
