@@ -1,5 +1,11 @@
-"""The synthetic world of fsv-bench and its scorers (this package knows the truth)."""
+"""The synthetic world of fsv-bench and its scorers (this package knows the truth).
 
+The names below are loaded on first use (``benchmark.Scenario``, ``from benchmark import simulate``),
+so that importing a small part of the package (``benchmark.errors``, ``benchmark.interrupt``) does
+not load MuJoCo and the renderer.
+"""
+
+import importlib
 import os
 
 # Headless by design: MuJoCo and pyrender pick their GL platform when first imported, so the
@@ -7,13 +13,20 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
-# isort: off
+_EXPORTS = {
+    "BenchmarkError": "benchmark.errors", "EpisodeFileError": "benchmark.errors", "RenderError": "benchmark.errors",
+    "ScenarioError": "benchmark.errors", "SimulationError": "benchmark.errors",
+    "Scenario": "benchmark.world.scenario", "Episode": "benchmark.world.episode",
+    "simulate": "benchmark.world.simulate", "TASKS": "benchmark.world.tasks",
+    "load_episode": "benchmark.camera.episode_file", "save_episode": "benchmark.camera.episode_file",
+    "render": "benchmark.camera.render", "SensorModel": "benchmark.camera.sensor",
+}
+__all__ = sorted(_EXPORTS)
 
-from benchmark.errors import BenchmarkError, EpisodeFileError, RenderError, ScenarioError, SimulationError
-from benchmark.world.scenario import Scenario
-from benchmark.world.episode import Episode
-from benchmark.world.simulate import simulate
-from benchmark.world.tasks import TASKS
-from benchmark.camera.episode_file import load_episode, save_episode
-from benchmark.camera.render import render
-from benchmark.camera.sensor import SensorModel
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'benchmark' has no attribute {name!r}")

@@ -17,6 +17,8 @@ import shutil
 import tempfile
 from typing import Iterator
 
+from benchmark import interrupt
+
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[pathlib.Path]:
@@ -81,7 +83,7 @@ def check_out(out: str | os.PathLike, option: str = "--out", replace: bool = Tru
     if not probe.is_dir():
         raise OutputFolderError(f"{option} {out}: {probe} is not a folder")
     try:
-        pathlib.Path(tempfile.mkdtemp(prefix=".fsv-bench-probe.", dir=probe)).rmdir()
+        os.rmdir(tempfile.mkdtemp(prefix=".fsv-bench-probe.", dir=probe))
     except OSError as e:
         raise OutputFolderError(f"{option} {out}: cannot write in {probe} ({e.strerror or e})") from None
 
@@ -98,9 +100,15 @@ def staging_folder(out: str | os.PathLike) -> pathlib.Path:
         pid = old.name[len(out.name) + 2:].split(".")[0]
         if old.is_dir() and pid.isdigit() and not _alive(int(pid)):
             shutil.rmtree(old, ignore_errors=True)
-    for old in out.parent.glob(f".{out.name}.old"):
-        shutil.rmtree(old, ignore_errors=True)  # a swap interrupted between its two renames
-    return pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.{os.getpid()}.", dir=out.parent))
+    old = out.with_name(f".{out.name}.old")
+    if old.is_dir():  # a swap that was cut short: between its renames (restore), or before removing the old one
+        if out.exists():
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(old, out)
+    folder = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.{os.getpid()}.", dir=out.parent))
+    interrupt.register(folder)
+    return folder
 
 
 _TEMPORARY = re.compile(r"^\.tmp-.+\.(\d+)\.[a-z0-9_]{8}")
@@ -137,17 +145,21 @@ def swap_folder(new: str | os.PathLike, dest: str | os.PathLike, *, replace_any:
     holds files fsv-bench did not write is refused (:class:`OutputFolderError`) unless ``replace_any``.
     """
     new, dest = pathlib.Path(new), pathlib.Path(dest)
+    if interrupt.interrupted():  # Ctrl-C came and a library swallowed it: the previous output stays
+        raise KeyboardInterrupt
     if not replace_any and not is_replaceable(dest):
         raise OutputFolderError(f"{dest} holds files that fsv-bench did not write: it is left as it is")
     (new / OUTPUT_MARKER).write_text(_MARKER_TEXT)
     os.chmod(new, 0o755)  # mkdtemp makes it private; results are shared
-    if not dest.exists():
+    with interrupt.critical():  # Ctrl-C's watchdog waits: never between the two renames
+        interrupt.unregister(new)
+        if not dest.exists():
+            os.replace(new, dest)
+            return dest
+        old = dest.with_name(f".{dest.name}.old")
+        shutil.rmtree(old, ignore_errors=True)
+        os.replace(dest, old)
         os.replace(new, dest)
-        return dest
-    old = dest.with_name(f".{dest.name}.old")
-    shutil.rmtree(old, ignore_errors=True)
-    os.replace(dest, old)
-    os.replace(new, dest)
     shutil.rmtree(old)
     return dest
 

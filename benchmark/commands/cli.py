@@ -22,6 +22,7 @@ import shutil
 import sys
 import time
 
+from benchmark import interrupt
 from benchmark.atomic import check_out, staging_folder, swap_folder, write_bytes
 from benchmark.background import Background
 from benchmark.camera.episode_file import save_episode
@@ -43,6 +44,12 @@ SUBCOMMANDS = {"generate": "benchmark.paper.dataset.cli", "calibrate": "benchmar
                "sweep": "benchmark.suites.sweep"}
 
 
+def _interrupted(e: BaseException) -> bool:
+    """Whether an exception is Ctrl-C's: a KeyboardInterrupt, or what a library made of it (the
+    SystemError of a compiled numba function, the ImportError of a C extension, an error that wraps it)."""
+    return isinstance(e, KeyboardInterrupt) or interrupt.interrupted() or isinstance(e.__context__, KeyboardInterrupt)
+
+
 def _subcommand(argv: list) -> int:
     """Runs ``fsv-bench <subcommand> ...``; bad input exits 2, Ctrl-C 130 (re-run to resume)."""
     module = importlib.import_module(SUBCOMMANDS[argv[0]])
@@ -51,16 +58,20 @@ def _subcommand(argv: list) -> int:
     args = p.parse_args(argv[1:])
     try:
         module.run(args)
-    except (ScenarioError, InputError, ValueError) as e:
-        print(f"fsv-bench {argv[0]}: error: {e}", file=sys.stderr)
-        return 2
-    except BenchmarkError as e:
-        print(f"fsv-bench {argv[0]}: failed: {e}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print(f"fsv-bench {argv[0]}: interrupted; complete files are kept, run the same command to resume",
-              file=sys.stderr)
-        return 130
+    except BaseException as e:
+        if isinstance(e, SystemExit):
+            raise
+        if _interrupted(e):
+            print(f"fsv-bench {argv[0]}: interrupted; complete files are kept, run the same command to resume",
+                  file=sys.stderr)
+            return 130
+        if isinstance(e, (ScenarioError, InputError, ValueError)):
+            print(f"fsv-bench {argv[0]}: error: {e}", file=sys.stderr)
+            return 2
+        if isinstance(e, BenchmarkError):
+            print(f"fsv-bench {argv[0]}: failed: {e}", file=sys.stderr)
+            return 1
+        raise
     return 0
 
 
@@ -171,24 +182,20 @@ def main(argv: list | None = None) -> int:
         summary["provenance"] = provenance()
         write_json(tmp / "summary.json", summary)
         swap_folder(tmp, out)
-    except (ScenarioError, InputError) as e:
+    except BaseException as e:
         background.cancel()
         shutil.rmtree(tmp, ignore_errors=True)
-        print(f"fsv-bench: error: {e}", file=sys.stderr)
-        return 2
-    except BenchmarkError as e:
-        background.cancel()
-        shutil.rmtree(tmp, ignore_errors=True)
-        print(f"fsv-bench: failed: {e}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        background.cancel()
-        shutil.rmtree(tmp, ignore_errors=True)
-        print(f"fsv-bench: interrupted; {out} is as it was before the run", file=sys.stderr)
-        return 130
-    except BaseException:
-        background.cancel()
-        shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(e, SystemExit):
+            raise
+        if _interrupted(e):
+            print(f"fsv-bench: interrupted; {out} is as it was before the run", file=sys.stderr)
+            return 130
+        if isinstance(e, (ScenarioError, InputError)):
+            print(f"fsv-bench: error: {e}", file=sys.stderr)
+            return 2
+        if isinstance(e, BenchmarkError):
+            print(f"fsv-bench: failed: {e}", file=sys.stderr)
+            return 1
         raise
     sc = scenario
     print(f"fsv-bench: task {sc.task}, user {sc.user}, grasp {sc.grasp}, mass {sc.mass}, seed {sc.seed}, "

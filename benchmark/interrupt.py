@@ -1,0 +1,73 @@
+"""Ctrl-C ends a command with status 130 within a second, whatever it is doing, and loses nothing.
+
+:func:`install` makes SIGINT raise KeyboardInterrupt as usual (the command's handlers clean up and
+return 130) and also starts a watchdog: if the process is still alive :data:`GRACE_S` later (the
+interrupt was swallowed by a library that catches ``BaseException``, or the main thread is inside a
+long compiled kernel that cannot be interrupted), the watchdog removes the command's staging folders
+(:func:`register`) and ends the process with status 130. An output folder being swapped into place
+(:func:`critical`) is finished first, so the previous output is either kept or wholly replaced.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import shutil
+import signal
+import sys
+import threading
+import time
+
+GRACE_S = 1.0
+"""How long after Ctrl-C the command may take to end by itself [s]."""
+
+EXIT_INTERRUPTED = 130
+
+_staging: set = set()
+_lock = threading.RLock()
+_fired = threading.Event()
+
+
+def register(folder: str | os.PathLike) -> None:
+    """A staging folder the watchdog removes if it has to end the process."""
+    with _lock:
+        _staging.add(pathlib.Path(folder))
+
+
+def unregister(folder: str | os.PathLike) -> None:
+    with _lock:
+        _staging.discard(pathlib.Path(folder))
+
+
+def critical():
+    """A block the watchdog waits for (a folder swap: two renames that must not be split)."""
+    return _lock
+
+
+def _force_exit() -> None:
+    time.sleep(GRACE_S)
+    if threading.main_thread().is_alive():
+        with _lock:
+            for folder in list(_staging):
+                shutil.rmtree(folder, ignore_errors=True)
+            sys.stderr.write("fsv-bench: interrupted\n")
+            sys.stderr.flush()
+            os._exit(EXIT_INTERRUPTED)
+
+
+def _handler(signum, frame):
+    if not _fired.is_set():
+        _fired.set()
+        threading.Thread(target=_force_exit, name="interrupt-watchdog", daemon=True).start()
+    raise KeyboardInterrupt
+
+
+def install() -> None:
+    """Installs the handler (main thread only; elsewhere, e.g. a test runner's thread, it does nothing)."""
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, _handler)
+
+
+def interrupted() -> bool:
+    """Whether Ctrl-C arrived (even if a library swallowed its KeyboardInterrupt)."""
+    return _fired.is_set()
