@@ -440,3 +440,19 @@ def test_generate_shows_every_tracked_frame_across_the_worker_processes(tmp_path
     assert (man["status"] == "ok").all()
     err = capsys.readouterr().err
     assert "tracked: 100%" in err and "92/92" in err  # 2 episodes x 46 frames
+
+
+def test_a_corrupt_dataset_header_is_refused_naming_the_file(tmp_path, capsys):
+    from benchmark.commands.cli import main
+    from benchmark.paper.dataset.files import read_header
+
+    header = tmp_path / "d" / "dataset.json"
+    header.parent.mkdir()
+    header.write_text('{"format": "fsv-bench-dataset"\n "version": 2}')
+    assert main(["generate", "--out", str(tmp_path / "d"), "--tasks", "lift", "--seeds", "0"]) == 2
+    err = capsys.readouterr().err
+    assert f"{header} is not a readable dataset header (made by `fsv-bench generate`): Expecting ','" in err
+    assert err.count("\n") == 1 and header.read_text().startswith('{"format"')  # left as it was
+    header.write_text("[1, 2]")
+    with pytest.raises(DatasetError, match=f"{header} is not a dataset header"):
+        read_header(tmp_path / "d")

@@ -18,8 +18,6 @@ The file's format, its reader and writer are :mod:`benchmark.method.grip_file`.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 
 from benchmark.method.grip_file import write_calibration
 from fsv.grip import GripCalibration, fit_grip
@@ -53,8 +51,9 @@ def run(args: argparse.Namespace) -> dict:
     from benchmark.scores.samples import MAX_EXCESS_N
 
     df = load_dataset(args.data, max_excess_n=MAX_EXCESS_N)
-    with open(os.path.join(args.data, "dataset.json")) as fh:
-        recording = json.load(fh)["spec"]
+    from benchmark.paper.dataset.files import read_header
+
+    recording = read_header(args.data)["spec"]
     calibrations = grip_calibrations(df)
     write_calibration(args.out, calibrations, recording)
     for u, c in sorted(calibrations.items()):

@@ -44,6 +44,7 @@ import numpy as np
 import pandas as pd
 
 from benchmark.atomic import save_figure, write_text
+from benchmark.paper.dataset.files import read_header
 from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset, training_set
 from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N
 from benchmark.errors import DatasetError
@@ -253,8 +254,7 @@ def score(data, protocol: Table2Protocol = Table2Protocol(), config: LearnConfig
 
 
 def _sources(data: str) -> dict:
-    with open(os.path.join(data, "dataset.json")) as fh:
-        spec = json.load(fh)["spec"]
+    spec = read_header(data)["spec"]
     return dict(kinematics=spec["kinematics"], contacts=spec["contacts"])
 
 

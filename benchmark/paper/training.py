@@ -16,13 +16,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 
 import numpy as np
 
 from benchmark.method.grip_file import CalibrationError, read_calibration
+from benchmark.paper.dataset.files import read_header
 from benchmark.paper.dataset import finger_names_of, load_dataset, training_set
 from benchmark.paper.dataset.cli import parse_ints
 from benchmark.scores.samples import MAX_EXCESS_N
@@ -59,6 +59,7 @@ def run(args: argparse.Namespace):
     except CalibrationError as e:
         raise InputError(f"--grip: {e}") from e
     df = load_dataset(args.data, max_excess_n=rule, **where)
+    header = read_header(args.data)  # before any training: a damaged header is refused at once
     data = training_set(df, grips)
     episodes = int(df["episode"].nunique())
     if args.folds and not 2 <= args.folds <= episodes:
@@ -74,8 +75,6 @@ def run(args: argparse.Namespace):
                disable=True if args.quiet else None, mininterval=0.5)  # None: hidden when stderr is not a terminal
     try:
         cv = cross_validate(data, config, on_epoch=bar.update).summary() if args.folds else None
-        with open(os.path.join(args.data, "dataset.json")) as fh:
-            header = json.load(fh)
         meta = dict(
             command="fsv-bench train " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train"] else "fsv.learn.train",
             dataset=header["spec"], selection=where, max_excess_n=rule, episodes=int(df["episode"].nunique()),

@@ -33,6 +33,23 @@ def _write_sealed(table: pa.Table, path: str) -> str:
     return file_sha256(data)
 
 
+def read_header(out) -> dict:
+    """A dataset folder's ``dataset.json`` (its spec, sources, format and world).
+
+    Raises:
+        DatasetFileError: Naming the file when it is missing, not JSON, or not a dataset's header.
+    """
+    path = os.path.join(os.fspath(out), "dataset.json")
+    try:
+        with open(path) as fh:
+            header = json.load(fh)
+    except (OSError, ValueError) as e:
+        raise DatasetFileError(f"{path} is not a readable dataset header (made by `fsv-bench generate`): {e}") from e
+    if not isinstance(header, dict) or not isinstance(header.get("spec"), dict):
+        raise DatasetFileError(f"{path} is not a dataset header: it has no \"spec\" object")
+    return header
+
+
 def _prepare(spec: DatasetSpec, out: str) -> str:
     episodes = os.path.join(out, "episodes")
     os.makedirs(episodes, exist_ok=True)
@@ -44,8 +61,7 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
     header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict(), world=world_fingerprint())
     path = os.path.join(out, "dataset.json")
     if os.path.exists(path):
-        with open(path) as fh:
-            old = json.load(fh)
+        old = read_header(out)
         if old.get("format") != FORMAT or old.get("version") != VERSION:
             raise DatasetError(f"{out!r} holds a dataset of format {old.get('format')!r} version {old.get('version')!r}; "
                                f"this fsv-bench writes version {VERSION} (with digests): use a new folder")
