@@ -29,4 +29,22 @@ def test_junit_has_one_case_per_gate_and_a_failure_naming_the_value():
     cases = suite.findall("testcase")
     assert [c.get("name") for c in cases] == ["median a <= 1", "mean a <= 1.5"]
     assert cases[0].find("failure") is None
-    assert "measured 2 (95 % CI 1-3)" in cases[1].find("failure").get("message")
+    assert "measured 2 (95 % CI [1, 3])" in cases[1].find("failure").get("message")
+
+
+def test_the_report_gives_units_and_intervals_as_brackets():
+    from benchmark.scores.episode import METRICS
+    from benchmark.scores.units import UNITS, labelled
+    from benchmark.scores.verdict import GateResult, report_markdown
+    from types import SimpleNamespace
+
+    assert set(UNITS) == set(METRICS)  # every metric has its unit
+    suite = SimpleNamespace(name="s", version=1, description="d")
+    agg = {m: {s: {"value": -0.65, "ci_low": -0.6509, "ci_high": 0.6927} for s in ("median", "mean")} for m in METRICS}
+    rows = [{"episode": "e", **{m: 1.0 for m in METRICS}}]
+    text = report_markdown(suite, "m", rows, agg, {"lift": agg}, [GateResult("g", -0.65, (-0.6509, 0.6927), True)],
+                           METRICS)
+    assert "| g | -0.65 | [-0.6509, 0.6927] | pass |" in text
+    assert "| acc_err_rms [m/s²] | -0.65 | [-0.6509, 0.6927] | -0.65 |" in text
+    assert "| contact_recall | -0.65 |" in text and labelled("learned_mae_n") == "learned_mae_n [N]"
+    assert "-0.6509-0.6927" not in text

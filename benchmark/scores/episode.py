@@ -26,7 +26,6 @@ METRICS = ("box_pos_err_mm", "box_rot_err_deg", "contact_err_mm_mean", "contact_
            "net_torque_err_nm_rms", "least_violation_frac", "learned_rel_err_pct", "learned_mae_n")
 """Names of the per-episode metrics, in report order."""
 
-
 def score_episode(episode, estimate) -> dict:
     """Every metric of one episode.
 

@@ -7,6 +7,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 from benchmark.scores.aggregate import aggregate_all
+from benchmark.scores.units import labelled
 
 
 @dataclass(frozen=True)
@@ -96,8 +97,12 @@ def _fmt(v) -> str:
     return "nothing scored" if v is None else f"{v:.4g}"
 
 
+def _interval(ci) -> str:
+    return "" if ci is None else f"[{ci[0]:.4g}, {ci[1]:.4g}]"
+
+
 def _fmt_ci(ci) -> str:
-    return "" if ci is None else f"(95 % CI {ci[0]:.4g}-{ci[1]:.4g})"
+    return "" if ci is None else f"(95 % CI {_interval(ci)})"
 
 
 def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_task: dict, results: list,
@@ -108,18 +113,20 @@ def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_
              f"**Verdict: {'every gate holds' if ok else 'FAILED: ' + ', '.join(r.name for r in results if not r.passed)}**",
              "", suite.description, "", "## Gates", "", "| gate | measured | 95 % CI | |", "|---|---|---|---|"]
     for r in results:
-        lines.append(f"| {r.name} | {_fmt(r.value)} | {_fmt_ci(r.ci).strip('()').replace('95 % CI ', '')} | "
+        lines.append(f"| {r.name} | {_fmt(r.value)} | {_interval(r.ci)} | "
                      f"{'pass' if r.passed else '**FAIL**'} |")
     lines += ["", f"## Aggregates over {len(rows)} episodes (median [95 % CI], mean)", "",
               "| metric | median | 95 % CI | mean |", "|---|---|---|---|"]
     for m in metrics:
         med, mean = aggregates[m]["median"], aggregates[m]["mean"]
-        lines.append(f"| {m} | {_fmt(med['value'])} | {_fmt_ci((med['ci_low'], med['ci_high']) if med['value'] is not None else None).strip('()').replace('95 % CI ', '')} | {_fmt(mean['value'])} |")
-    lines += ["", "## Per task (median)", "", "| task | " + " | ".join(metrics) + " |",
+        ci = (med["ci_low"], med["ci_high"]) if med["value"] is not None else None
+        lines.append(f"| {labelled(m)} | {_fmt(med['value'])} | {_interval(ci)} | {_fmt(mean['value'])} |")
+    lines += ["", "## Per task (median)", "", "| task | " + " | ".join(labelled(m) for m in metrics) + " |",
               "|---|" + "---|" * len(metrics)]
     for task, agg in per_task.items():
         lines.append(f"| {task} | " + " | ".join(_fmt(agg[m]["median"]["value"]) for m in metrics) + " |")
-    lines += ["", "## Per episode", "", "| episode | " + " | ".join(metrics) + " |", "|---|" + "---|" * len(metrics)]
+    lines += ["", "## Per episode", "", "| episode | " + " | ".join(labelled(m) for m in metrics) + " |",
+              "|---|" + "---|" * len(metrics)]
     for r in rows:
         lines.append(f"| {r['episode']} | " + " | ".join(_fmt(r[m] if r[m] == r[m] else None) for m in metrics) + " |")
     return "\n".join(lines) + "\n"
