@@ -29,7 +29,7 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
                  hand_model: HandModel, path: str | os.PathLike, frames: int = 6, truth: Truth | None = None) -> Path:
     """A PNG strip: depth frames (grey: near dark, far light) with the tracked box (green), hand
     capsules (orange), fingertips (red: seen, white: hidden) and active contact points (cyan crosses)
-    drawn over them; with ``truth``, the true box (white dashed), hand (faint white) and contact
+    drawn over them; with ``truth``, the true box (gold dashed), hand (faint gold) and contact
     points (magenta plus signs) beneath. A legend under the strip names every mark.
 
     Args:
@@ -76,6 +76,9 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
     return path
 
 
+TRUTH_COLOUR = "#ffd700"
+"""The truth's colour (gold): it stands out on the grey depth at any brightness, unlike white."""
+
 _SIGNS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
 """The box's eight corners as signs of its half extents."""
 
@@ -100,16 +103,16 @@ def _crop(calib: Calibration, tracking, object_model: ObjectModel, hand_model: H
 
 
 def _draw_truth(ax, calib: Calibration, truth: Truth, object_model: ObjectModel, hand_model: HandModel, i: int) -> None:
-    """The true box (white dashed), hand (faint white) and contact points (magenta plus signs) of frame ``i``."""
+    """The true box (gold dashed), hand (faint gold) and contact points (magenta plus signs) of frame ``i``."""
     from matplotlib.collections import LineCollection
 
     corners = truth.box_pos[i] + (_SIGNS * object_model.half_extents) @ truth.box_rot[i].T
     uv = _project(calib, corners)
-    ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors="white", linewidths=1.0,
-                                     linestyles="--", alpha=0.8))
+    ax.add_collection(LineCollection([uv[[a, b]] for a, b in _BOX_EDGES], colors=TRUTH_COLOUR, linewidths=1.3,
+                                     linestyles="--"))
     ends = capsule_endpoints(hand_model, forward_kinematics_qpos(hand_model, truth.hand_qpos[i]))
     uv = _project(calib, ends.reshape(-1, 3)).reshape(-1, 2, 2)
-    ax.add_collection(LineCollection(uv, colors="white", linewidths=2.5, alpha=0.3, capstyle="round"))
+    ax.add_collection(LineCollection(uv, colors=TRUTH_COLOUR, linewidths=2.5, alpha=0.35, capstyle="round"))
     act_t = np.asarray(truth.contact_active[i], bool)
     if act_t.any():
         uv = _project(calib, truth.box_pos[i] + truth.contact_point[i, act_t] @ truth.box_rot[i].T)
@@ -155,8 +158,8 @@ def _legend(with_truth: bool) -> list:
              Line2D([], [], color="white", markeredgecolor="red", marker="o", ls="", ms=4, label="fingertip (hidden)"),
              Line2D([], [], color="cyan", marker="x", ls="", ms=6, label="tracked contact")]
     if with_truth:
-        marks += [Line2D([], [], color="grey", lw=1.0, ls="--", label="true box"),
-                  Line2D([], [], color="grey", lw=2.5, alpha=0.4, label="true hand"),
+        marks += [Line2D([], [], color=TRUTH_COLOUR, lw=1.3, ls="--", label="true box"),
+                  Line2D([], [], color=TRUTH_COLOUR, lw=2.5, alpha=0.35, label="true hand"),
                   Line2D([], [], color="magenta", marker="+", ls="", ms=7, label="true contact")]
     return marks
 
