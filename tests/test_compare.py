@@ -14,16 +14,24 @@ def _scores(values, version=1, recall=0.9):
             "episodes": eps}
 
 
-def test_a_uniformly_better_method_is_named_and_noise_is_not():
-    a = _scores([1.0, 2.0, 3.0, 4.0, 5.0])
-    b = _scores([0.5, 1.5, 2.5, 3.5, 4.5], recall=0.9)
+def test_four_episodes_are_too_few_for_a_verdict_however_alike_their_signs():
+    a = _scores([1.0, 2.0, 3.0, 4.0])
+    b = _scores([0.5, 1.5, 2.5, 3.5])  # lower on all four: a sign test's p = 0.125
+    r = compare(a, b)["metrics"]["box_pos_err_mm"]
+    assert r["mean_diff"] == pytest.approx(-0.5) and r["pairs"] == 4 and r["p"] is None
+    assert r["better"] == "too few episodes" and r["interval"] == "few episodes"
+
+
+def test_a_uniformly_better_method_is_named_with_its_p_value_and_noise_is_not():
+    a = _scores([1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0])
+    b = _scores([0.5, 1.4, 2.3, 3.6, 4.5, 5.2, 6.6], recall=0.9)  # lower on all seven
     r = compare(a, b)
-    assert r["metrics"]["box_pos_err_mm"]["mean_diff"] == pytest.approx(-0.5)
-    assert r["metrics"]["box_pos_err_mm"]["better"] == "B"  # lower error, every episode
-    assert r["metrics"]["contact_recall"]["better"] == "neither"  # identical recall
-    c = _scores([1.5, 1.5, 3.5, 3.5, 5.0])  # differences of both signs
+    m = r["metrics"]["box_pos_err_mm"]
+    assert m["better"] == "B" and m["p"] == pytest.approx(2 / 2**7)  # exact Wilcoxon: the smallest two-sided p
+    assert r["metrics"]["contact_recall"]["better"] == "neither"  # the same recall on every episode
+    c = _scores([1.5, 1.5, 3.5, 3.5, 5.5, 5.5, 7.5])  # differences of both signs
     assert compare(a, c)["metrics"]["box_pos_err_mm"]["better"] == "neither"
-    worse_recall = _scores([1.0, 2.0, 3.0, 4.0, 5.0], recall=0.8)
+    worse_recall = _scores([1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0], recall=0.8)
     assert compare(a, worse_recall)["metrics"]["contact_recall"]["better"] == "A"
 
 
@@ -33,11 +41,12 @@ def test_other_suite_versions_are_refused():
 
 
 def test_cli_prints_and_writes_and_refuses_a_folder_without_scores(tmp_path, capsys):
-    for name, vals in (("a", [1.0, 2.0, 3.0]), ("b", [0.0, 1.0, 2.0])):
+    for name, vals in (("a", [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]), ("b", [0.0, 1.0, 2.0, 3.0, 4.0, 5.0])):
         (tmp_path / name).mkdir()
         (tmp_path / name / "scores.json").write_text(json.dumps(_scores(vals)))
     assert main(["compare", str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(tmp_path / "c.json")]) == 0
-    assert "box_pos_err_mm" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "over n = 6 episodes" in printed and "box_pos_err_mm [mm]" in printed and "0.0312" in printed
     assert json.loads((tmp_path / "c.json").read_text())["metrics"]["box_pos_err_mm"]["better"] == "B"
     assert main(["compare", str(tmp_path / "a"), str(tmp_path / "nope")]) == 2
     assert "no readable scores.json" in capsys.readouterr().err

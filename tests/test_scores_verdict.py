@@ -7,8 +7,10 @@ import pytest
 from benchmark.scores.verdict import check_gates, junit_xml
 from benchmark.suites import Gate
 
-AGG = {"a": {"median": {"value": 1.0, "ci_low": 0.5, "ci_high": 1.5}, "mean": {"value": 2.0, "ci_low": 1.0, "ci_high": 3.0}},
-       "b": {"median": {"value": None, "ci_low": None, "ci_high": None}, "mean": {"value": None, "ci_low": None, "ci_high": None}}}
+AGG = {"a": {"median": {"value": 1.0, "ci_low": 0.5, "ci_high": 1.5, "n": 4},
+             "mean": {"value": 2.0, "ci_low": 1.0, "ci_high": 3.0, "n": 4}},
+       "b": {"median": {"value": None, "ci_low": None, "ci_high": None, "n": 0},
+             "mean": {"value": None, "ci_low": None, "ci_high": None, "n": 0}}}
 
 
 def test_gates_hold_fail_and_fail_when_nothing_was_scored():
@@ -29,7 +31,7 @@ def test_junit_has_one_case_per_gate_and_a_failure_naming_the_value():
     cases = suite.findall("testcase")
     assert [c.get("name") for c in cases] == ["median a <= 1", "mean a <= 1.5"]
     assert cases[0].find("failure") is None
-    assert "measured 2 (95 % CI [1, 3])" in cases[1].find("failure").get("message")
+    assert "measured 2 (95 % CI [1, 3], n = 4 episodes, few episodes)" in cases[1].find("failure").get("message")
 
 
 def test_the_report_gives_units_and_intervals_as_brackets():
@@ -42,9 +44,10 @@ def test_the_report_gives_units_and_intervals_as_brackets():
     suite = SimpleNamespace(name="s", version=1, description="d")
     agg = {m: {s: {"value": -0.65, "ci_low": -0.6509, "ci_high": 0.6927} for s in ("median", "mean")} for m in METRICS}
     rows = [{"episode": "e", **{m: 1.0 for m in METRICS}}]
-    text = report_markdown(suite, "m", rows, agg, {"lift": agg}, [GateResult("g", -0.65, (-0.6509, 0.6927), True)],
+    text = report_markdown(suite, "m", rows, agg, {"lift": agg}, [GateResult("g", -0.65, (-0.6509, 0.6927), True, 1)],
                            METRICS)
-    assert "| g | -0.65 | [-0.6509, 0.6927] | pass |" in text
+    assert "| g | -0.65 | [-0.6509, 0.6927] | 1 | pass |" in text
+    assert "n = 1 episodes: with so few, each 95 % interval is little more than the range" in text
     assert "| acc_err_rms [m/s²] | -0.65 | [-0.6509, 0.6927] | -0.65 |" in text
     assert "| contact_recall | -0.65 |" in text and labelled("learned_mae_n") == "learned_mae_n [N]"
     assert "-0.6509-0.6927" not in text

@@ -44,3 +44,30 @@ def aggregate_all(rows: list[dict], metrics, by: str | None = None) -> dict:
         groups = sorted({r[by] for r in rows})
         return {g: aggregate_all([r for r in rows if r[by] == g], metrics) for g in groups}
     return {m: {s: aggregate([r[m] for r in rows], s) for s in ("median", "mean")} for m in metrics}
+
+
+MIN_PAIRED_EPISODES = 6
+"""Fewest paired episodes (non-zero differences) with which a two-sided Wilcoxon signed-rank test can
+reach p < 0.05: its smallest p with n pairs is 2 / 2^n (0.0625 with 5, 0.031 with 6)."""
+
+FEW_EPISODES = 10
+"""Below this many episodes a bootstrap interval is little more than the values' range: reports
+label such intervals "few episodes"."""
+
+
+def paired_test(differences) -> dict:
+    """Wilcoxon's signed-rank test of paired per-episode differences (exact for up to 50 pairs).
+
+    Returns:
+        ``{"n", "p", "median_diff"}``: ``n`` the non-zero finite differences (ties at zero are
+        dropped, Wilcoxon's rule); ``p`` the two-sided p-value, or None when ``n`` is below
+        :data:`MIN_PAIRED_EPISODES` (too few episodes for any verdict at 95 %); the median difference.
+    """
+    d = np.asarray([v for v in differences if v is not None and np.isfinite(v)], dtype=float)
+    nonzero = d[d != 0]
+    median = float(np.median(d)) if d.size else None
+    if nonzero.size < MIN_PAIRED_EPISODES:
+        return {"n": int(nonzero.size), "p": None, "median_diff": median}
+    method = "exact" if nonzero.size <= 50 else "approx"
+    p = float(stats.wilcoxon(nonzero, alternative="two-sided", method=method).pvalue)
+    return {"n": int(nonzero.size), "p": p, "median_diff": median}

@@ -6,7 +6,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-from benchmark.scores.aggregate import aggregate_all
+from benchmark.scores.aggregate import FEW_EPISODES, aggregate_all
 from benchmark.scores.units import labelled
 
 
@@ -54,12 +54,15 @@ class GateResult:
         value: The aggregate (None when nothing was scored: the gate fails).
         ci: The aggregate's 95 % interval, ``(low, high)`` or None.
         passed: Whether the gate holds.
+        n: The episodes the aggregate is over (below ``FEW_EPISODES`` its interval is labelled
+            "few episodes").
     """
 
     name: str
     value: float | None
     ci: tuple | None
     passed: bool
+    n: int = 0
 
 
 def check_gates(gates, aggregates: dict) -> list[GateResult]:
@@ -75,7 +78,7 @@ def check_gates(gates, aggregates: dict) -> list[GateResult]:
         a = aggregates[g.metric][g.statistic]
         value = a["value"]
         out.append(GateResult(name=g.name, value=value, ci=None if value is None else (a["ci_low"], a["ci_high"]),
-                              passed=value is not None and g.holds(value)))
+                              passed=value is not None and g.holds(value), n=int(a.get("n", 0))))
     return out
 
 
@@ -88,8 +91,8 @@ def junit_xml(suite_name: str, results: list[GateResult], elapsed_s: float) -> b
     for r in results:
         case = ET.SubElement(ts, "testcase", classname=f"fsv-bench.{suite_name}", name=r.name, time="0")
         if not r.passed:
-            f = ET.SubElement(case, "failure", message=f"{r.name}: measured {_fmt(r.value)} {_fmt_ci(r.ci)}")
-            f.text = f"{r.name} does not hold: measured {_fmt(r.value)} {_fmt_ci(r.ci)}"
+            f = ET.SubElement(case, "failure", message=f"{r.name}: measured {_fmt(r.value)} {_fmt_ci(r.ci, r.n)}")
+            f.text = f"{r.name} does not hold: measured {_fmt(r.value)} {_fmt_ci(r.ci, r.n)}"
     return ET.tostring(root, encoding="utf-8", xml_declaration=True)
 
 
@@ -101,8 +104,12 @@ def _interval(ci) -> str:
     return "" if ci is None else f"[{ci[0]:.4g}, {ci[1]:.4g}]"
 
 
-def _fmt_ci(ci) -> str:
-    return "" if ci is None else f"(95 % CI {_interval(ci)})"
+def _fmt_ci(ci, n: int | None = None) -> str:
+    if ci is None:
+        return ""
+    if n is None:
+        return f"(95 % CI {_interval(ci)})"
+    return f"(95 % CI {_interval(ci)}, n = {n} episodes{', few episodes' if n < FEW_EPISODES else ''})"
 
 
 def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_task: dict, results: list,
@@ -111,9 +118,12 @@ def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_
     ok = all(r.passed for r in results)
     lines = [f"# {suite.name} (version {suite.version}): {method}", "",
              f"**Verdict: {'every gate holds' if ok else 'FAILED: ' + ', '.join(r.name for r in results if not r.passed)}**",
-             "", suite.description, "", "## Gates", "", "| gate | measured | 95 % CI | |", "|---|---|---|---|"]
+             "", suite.description, "", f"n = {len(rows)} episodes" + (
+                 ": with so few, each 95 % interval is little more than the range of the values (few episodes)"
+                 if len(rows) < FEW_EPISODES else ""),
+             "", "## Gates", "", "| gate | measured | 95 % CI | n | |", "|---|---|---|---|---|"]
     for r in results:
-        lines.append(f"| {r.name} | {_fmt(r.value)} | {_interval(r.ci)} | "
+        lines.append(f"| {r.name} | {_fmt(r.value)} | {_interval(r.ci)} | {r.n} | "
                      f"{'pass' if r.passed else '**FAIL**'} |")
     lines += ["", f"## Aggregates over {len(rows)} episodes (median [95 % CI], mean)", "",
               "| metric | median | 95 % CI | mean |", "|---|---|---|---|"]

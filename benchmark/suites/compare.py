@@ -4,8 +4,12 @@
 
 Both folders hold a ``scores.json`` written by ``fsv-bench eval`` on the same suite and version.
 For every metric, the per-episode differences B - A over the episodes both scored give a mean
-difference with its 95 % bootstrap interval; a method is called better on a metric only when the
-interval excludes zero (lower is better for errors, higher for recall and precision).
+difference with its 95 % bootstrap interval (labelled "few episodes" below
+:data:`benchmark.scores.aggregate.FEW_EPISODES`) and Wilcoxon's signed-rank test. A method is
+called better on a metric only when the test's two-sided p is below 0.05 (lower is better for
+errors, higher for recall and precision); with fewer than
+:data:`benchmark.scores.aggregate.MIN_PAIRED_EPISODES` differing pairs no p below 0.05 is possible,
+and the verdict is "too few episodes".
 """
 
 from __future__ import annotations
@@ -14,7 +18,11 @@ import argparse
 import json
 import pathlib
 
-from benchmark.scores.aggregate import aggregate
+from benchmark.scores.aggregate import FEW_EPISODES, aggregate, paired_test
+from benchmark.scores.units import labelled
+
+ALPHA = 0.05
+"""The paired test's level: a method is better where p < ALPHA."""
 
 HIGHER_IS_BETTER = ("contact_recall", "contact_precision")
 
@@ -47,14 +55,21 @@ def compare(a: dict, b: dict) -> dict:
     for m in a["metrics"]:
         d = [eb[k][m] - ea[k][m] for k in common if ea[k][m] is not None and eb[k][m] is not None]
         agg = aggregate(d, "mean")
-        better = "neither"
-        if agg["value"] is not None and agg["n"] >= 2:
-            lo, hi = agg["ci_low"], agg["ci_high"]
-            b_better = (lo > 0) if m in HIGHER_IS_BETTER else (hi < 0)
-            a_better = (hi < 0) if m in HIGHER_IS_BETTER else (lo > 0)
-            better = "B" if b_better else "A" if a_better else "neither"
+        test = paired_test(d)
+        if agg["value"] is None:
+            better = "nothing scored"
+        elif test["n"] == 0:
+            better = "neither"  # the same value on every episode
+        elif test["p"] is None:
+            better = "too few episodes"
+        elif test["p"] >= ALPHA:
+            better = "neither"
+        else:
+            lower = test["median_diff"] < 0
+            better = ("A" if lower else "B") if m in HIGHER_IS_BETTER else ("B" if lower else "A")
         out[m] = {"mean_diff": agg["value"], "ci_low": agg["ci_low"], "ci_high": agg["ci_high"], "n": agg["n"],
-                  "better": better}
+                  "interval": "few episodes" if agg["n"] < FEW_EPISODES else "bootstrap",
+                  "median_diff": test["median_diff"], "pairs": test["n"], "p": test["p"], "better": better}
     return {"suite": sa, "a": a.get("method"), "b": b.get("method"), "episodes": common, "metrics": out}
 
 
@@ -66,14 +81,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> dict:
     result = compare(load_scores(args.a), load_scores(args.b))
-    print(f"{result['suite']['name']} v{result['suite']['version']}: B - A over {len(result['episodes'])} episodes "
-          f"(A = {args.a}, B = {args.b}); better = interval excludes zero")
-    print(f"{'metric':24s} {'mean B-A':>12s} {'95 % CI':>26s}  better")
+    n = len(result["episodes"])
+    print(f"{result['suite']['name']} v{result['suite']['version']}: B - A over n = {n} episodes (A = {args.a}, "
+          f"B = {args.b}); better: Wilcoxon signed-rank p < {ALPHA:g}" + (
+              f"; 95 % intervals over {n} episodes are little more than their range" if n < FEW_EPISODES else ""))
+    print(f"{'metric':28s} {'mean B-A':>10s} {'95 % CI':>24s} {'pairs':>5s} {'p':>8s}  better")
     for m, r in result["metrics"].items():
         if r["mean_diff"] is None:
-            print(f"{m:24s} {'-':>12s}")
+            print(f"{labelled(m):28s} {'-':>10s}")
             continue
-        print(f"{m:24s} {r['mean_diff']:12.4g} [{r['ci_low']:11.4g}, {r['ci_high']:11.4g}]  {r['better']}")
+        p = "-" if r["p"] is None else f"{r['p']:.3g}"
+        print(f"{labelled(m):28s} {r['mean_diff']:10.4g} [{r['ci_low']:10.4g}, {r['ci_high']:10.4g}] {r['pairs']:5d} "
+              f"{p:>8s}  {r['better']}")
     if args.out:
         from benchmark.atomic import write_text
 

@@ -32,6 +32,7 @@ import time
 from dataclasses import asdict
 
 from benchmark.atomic import check_out, remove_stale_temporaries, staging_folder, swap_folder
+from benchmark.scores.aggregate import FEW_EPISODES
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.world.scenario import Scenario, episode_name
 from benchmark.suites import Gate, Suite, get_suite
@@ -187,7 +188,7 @@ def scores_document(suite: Suite, rows: list, gates, *, method: str, stages: dic
     return {
         "suite": {"name": suite.name, "version": suite.version, "description": suite.description},
         "method": method, "method_spec": method_spec, "stages": stages,
-        "metrics": list(METRICS), "episodes": rows, "aggregate": aggregates,
+        "metrics": list(METRICS), "n": len(rows), "episodes": rows, "aggregate": aggregates,
         "per_task": aggregate_all(rows, METRICS, by="task"),
         "gates": [asdict(r) for r in results], "verdict": "pass" if all(r.passed for r in results) else "fail",
         "rendered": sum(r["rendered"] for r in rows), "seconds": seconds, "provenance": provenance(),
@@ -336,10 +337,12 @@ def run(args: argparse.Namespace) -> dict:
 def print_verdict(scores: dict, out, command: str) -> None:
     """Prints the gates of ``scores`` and raises GateFailure naming the failed ones."""
     suite = scores["suite"]
-    print(f"fsv-bench {command}: suite {suite['name']} v{suite['version']}, {len(scores['episodes'])} episodes "
-          f"({scores['rendered']} rendered, the rest from the cache), {scores['seconds']:.0f} s\n  method: {scores['method']}")
+    n = len(scores["episodes"])
+    print(f"fsv-bench {command}: suite {suite['name']} v{suite['version']}, n = {n} episodes "
+          f"({scores['rendered']} rendered, the rest from the cache), {scores['seconds']:.0f} s\n  method: {scores['method']}"
+          + (f"\n  95 % intervals over {n} episodes are little more than the values' range" if n < FEW_EPISODES else ""))
     for g in scores["gates"]:
-        ci = "" if g["ci"] is None else f" [{g['ci'][0]:.4g}, {g['ci'][1]:.4g}]"
+        ci = "" if g["ci"] is None else f" 95 % CI [{g['ci'][0]:.4g}, {g['ci'][1]:.4g}]"
         value = "nothing scored" if g["value"] is None else f"{g['value']:.4g}"
         print(f"  {'pass' if g['passed'] else 'FAIL'}  {g['name']}: {value}{ci}")
     print(f"written to {out}/ (scores.json, report.md, junit.xml)")
