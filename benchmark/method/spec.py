@@ -19,7 +19,9 @@ class MethodSpec:
 
     Attributes:
         method: A whole method replacing every stage: an ``fsv.method.Method`` (or a factory of one),
-            or any callable ``(inputs: fsv.method.CameraInput, rng) -> fsv.method.Estimate``.
+            or any callable ``(inputs: fsv.method.CameraInput, rng) -> fsv.method.Estimate``; or the
+            name of a baseline (:data:`fsv.method.baselines.BASELINES`: ``static``,
+            ``zero-kinematics``, ``gravity-forces``, ``no-internal``, ``grip-line``).
         tracker: Replaces the reference tracker.
         differentiator: Replaces the algebraic differentiator; or one of :data:`DIFFERENTIATORS`.
         forces: Replaces the nominal-force programs.
@@ -50,6 +52,18 @@ class MethodSpec:
                              "--tracker/--differentiator/--forces/--internal")
 
     @property
+    def tracking_key(self):
+        """Methods with equal keys run the same tracker (an episode's tracking is run once for them);
+        None: a whole method of its own, never shared."""
+        from fsv.method.baselines import BASELINE_STAGE
+
+        if not self.method:
+            return ("tracker", self.tracker)
+        if self.method in BASELINE_STAGE:
+            return ("tracker", None) if BASELINE_STAGE[self.method] != "tracker" else ("baseline", self.method)
+        return None
+
+    @property
     def stage_specs(self) -> dict:
         return {"tracker": self.tracker, "differentiator": self.differentiator, "forces": self.forces,
                 "internal": self.internal}
@@ -72,7 +86,10 @@ def _build(spec: MethodSpec):
     from benchmark.method.load import load_object
     from fsv.errors import InputError
     from fsv.method import Method, make_method
+    from fsv.method.baselines import BASELINES
 
+    if spec.method in BASELINES:
+        return BASELINES[spec.method]()
     if spec.method:
         method = load_object(spec.method, "--method")
         if spec.oracle and not isinstance(method, Method):

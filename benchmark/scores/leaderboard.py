@@ -40,6 +40,49 @@ def leaderboard_markdown(suite, entries: list) -> str:
         held = sum(g["passed"] for g in scores["gates"])
         cells = " | ".join(_cell(agg[m][s]) for m, s, _ in COLUMNS)
         lines.append(f"| {name} | {cells} | {held}/{len(scores['gates'])} |")
+    lines += skill_table(entries)
     lines += ["", "Methods:", ""]
     lines += [f"- **{name}**: {scores['method']}" for name, scores in entries]
     return "\n".join(lines) + "\n"
+
+
+HIGHER_IS_BETTER = ("contact_recall", "contact_precision")
+
+
+def skill(value: float | None, best_baseline: float | None, metric: str) -> float | None:
+    """A method's skill against the best baseline: 1 - error / the baseline's error (1 perfect, 0 no
+    better than the trivial method, below 0 worse); for recall and precision (higher is better)
+    (value - baseline) / (1 - baseline). None where either is missing or the baseline is perfect."""
+    if value is None or best_baseline is None:
+        return None
+    if metric in HIGHER_IS_BETTER:
+        return None if best_baseline >= 1.0 else (value - best_baseline) / (1.0 - best_baseline)
+    return None if best_baseline <= 0.0 else 1.0 - value / best_baseline
+
+
+def skill_table(entries: list) -> list:
+    """Lines of a Markdown table: per metric the best baseline's statistic (rows named
+    ``baseline-*``), then every other method's skill against it."""
+    baselines = [(n, s) for n, s in entries if n.startswith("baseline-")]
+    if not baselines:
+        return []
+    best = {}
+    for m, st, _ in COLUMNS:
+        values = [(s["aggregate"][m][st]["value"], n) for n, s in baselines if s["aggregate"][m][st]["value"] is not None]
+        pick = max if m in HIGHER_IS_BETTER else min
+        best[m] = pick(values) if values else (None, None)
+    lines = ["", "Skill against the best baseline per metric: 1 - statistic / the best baseline's (recall: "
+             "(statistic - baseline) / (1 - baseline)); 1 is perfect, 0 no better than a trivial method.", "",
+             "| | " + " | ".join(h for _, _, h in COLUMNS) + " |", "|" + "---|" * (len(COLUMNS) + 1),
+             "| best baseline | " + " | ".join("—" if best[m][0] is None else f"{best[m][0]:.3g} ({best[m][1][9:]})"
+                                               for m, _, _ in COLUMNS) + " |"]
+    for name, scores in entries:
+        if name.startswith("baseline-"):
+            continue
+        cells = []
+        for m, st, _ in COLUMNS:
+            k = skill(scores["aggregate"][m][st]["value"], best[m][0], m)
+            cells.append("—" if k is None else f"{k:.2f}")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return lines
+

@@ -97,10 +97,11 @@ def _episode_rows(job) -> list:
     rows, tracked = [], {}
     for spec in specs:
         t1 = time.perf_counter()
-        shared = None if spec.method else tracked.get(spec.tracker)
+        key = spec.tracking_key
+        shared = None if key is None else tracked.get(key)
         estimate = run_method(spec, episode, inputs=inputs, tracking=shared)
-        if not spec.method:
-            tracked.setdefault(spec.tracker, estimate.tracking)
+        if key is not None:
+            tracked.setdefault(key, estimate.tracking)
         metrics = score_episode(episode, estimate)
         seconds = time.perf_counter() - (t0 if not rows else t1)
         rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc), **metrics,
@@ -287,8 +288,9 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, intern
     from benchmark.method import DIFFERENTIATORS, ORACLE_STAGES
 
     g = p.add_argument_group("the method (default: the reference; replace a stage by module:attribute)")
-    g.add_argument("--method", default=None, metavar="MODULE:ATTR",
-                   help="a whole method: an fsv.method.Method (or a factory of one) or a callable (inputs, rng) -> Estimate")
+    g.add_argument("--method", default=None, metavar="NAME|MODULE:ATTR",
+                   help="a whole method: an fsv.method.Method (or a factory of one) or a callable (inputs, rng) -> Estimate; "
+                        "or a stage's trivial baseline: static, zero-kinematics, gravity-forces, no-internal, grip-line")
     g.add_argument("--tracker", default=None, metavar="MODULE:ATTR", help="(inputs, rng) -> tracking with .box and .contacts")
     g.add_argument("--differentiator", default=None, metavar="NAME|MODULE:ATTR",
                    help=f"(poses) -> Kinematics, or one of {', '.join(DIFFERENTIATORS)}")

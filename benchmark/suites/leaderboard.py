@@ -2,9 +2,10 @@
 
     fsv-bench leaderboard --suite standard --out DIR [--workers N] [--cache DIR] [--quiet]
 
-The variants (:data:`VARIANTS`) replace one stage of the reference (another differentiator) or feed
-it truth (oracle contacts, oracle kinematics: ablations that show what each stage costs). They share
-every episode's rendering and tracking. ``DIR/<variant>/`` gets the files of ``fsv-bench eval``
+The variants (:data:`VARIANTS`) replace one stage of the reference (another differentiator, or a
+stage's trivial baseline) or feed it truth (oracle contacts, oracle kinematics: ablations that show
+what each stage costs). They share every episode's rendering and tracking. The table gives each
+method's skill against the best baseline per metric. ``DIR/<variant>/`` gets the files of ``fsv-bench eval``
 (``scores.json``, ``report.md``, ``junit.xml``); ``DIR/leaderboard.md`` the table with intervals.
 The exit status is 0 when the reference passes the suite's gates, 1 when not.
 """
@@ -17,6 +18,9 @@ import shutil
 
 from benchmark.atomic import staging_folder, swap_folder
 from benchmark.method import MethodSpec
+from fsv.method.baselines import BASELINES
+
+BASELINE_NAMES = tuple(BASELINES)
 
 VARIANTS = {
     "reference": MethodSpec(),
@@ -25,8 +29,10 @@ VARIANTS = {
     "oracle-contacts": MethodSpec(oracle=("contacts",)),
     "oracle-kinematics": MethodSpec(oracle=("kinematics",)),
     "oracle-contacts-kinematics": MethodSpec(oracle=("contacts", "kinematics")),
+    **{f"baseline-{name}": MethodSpec(method=name) for name in BASELINE_NAMES},
 }
-"""The leaderboard's rows: the reference (algebraic differentiation) and its variants."""
+"""The leaderboard's rows: the reference (algebraic differentiation), its variants, and the trivial
+baseline of each stage (``fsv.method.baselines``) every method must beat."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
