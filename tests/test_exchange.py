@@ -186,3 +186,19 @@ def test_a_cached_episode_copied_under_another_name_is_not_used(tmp_path, capsys
     ep_a, made = cached_episode(suite, a, cache)
     assert made and ep_a.scenario == a and "a renamed or copied file" in capsys.readouterr().err
     assert episode_identity(suite, a)["scenario"]["seed"] == 31
+
+
+def test_check_says_whether_an_estimates_file_will_be_accepted(tiny, tmp_path, capsys):
+    meta = {"format": "fsv-bench-estimates", "version": 1, "episode": "lift-u0-g0-m0-s21", "finger_names": ["thumb", "index"]}
+    _write(tmp_path / "ok.npz", _valid_arrays(), meta)
+    assert main(["check", str(tmp_path / "ok.npz")]) == 0
+    assert "ok.npz: ok: episode 'lift-u0-g0-m0-s21', 5 frames, 2 fingers" in capsys.readouterr().out
+    _write(tmp_path / "bad.npz", _bent(_valid_arrays(), "box/rot", lambda a: a.__imul__(5.0)), meta)
+    assert main(["check", str(tmp_path / "bad.npz")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bad.npz: box/rot at frame 0 is not a rotation" in err
+    # against the episode's camera inputs: its frames and fingers differ from this file's
+    assert main(["export", "--suite", "tiny", "--out", str(tmp_path / "in"), "--cache", str(tmp_path / "c"), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["check", str(tmp_path / "ok.npz"), "--inputs", str(tmp_path / "in" / "lift-u0-g0-m0-s21.npz")]) == 2
+    assert "finger_names ['thumb', 'index'] do not match the episode's" in capsys.readouterr().err

@@ -41,7 +41,7 @@ SUBCOMMANDS = {"generate": "benchmark.paper.dataset.cli", "calibrate": "benchmar
                "reproduce": "benchmark.reproduce", "eval": "benchmark.suites.evaluate",
                "compare": "benchmark.suites.compare", "export": "benchmark.exchange.export",
                "score": "benchmark.exchange.score", "leaderboard": "benchmark.suites.leaderboard",
-               "sweep": "benchmark.suites.sweep"}
+               "sweep": "benchmark.suites.sweep", "check": "benchmark.exchange.check"}
 
 
 def _interrupted(e: BaseException) -> bool:

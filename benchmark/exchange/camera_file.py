@@ -49,7 +49,7 @@ perturbed first-frame initialisation.
 """
 
 
-class CameraFileError(BenchmarkError):
+class CameraFileError(BenchmarkError, ValueError):
     """A camera-input file is missing, damaged or of another format."""
 
 

@@ -1,0 +1,54 @@
+"""``fsv-bench check``: is an estimates file one that ``fsv-bench score`` will accept, and if not, why.
+
+    fsv-bench check FILE [--inputs CAMERA_FILE]
+
+Reads the file as ``fsv-bench score`` does: its container, format and version, the shapes of its
+arrays, and their physics (:func:`benchmark.exchange.estimates_file.check_physics`). With
+``--inputs`` (the episode's camera-input file from ``fsv-bench export``) also the frames, the
+fingers and the identity (episode, suite, world) against that episode. Exit 0 and one line when it
+is good; exit 2 and one line naming the array, the frame or the entry when it is not.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+
+import numpy as np
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("file", type=pathlib.Path, help="an estimates file (.npz)")
+    p.add_argument("--inputs", type=pathlib.Path, default=None,
+                   help="the episode's camera-input file (fsv-bench export): frames, fingers and identity checked too")
+
+
+def check(path: pathlib.Path, inputs: pathlib.Path | None = None) -> str:
+    """Checks an estimates file; returns a one-line description (raises EstimatesFileError, CameraFileError)."""
+    from benchmark.archive import read_archive
+    from benchmark.exchange.camera_file import load_camera_input
+    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, check_identity, load_estimate
+    from benchmark.fingerprint import world_fingerprint
+
+    meta, arrays = read_archive(path, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
+                                digests_required=False)
+    if inputs is not None:
+        camera, cmeta = load_camera_input(inputs)
+        suite = argparse.Namespace(**cmeta["suite"])
+        check_identity(path, meta, episode=cmeta["episode"], suite=suite, world=world_fingerprint())
+        T, fps, names = camera.num_frames, camera.depth.fps, tuple(camera.hand_model.finger_names)
+    else:
+        pos = arrays.get("box", {}).get("pos")
+        if pos is None:
+            raise EstimatesFileError(f"{path}: required array box/pos is missing")
+        T, fps, names = len(pos), 30.0, tuple(meta.get("finger_names") or ())
+    estimate = load_estimate(path, t=np.arange(T) / fps, finger_names=names)
+    groups = [g for g, s in (("nominal", estimate.nominal), ("forces", estimate.forces)) if s is not None]
+    return (f"{path}: ok: episode {meta.get('episode')!r}, {T} frames, {len(names)} fingers, forces: "
+            f"{', '.join(groups) or 'none'}" + (f"; matches {inputs}" if inputs is not None else ""))
+
+
+def run(args: argparse.Namespace) -> str:
+    line = check(args.file, args.inputs)
+    print(line)
+    return line
