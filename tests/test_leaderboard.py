@@ -29,3 +29,26 @@ def test_the_leaderboard_scores_every_variant_and_the_oracles_score_as_truth(tin
     assert s["central"]["acc_err_rms"] > s["reference"]["acc_err_rms"]  # measured 3.3 vs 0.29 m/s^2
     labels = json.loads((out / "oracle-contacts-kinematics" / "scores.json").read_text())["method"]
     assert "contacts: oracle" in labels and "differentiator: oracle" in labels
+
+
+def test_skill_is_measured_against_the_baseline_of_the_metrics_stage():
+    from benchmark.scores.leaderboard import skill, skill_table
+
+    assert skill(0.25, 1.0, "acc_err_rms") == 0.75 and skill(1.5, 1.0, "acc_err_rms") == -0.5
+    assert skill(0.9, 0.5, "contact_recall") == pytest.approx(0.8) and skill(0.9, 1.0, "contact_recall") is None
+    assert skill(None, 1.0, "acc_err_rms") is None
+
+    def scores(**medians):
+        agg = {m: {s: {"value": medians.get(m, 1.0)} for s in ("median", "mean")}
+               for m in ("box_pos_err_mm", "contact_err_mm_std", "contact_recall", "acc_err_rms", "net_force_err_n_rms",
+                         "net_force_err_n_rms_instant", "least_violation_frac", "learned_rel_err_pct", "learned_mae_n")}
+        return {"aggregate": agg}
+
+    entries = [("reference", scores(acc_err_rms=0.3)),
+               ("baseline-zero-kinematics", scores(acc_err_rms=0.6)),
+               ("baseline-gravity-forces", scores(acc_err_rms=0.3))]  # the reference's kinematics: not the acc's baseline
+    lines = skill_table(entries, {"zero-kinematics": "differentiator", "gravity-forces": "forces"})
+    best = next(line for line in lines if line.startswith("| best baseline"))
+    assert "0.6 (zero-kinematics)" in best
+    row = next(line for line in lines if line.startswith("| reference")).split(" | ")
+    assert row[4] == "0.50"  # 1 - 0.3 / 0.6

@@ -23,11 +23,12 @@ def _cell(agg: dict) -> str:
     return f"{v:.3g} [{lo:.3g}, {hi:.3g}]"
 
 
-def leaderboard_markdown(suite, entries: list) -> str:
+def leaderboard_markdown(suite, entries: list, baseline_stage: dict | None = None) -> str:
     """A Markdown table of ``entries`` (``(name, scores.json content)``) on ``suite``.
 
     Each cell is the statistic over the suite's episodes with its 95 % bootstrap interval; the last
-    column counts the suite's gates that hold.
+    column counts the suite's gates that hold. With ``baseline_stage`` (baseline name -> the stage
+    it stands in for) a second table gives every method's skill against its stage's best baseline.
     """
     head = "| method | " + " | ".join(f"{h} ({s})" for _, s, h in COLUMNS) + " | gates |"
     lines = [f"# Leaderboard: {suite.name} (version {suite.version}, {len(suite.scenarios)} episodes)", "",
@@ -40,7 +41,7 @@ def leaderboard_markdown(suite, entries: list) -> str:
         held = sum(g["passed"] for g in scores["gates"])
         cells = " | ".join(_cell(agg[m][s]) for m, s, _ in COLUMNS)
         lines.append(f"| {name} | {cells} | {held}/{len(scores['gates'])} |")
-    lines += skill_table(entries)
+    lines += skill_table(entries, baseline_stage or {})
     lines += ["", "Methods:", ""]
     lines += [f"- **{name}**: {scores['method']}" for name, scores in entries]
     return "\n".join(lines) + "\n"
@@ -60,19 +61,30 @@ def skill(value: float | None, best_baseline: float | None, metric: str) -> floa
     return None if best_baseline <= 0.0 else 1.0 - value / best_baseline
 
 
-def skill_table(entries: list) -> list:
-    """Lines of a Markdown table: per metric the best baseline's statistic (rows named
-    ``baseline-*``), then every other method's skill against it."""
+METRIC_STAGE = {"box_pos_err_mm": "tracker", "contact_err_mm_std": "tracker", "contact_recall": "tracker",
+                "acc_err_rms": "differentiator", "net_force_err_n_rms": "forces", "net_force_err_n_rms_instant": "forces",
+                "least_violation_frac": "forces", "learned_rel_err_pct": "internal", "learned_mae_n": "internal"}
+"""The stage whose output each column scores: its baselines are the ones a method's skill is measured against."""
+
+
+def skill_table(entries: list, baseline_stage: dict) -> list:
+    """Lines of a Markdown table: per metric the best of the baselines standing in for the metric's
+    stage (rows ``baseline-<name>``, ``baseline_stage``: name -> stage), then every other method's
+    skill against it."""
     baselines = [(n, s) for n, s in entries if n.startswith("baseline-")]
     if not baselines:
         return []
     best = {}
     for m, st, _ in COLUMNS:
-        values = [(s["aggregate"][m][st]["value"], n) for n, s in baselines if s["aggregate"][m][st]["value"] is not None]
+        values = [(s["aggregate"][m][st]["value"], n) for n, s in baselines
+                  if s["aggregate"][m][st]["value"] is not None and baseline_stage.get(n[9:]) == METRIC_STAGE[m]]
         pick = max if m in HIGHER_IS_BETTER else min
         best[m] = pick(values) if values else (None, None)
-    lines = ["", "Skill against the best baseline per metric: 1 - statistic / the best baseline's (recall: "
-             "(statistic - baseline) / (1 - baseline)); 1 is perfect, 0 no better than a trivial method.", "",
+    lines = ["", "Skill against the best baseline of the metric's stage (the static box for the tracker's "
+             "metrics, zero kinematics for the acceleration, gravity-only forces for the net force and "
+             "least-violation frames, no internal forces or the grip line alone for the learned forces): "
+             "1 - statistic / the baseline's (recall: (statistic - baseline) / (1 - baseline)); 1 is "
+             "perfect, 0 no better than the trivial method, below 0 worse.", "",
              "| | " + " | ".join(h for _, _, h in COLUMNS) + " |", "|" + "---|" * (len(COLUMNS) + 1),
              "| best baseline | " + " | ".join("—" if best[m][0] is None else f"{best[m][0]:.3g} ({best[m][1][9:]})"
                                                for m, _, _ in COLUMNS) + " |"]

@@ -18,7 +18,7 @@ import shutil
 
 from benchmark.atomic import staging_folder, swap_folder
 from benchmark.method import MethodSpec
-from fsv.method.baselines import BASELINES
+from fsv.method.baselines import BASELINE_STAGE, BASELINES
 
 BASELINE_NAMES = tuple(BASELINES)
 
@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> list:
     try:
         for name, scores in entries:
             write_outputs(scores, suite, tmp / name)
-        table = leaderboard_markdown(suite, entries)
+        table = leaderboard_markdown(suite, entries, BASELINE_STAGE)
         (tmp / "leaderboard.md").write_text(table)
         swap_folder(tmp, out)
     except BaseException:
