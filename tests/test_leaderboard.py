@@ -19,11 +19,13 @@ def tiny(monkeypatch):
 def test_the_leaderboard_scores_every_variant_and_the_oracles_score_as_truth(tiny, tmp_path, capsys):
     out = tmp_path / "board"
     assert main(["leaderboard", "--suite", "tiny", "--out", str(out), "--cache", str(tmp_path / "c"), "--quiet"]) == 0
-    table = (out / "leaderboard.md").read_text()
+    table, skills = (out / "leaderboard.md").read_text().split("Skill against the best baseline")
     assert sum(line.startswith(f"| {name} |") for name in VARIANTS for line in table.splitlines()) == len(VARIANTS)
+    assert "| best baseline |" in skills and "| reference |" in skills and "| baseline-static |" not in skills
     s = {name: json.loads((out / name / "scores.json").read_text())["episodes"][0] for name in VARIANTS}
     assert s["reference"]["rendered"] and not s["central"]["rendered"]  # rendered once for all
-    assert len({s[n]["box_pos_err_mm"] for n in VARIANTS}) == 1  # one tracking run shared by all
+    assert len({s[n]["box_pos_err_mm"] for n in VARIANTS if n != "baseline-static"}) == 1  # one tracking run shared
+    assert s["baseline-static"]["box_pos_err_mm"] > 10 * s["reference"]["box_pos_err_mm"]  # no vision at all
     assert s["oracle-kinematics"]["acc_err_rms"] < 1e-9 < 0.05 < s["reference"]["acc_err_rms"]
     assert s["oracle-contacts"]["contact_err_mm_std"] == 0.0 and s["oracle-contacts"]["contact_recall"] == 1.0
     assert s["central"]["acc_err_rms"] > s["reference"]["acc_err_rms"]  # measured 3.3 vs 0.29 m/s^2
