@@ -1,0 +1,38 @@
+"""The Node.js reader and writer (examples/js): a method in a second language through files, scored."""
+
+import json
+import pathlib
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from benchmark.commands.cli import main
+from benchmark.suites import SUITES
+from test_evaluate import TINY
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+NODE = shutil.which("node")
+
+
+@pytest.mark.skipif(NODE is None, reason="Node.js is not installed")
+def test_a_nodejs_method_reads_the_camera_inputs_and_its_estimates_are_scored(tmp_path, monkeypatch, capsys):
+    from benchmark.exchange import load_camera_input
+
+    monkeypatch.setitem(SUITES, "tiny", TINY)
+    inputs, estimates = tmp_path / "in", tmp_path / "est"
+    assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(tmp_path / "c"), "--quiet"]) == 0
+    run = subprocess.run([NODE, str(ROOT / "examples/js/static_method.mjs"), str(inputs), str(estimates)],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    name, frames, depth_sum = run.stdout.split()
+    camera, meta = load_camera_input(inputs / f"{name}.npz")
+    assert name == meta["episode"] and int(frames) == camera.num_frames
+    assert float(depth_sum) == pytest.approx(float(np.sum(camera.depth.depth_m, dtype=np.float64)), rel=1e-9)
+    capsys.readouterr()
+    assert main(["check", str(estimates / f"{name}.npz"), "--inputs", str(inputs / f"{name}.npz")]) == 0
+    assert main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "s"),
+                 "--cache", str(tmp_path / "c"), "--quiet"]) == 1  # a box that does not move fails the gates
+    scores = json.loads((tmp_path / "s" / "scores.json").read_text())
+    assert scores["method"] == "static box (Node.js example)" and scores["episodes"][0]["box_pos_err_mm"] > 10
