@@ -33,6 +33,7 @@ def test_a_nodejs_method_reads_the_camera_inputs_and_its_estimates_are_scored(tm
     capsys.readouterr()
     assert main(["check", str(estimates / f"{name}.npz"), "--inputs", str(inputs / f"{name}.npz")]) == 0
     assert main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "s"),
-                 "--cache", str(tmp_path / "c"), "--quiet"]) == 1  # a box that does not move fails the gates
+                 "--cache", str(tmp_path / "c"), "--quiet", "--pictures", "worst"]) == 1  # a still box fails the gates
+    assert [p.name for p in (tmp_path / "s" / "pictures").iterdir()] == [f"{name}-overlay.png"]  # no forces: no Fig. 5
     scores = json.loads((tmp_path / "s" / "scores.json").read_text())
     assert scores["method"] == "static box (Node.js example)" and scores["episodes"][0]["box_pos_err_mm"] > 10

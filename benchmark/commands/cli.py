@@ -38,7 +38,7 @@ from fsv.provenance import provenance
 
 SUBCOMMANDS = {"generate": "benchmark.paper.dataset.cli", "calibrate": "benchmark.paper.calibration",
                "train": "benchmark.paper.training", "table2": "benchmark.paper.table2",
-               "reproduce": "benchmark.reproduce", "eval": "benchmark.suites.evaluate",
+               "reproduce": "benchmark.reproduce", "eval": "benchmark.commands.eval",
                "compare": "benchmark.suites.compare", "export": "benchmark.exchange.export",
                "score": "benchmark.exchange.score", "leaderboard": "benchmark.suites.leaderboard",
                "sweep": "benchmark.suites.sweep", "check": "benchmark.exchange.check"}

@@ -23,6 +23,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
     p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
+    from benchmark.commands.eval import add_picture_arguments
+
+    add_picture_arguments(p)
 
 
 def estimate_paths(suite, folder: pathlib.Path) -> dict:
@@ -40,8 +43,9 @@ def estimate_paths(suite, folder: pathlib.Path) -> dict:
     return paths
 
 
-def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress: bool = True) -> dict:
-    """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``."""
+def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress: bool = True, observer=None) -> dict:
+    """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``
+    (``observer(episode, estimate, 0)`` sees every estimate, e.g. to draw its pictures)."""
     from dataclasses import asdict
 
     from benchmark.archive import read_archive
@@ -69,6 +73,8 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
         t1 = time.perf_counter()
         episode, made = cached_episode(suite, sc, cache)
         estimate = load_estimate(paths[sc], t=episode.truth.t, finger_names=tuple(episode.hand_model.finger_names))
+        if observer is not None:
+            observer(episode, estimate, 0)
         rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
                      **score_episode(episode, estimate), "seconds": time.perf_counter() - t1, "rendered": made})
     first = metas[suite.scenarios[0]]
@@ -87,7 +93,18 @@ def run(args: argparse.Namespace) -> dict:
     gates = load_gates(args.gates) if args.gates else None
     check_out(args.out)
     estimate_paths(suite, args.estimates)
-    scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet)
-    write_outputs(scores, suite, args.out)
+    if args.pictures:
+        import tempfile
+
+        from benchmark.commands.pictures.episodes import EpisodePictures, chosen
+
+        with tempfile.TemporaryDirectory(prefix="fsv-bench-pictures-") as folder:
+            writer = EpisodePictures(folder)
+            scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
+                                 observer=writer)
+            write_outputs(scores, suite, args.out, chosen(writer, args.pictures)(scores, gates or suite.gates))
+    else:
+        scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet)
+        write_outputs(scores, suite, args.out)
     print_verdict(scores, args.out, "score")
     return scores

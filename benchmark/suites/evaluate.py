@@ -90,7 +90,7 @@ def _episode_rows(job) -> list:
     from benchmark.method import camera_input, run_method
     from benchmark.scores.episode import score_episode
 
-    suite, sc, cache, specs, init_scale = job
+    suite, sc, cache, specs, init_scale, observer = job
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
     inputs = camera_input(episode, init_scale)
@@ -103,6 +103,8 @@ def _episode_rows(job) -> list:
         if key is not None:
             tracked.setdefault(key, estimate.tracking)
         metrics = score_episode(episode, estimate)
+        if observer is not None:
+            observer(episode, estimate, len(rows))
         seconds = time.perf_counter() - (t0 if not rows else t1)
         rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc), **metrics,
                      "seconds": seconds, "rendered": made and not rows})
@@ -110,7 +112,7 @@ def _episode_rows(job) -> list:
 
 
 def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-             workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None) -> dict:
+             workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None, observer=None) -> dict:
     """Scores one method (default: the reference) on every episode of ``suite``.
 
     Episodes run in ``workers`` local processes (1: in this process); the scores do not depend on it.
@@ -122,17 +124,19 @@ def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None 
     from benchmark.method import MethodSpec
 
     return evaluate_many(suite, [spec or MethodSpec()], gates=gates, cache=cache, progress=progress,
-                         workers=workers, init_scale=init_scale, ray_address=ray_address)[0]
+                         workers=workers, init_scale=init_scale, ray_address=ray_address, observer=observer)[0]
 
 
 def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-                  workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None) -> list:
+                  workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None, observer=None) -> list:
     """Scores several methods on every episode of ``suite``, each episode rendered (or read) once.
 
     Episodes run in this process, ``workers`` local processes, or as tasks on the Ray cluster at
     ``ray_address`` (:mod:`benchmark.parallel`); the scores do not depend on where.
     ``init_scale`` scales the seeded first-frame perturbation handed to the methods
-    (``benchmark.method.init.INIT_PERTURBATION``; 1 = the suites' protocol).
+    (``benchmark.method.init.INIT_PERTURBATION``; 1 = the suites' protocol). ``observer``, a
+    picklable callable ``(episode, estimate, method index)``, sees every method's estimate on every
+    episode where it is made (e.g. to draw pictures; a floor above provides it).
 
     Returns:
         One ``scores.json`` content per method, in the order of ``specs``.
@@ -150,7 +154,7 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
         from tqdm import tqdm
 
         bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
-    jobs = [(suite, sc, cache, specs, init_scale) for sc in suite.scenarios]
+    jobs = [(suite, sc, cache, specs, init_scale, observer) for sc in suite.scenarios]
     from benchmark.parallel import run_jobs
 
     per_episode = [None] * len(jobs)
@@ -207,8 +211,9 @@ def strict(obj):
     return obj
 
 
-def write_outputs(scores: dict, suite: Suite, out: pathlib.Path) -> None:
-    """Writes ``scores.json``, ``report.md`` and ``junit.xml`` into a temporary folder, then swaps it in."""
+def write_outputs(scores: dict, suite: Suite, out: pathlib.Path, pictures=()) -> None:
+    """Writes ``scores.json``, ``report.md`` and ``junit.xml`` (and ``pictures/``: the given files)
+    into a temporary folder, then swaps it in."""
     from benchmark.scores.verdict import GateResult, junit_xml, report_markdown
     from benchmark.scores.episode import METRICS
 
@@ -220,6 +225,10 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path) -> None:
         (tmp / "report.md").write_text(report_markdown(suite, scores["method"], scores["episodes"], scores["aggregate"],
                                                        scores["per_task"], results, METRICS))
         (tmp / "junit.xml").write_bytes(junit_xml(suite.name, results, scores["seconds"]))
+        if pictures:
+            (tmp / "pictures").mkdir()
+            for path in pictures:
+                shutil.copyfile(path, tmp / "pictures" / pathlib.Path(path).name)
         swap_folder(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -317,8 +326,12 @@ def spec_from_args(args: argparse.Namespace):
     return spec
 
 
-def run(args: argparse.Namespace) -> dict:
-    """Runs ``fsv-bench eval``: checks every input, evaluates, writes, prints; raises GateFailure on a failed gate."""
+def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
+    """Runs ``fsv-bench eval``: checks every input, evaluates, writes, prints; raises GateFailure on a failed gate.
+
+    ``observer`` sees every estimate (:func:`evaluate_many`); ``pictures(scores, gates)`` returns
+    files to write into ``DIR/pictures/`` (the commands' ``--pictures``).
+    """
     suite = get_suite(args.suite, args.sensor)
     gates = load_gates(args.gates) if args.gates else None
     if args.workers < 1:
@@ -330,8 +343,8 @@ def run(args: argparse.Namespace) -> dict:
 
         check_ray_address(args.ray_address)
     scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers,
-                      ray_address=args.ray_address)
-    write_outputs(scores, suite, args.out)
+                      ray_address=args.ray_address, observer=observer)
+    write_outputs(scores, suite, args.out, () if pictures is None else pictures(scores, gates or suite.gates))
     print_verdict(scores, args.out, "eval")
     return scores
 
