@@ -7,6 +7,10 @@ shape and bytes) and ``meta_sha256`` (:func:`fsv.digest.tree_sha256` of the JSON
 Writers replace the file atomically with fixed zip timestamps (the same content gives the same
 bytes); readers check the format, the version and every digest. Files written by other programs
 may leave the digests out (``digests_required=False``): then only the format and version are checked.
+
+The same archive may be an HDF5 file (a path ending in ``.h5``): a dataset per array at
+``<section>/<field>`` and a uint8 dataset ``meta.json``, with the same digests; C, C++, Julia,
+MATLAB, R and JavaScript read it with their own HDF5 libraries (Python: ``h5py``).
 """
 
 from __future__ import annotations
@@ -20,6 +24,40 @@ import numpy as np
 from benchmark.atomic import atomic_path
 from fsv.digest import array_sha256, tree_sha256
 from fsv.errors import one_line
+
+HDF5_SUFFIX = ".h5"
+"""An archive whose path ends so is an HDF5 file, any other an ``.npz``."""
+
+
+def _h5py():
+    try:
+        import h5py
+    except ImportError as e:  # pragma: no cover - h5py is installed with fsv-bench
+        raise ImportError("HDF5 files need h5py: pip install h5py") from e
+    return h5py
+
+
+class _HDF5Entries:
+    """An HDF5 archive seen as ``np.load`` sees an ``.npz``: ``files`` and ``[name]`` -> array."""
+
+    def __init__(self, path):
+        self._file = _h5py().File(path, "r")
+        names = []
+        self._file.visititems(lambda name, obj: names.append(name) if hasattr(obj, "shape") else None)
+        self.files = names
+
+    def __getitem__(self, name):
+        return np.asarray(self._file[name][()])
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self._file.close()
+
+
+def _container(path: pathlib.Path):
+    return _HDF5Entries(path) if path.suffix == HDF5_SUFFIX else np.load(path, allow_pickle=False)
 
 
 def write_archive(path, fmt: str, version: int, meta: dict, arrays: dict) -> pathlib.Path:
@@ -41,6 +79,15 @@ def write_archive(path, fmt: str, version: int, meta: dict, arrays: dict) -> pat
     meta["meta_sha256"] = tree_sha256(meta)
     entries = dict(arrays)
     entries["meta.json"] = np.frombuffer(json.dumps(meta, sort_keys=True).encode(), dtype=np.uint8)
+    if path.suffix == HDF5_SUFFIX:
+        h5py = _h5py()
+        with atomic_path(path) as tmp, h5py.File(tmp, "w", track_order=True) as f:
+            for name, value in entries.items():
+                value = np.asanyarray(value)
+                big = value.size > 4096
+                f.create_dataset(name, data=value, track_times=False, compression="gzip" if big else None,
+                                 compression_opts=4 if big else None)
+        return path
     with atomic_path(path) as tmp, zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as z:
         for name, value in entries.items():
             info = zipfile.ZipInfo(name + ".npy", date_time=(1980, 1, 1, 0, 0, 0))  # fixed: same bytes
@@ -73,7 +120,7 @@ def read_archive(path, fmt: str, version: int, *, kind: str, error: type, digest
         raise error(f"no {kind} file at {path}")
     entry = "meta.json"
     try:
-        with np.load(path, allow_pickle=False) as z:
+        with _container(path) as z:
             if "meta.json" not in z.files:
                 raise error(f"{path} is not an fsv-bench {kind} file (no meta.json entry)")
             meta = json.loads(bytes(z["meta.json"]).decode())

@@ -202,3 +202,29 @@ def test_check_says_whether_an_estimates_file_will_be_accepted(tiny, tmp_path, c
     capsys.readouterr()
     assert main(["check", str(tmp_path / "ok.npz"), "--inputs", str(tmp_path / "in" / "lift-u0-g0-m0-s21.npz")]) == 2
     assert "finger_names ['thumb', 'index'] do not match the episode's" in capsys.readouterr().err
+
+
+def test_hdf5_files_round_trip_to_the_same_scores_as_npz(tiny, tmp_path, capsys):
+    import h5py
+
+    from benchmark.method import MethodSpec, method_label
+    from examples.estimates_from_files import write_estimates
+
+    cache, spec = tmp_path / "cache", MethodSpec(differentiator="central")
+    scores = {}
+    for fmt in ("npz", "hdf5"):
+        inputs, est = tmp_path / f"in-{fmt}", tmp_path / f"est-{fmt}"
+        assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(cache), "--quiet",
+                     "--format", fmt]) == 0
+        write_estimates(inputs, est, spec.build(), method_label(spec))
+        code = main(["score", "--suite", "tiny", "--estimates", str(est), "--out", str(tmp_path / f"s-{fmt}"),
+                     "--cache", str(cache), "--quiet", "--format", fmt])
+        assert code in (0, 1)
+        scores[fmt] = json.loads((tmp_path / f"s-{fmt}" / "scores.json").read_text())
+    with h5py.File(tmp_path / "in-hdf5" / "lift-u0-g0-m0-s21.h5", "r") as f:  # plain HDF5, readable anywhere
+        assert f["camera/depth_counts"].dtype == np.uint16 and f["camera/depth_counts"].ndim == 3
+        assert json.loads(bytes(f["meta.json"][()]).decode())["episode"] == "lift-u0-g0-m0-s21"
+    drop = ("seconds", "rendered")
+    assert [{k: v for k, v in r.items() if k not in drop} for r in scores["hdf5"]["episodes"]] == \
+           [{k: v for k, v in r.items() if k not in drop} for r in scores["npz"]["episodes"]]
+    assert scores["hdf5"]["aggregate"] == scores["npz"]["aggregate"]

@@ -22,11 +22,18 @@ from benchmark.atomic import staging_folder, swap_folder
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.options import add_suite_arguments
 
-    add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz)", workers=False)
+    add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz or .h5)", workers=False)
+    p.add_argument("--format", choices=FORMATS, default="npz",
+                   help="the files' container: npz (NumPy) or hdf5 (for C, C++, Julia, MATLAB, R, JS; <episode>.h5)")
 
 
-def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True) -> dict:
-    """Writes the camera inputs of every episode of ``suite`` into ``out``; returns ``suite.json``'s content."""
+FORMATS = {"npz": ".npz", "hdf5": ".h5"}
+"""``--format``: the container of the camera-input and estimates files, by its file suffix."""
+
+
+def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True, container: str = "npz") -> dict:
+    """Writes the camera inputs of every episode of ``suite`` into ``out`` (as ``<episode>.npz``, or
+    ``.h5`` with ``container="hdf5"``); returns ``suite.json``'s content."""
     from benchmark.suites.evaluate import cached_episode, default_cache
     from benchmark.world.scenario import episode_name
     from benchmark.exchange import camera_file, estimates_file
@@ -35,6 +42,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True)
 
     cache = pathlib.Path(cache or default_cache())
     out = pathlib.Path(out)
+    suffix = FORMATS[container]
     tmp = staging_folder(out)
     try:
         episodes = []
@@ -47,16 +55,16 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True)
             episode, _ = cached_episode(suite, sc, cache)
             name = episode_name(sc)
             inputs = camera_input(episode)
-            camera_file.save_camera_input(inputs, tmp / f"{name}.npz", episode=name, suite=suite,
+            camera_file.save_camera_input(inputs, tmp / f"{name}{suffix}", episode=name, suite=suite,
                                           rng_seed=sc.rng_entropy("tracker"))
-            episodes.append({"episode": name, "file": f"{name}.npz", "frames": inputs.num_frames,
+            episodes.append({"episode": name, "file": f"{name}{suffix}", "frames": inputs.num_frames,
                              "task": sc.task})
         index = {"suite": {"name": suite.name, "version": suite.version, "description": suite.description},
                  "episodes": episodes,
                  "formats": {"camera": [camera_file.FORMAT, camera_file.VERSION],
                              "estimates": [estimates_file.FORMAT, estimates_file.VERSION]},
-                 "estimates": "write <episode>.npz per episode into one folder; fsv-bench score --suite "
-                              f"{suite.name} --estimates FOLDER --out OUT",
+                 "estimates": f"write <episode>{suffix} per episode into one folder; fsv-bench score --suite "
+                              f"{suite.name} --estimates FOLDER --out OUT" + (" --format hdf5" if suffix == ".h5" else ""),
                  "provenance": provenance()}
         (tmp / "suite.json").write_text(json.dumps(index, indent=1) + "\n")
         swap_folder(tmp, out)
@@ -72,7 +80,7 @@ def run(args: argparse.Namespace) -> dict:
 
     suite = get_suite(args.suite, args.sensor)
     check_out(args.out)
-    index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet)
+    index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format)
     print(f"fsv-bench export: suite {suite.name} v{suite.version}, {len(index['episodes'])} camera-input files "
           f"in {args.out}/ (format {index['formats']['camera'][0]} v{index['formats']['camera'][1]})")
     return index

@@ -23,27 +23,33 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
     p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
+    p.add_argument("--format", choices=("npz", "hdf5"), default="npz",
+                   help="the estimates files' container: <episode>.npz (default) or <episode>.h5")
     from benchmark.commands.eval import add_picture_arguments
 
     add_picture_arguments(p)
 
 
-def estimate_paths(suite, folder: pathlib.Path) -> dict:
-    """``{scenario: path}`` of every episode's estimates file; ValueError naming the missing ones."""
+def estimate_paths(suite, folder: pathlib.Path, container: str = "npz") -> dict:
+    """``{scenario: path}`` of every episode's estimates file (``.npz``, or ``.h5`` for ``hdf5``);
+    ValueError naming the missing ones."""
+    from benchmark.exchange.export import FORMATS
     from benchmark.world.scenario import episode_name
 
     folder = pathlib.Path(folder)
     if not folder.is_dir():
         raise ValueError(f"--estimates {folder}: no such folder")
-    paths = {sc: folder / f"{episode_name(sc)}.npz" for sc in suite.scenarios}
+    suffix = FORMATS[container]
+    paths = {sc: folder / f"{episode_name(sc)}{suffix}" for sc in suite.scenarios}
     missing = [p.name for p in paths.values() if not p.is_file()]
     if missing:
         raise ValueError(f"--estimates {folder}: {len(missing)} of {len(paths)} episodes have no estimates file "
-                         f"(first: {missing[0]}); expected one <episode>.npz per episode of suite {suite.name}")
+                         f"(first: {missing[0]}); expected one <episode>{suffix} per episode of suite {suite.name}")
     return paths
 
 
-def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress: bool = True, observer=None) -> dict:
+def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress: bool = True, observer=None,
+                container: str = "npz") -> dict:
     """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``
     (``observer(episode, estimate, 0)`` sees every estimate, e.g. to draw its pictures)."""
     from dataclasses import asdict
@@ -55,7 +61,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     from benchmark.suites.evaluate import cached_episode, default_cache, scores_document
     from benchmark.world.scenario import episode_name
 
-    paths = estimate_paths(suite, folder)
+    paths = estimate_paths(suite, folder, container)
     metas = {sc: read_archive(p, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
                               digests_required=False)[0] for sc, p in paths.items()}  # every header before any work
     world = world_fingerprint()
@@ -92,7 +98,7 @@ def run(args: argparse.Namespace) -> dict:
     suite = get_suite(args.suite, args.sensor)
     gates = load_gates(args.gates) if args.gates else None
     check_out(args.out)
-    estimate_paths(suite, args.estimates)
+    estimate_paths(suite, args.estimates, args.format)
     if args.pictures:
         import tempfile
 
@@ -101,10 +107,11 @@ def run(args: argparse.Namespace) -> dict:
         with tempfile.TemporaryDirectory(prefix="fsv-bench-pictures-") as folder:
             writer = EpisodePictures(folder)
             scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
-                                 observer=writer)
+                                 observer=writer, container=args.format)
             write_outputs(scores, suite, args.out, chosen(writer, args.pictures)(scores, gates or suite.gates))
     else:
-        scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet)
+        scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
+                             container=args.format)
         write_outputs(scores, suite, args.out)
     print_verdict(scores, args.out, "score")
     return scores
