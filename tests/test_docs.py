@@ -28,3 +28,15 @@ def test_the_readme_is_short_and_its_docs_links_resolve():
     assert links, "README.md links into docs/"
     missing = sorted({link for link in links if not (ROOT / link).is_file()})
     assert not missing, f"README.md links to missing files: {missing}"
+
+
+def test_the_api_reference_readable_in_the_repository_is_up_to_date():
+    import subprocess
+    import sys
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    run = subprocess.run([sys.executable, str(root / "tools" / "api_reference.py"), "--check"], capture_output=True,
+                         text=True, cwd=root)
+    assert run.returncode == 0, run.stderr
+    text = (root / "docs" / "api-reference.md").read_text()
+    assert "### `make_method`" in text and "### `MethodSpec`" in text and "### `load_estimate`" in text
