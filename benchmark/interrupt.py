@@ -56,10 +56,20 @@ def _force_exit() -> None:
 
 
 def _handler(signum, frame):
-    if not _fired.is_set():
-        _fired.set()
-        threading.Thread(target=_force_exit, name="interrupt-watchdog", daemon=True).start()
+    if _fired.is_set():  # a second Ctrl-C: the watchdog already ends the process within GRACE_S
+        return
+    _fired.set()
+    threading.Thread(target=_force_exit, name="interrupt-watchdog", daemon=True).start()
     raise KeyboardInterrupt
+
+
+def exit_now(code: int = EXIT_INTERRUPTED) -> None:
+    """Ends the process with ``code`` at once (after flushing the console), skipping the
+    interpreter's teardown: for a command that was interrupted and has cleaned up."""
+    with _lock:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
 
 
 def install() -> None:

@@ -18,12 +18,15 @@ def main() -> int:
     try:
         from benchmark.commands.cli import main as run
 
-        return run()
+        code = run()
     except BaseException as e:  # e.g. a C extension's import turns the interrupt into an ImportError
-        if interrupt.interrupted() and not isinstance(e, SystemExit):
-            print("fsv-bench: interrupted; nothing was written", file=sys.stderr)
-            return interrupt.EXIT_INTERRUPTED
-        raise
+        if not interrupt.interrupted() or isinstance(e, SystemExit):
+            raise
+        print("fsv-bench: interrupted; nothing was written", file=sys.stderr)
+        code = interrupt.EXIT_INTERRUPTED
+    if interrupt.interrupted():  # every file is complete or removed: end now, before the interpreter's
+        interrupt.exit_now(code)  # teardown, where a library could turn the interrupt into another status
+    return code
 
 
 if __name__ == "__main__":
