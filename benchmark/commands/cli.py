@@ -50,6 +50,23 @@ def _interrupted(e: BaseException) -> bool:
     return isinstance(e, KeyboardInterrupt) or interrupt.interrupted() or isinstance(e.__context__, KeyboardInterrupt)
 
 
+def exit_status(e: BaseException, prog: str, when_interrupted: str, bad_input: tuple) -> int:
+    """The exit status of a command that raised ``e``, with its one line on stderr: 130 interrupted,
+    2 bad input (``bad_input``), 1 a failure of the benchmark (a failed stage); anything else (a bug,
+    SystemExit) is raised again."""
+    if not isinstance(e, SystemExit):
+        if _interrupted(e):
+            print(f"{prog}: interrupted; {when_interrupted}", file=sys.stderr)
+            return 130
+        if isinstance(e, bad_input):
+            print(f"{prog}: error: {e}", file=sys.stderr)
+            return 2
+        if isinstance(e, BenchmarkError):
+            print(f"{prog}: failed: {e}", file=sys.stderr)
+            return 1
+    raise e
+
+
 def _subcommand(argv: list) -> int:
     """Runs ``fsv-bench <subcommand> ...``; bad input exits 2, Ctrl-C 130 (re-run to resume)."""
     module = importlib.import_module(SUBCOMMANDS[argv[0]])
@@ -59,19 +76,8 @@ def _subcommand(argv: list) -> int:
     try:
         module.run(args)
     except BaseException as e:
-        if isinstance(e, SystemExit):
-            raise
-        if _interrupted(e):
-            print(f"fsv-bench {argv[0]}: interrupted; complete files are kept, run the same command to resume",
-                  file=sys.stderr)
-            return 130
-        if isinstance(e, (ScenarioError, InputError, ValueError)):
-            print(f"fsv-bench {argv[0]}: error: {e}", file=sys.stderr)
-            return 2
-        if isinstance(e, BenchmarkError):
-            print(f"fsv-bench {argv[0]}: failed: {e}", file=sys.stderr)
-            return 1
-        raise
+        return exit_status(e, f"fsv-bench {argv[0]}", "complete files are kept, run the same command to resume",
+                           (ScenarioError, InputError, ValueError))
     return 0
 
 
@@ -185,18 +191,7 @@ def main(argv: list | None = None) -> int:
     except BaseException as e:
         background.cancel()
         shutil.rmtree(tmp, ignore_errors=True)
-        if isinstance(e, SystemExit):
-            raise
-        if _interrupted(e):
-            print(f"fsv-bench: interrupted; {out} is as it was before the run", file=sys.stderr)
-            return 130
-        if isinstance(e, (ScenarioError, InputError)):
-            print(f"fsv-bench: error: {e}", file=sys.stderr)
-            return 2
-        if isinstance(e, BenchmarkError):
-            print(f"fsv-bench: failed: {e}", file=sys.stderr)
-            return 1
-        raise
+        return exit_status(e, "fsv-bench", f"{out} is as it was before the run", (ScenarioError, InputError))
     sc = scenario
     print(f"fsv-bench: task {sc.task}, user {sc.user}, grasp {sc.grasp}, mass {sc.mass}, seed {sc.seed}, "
           f"sensor {sc.sensor}, noise {sc.noise_m} m, {len(record.episode.truth.t)} frames")
