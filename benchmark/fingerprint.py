@@ -16,6 +16,7 @@ any code that runs does.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import pathlib
 
@@ -60,9 +61,20 @@ def code_of(root: pathlib.Path, entry_points) -> list:
 
 
 def world_fingerprint(root: pathlib.Path = ROOT) -> str:
-    """Fingerprint of the world: the code :data:`WORLD_ENTRY_POINTS` run and ``sim_assets/``'s data."""
+    """Fingerprint of the world: the code :data:`WORLD_ENTRY_POINTS` run and ``sim_assets/``'s data.
+
+    This installation's (``root`` left as it is) is computed once per process: it keys every cached
+    episode and file an evaluation touches, and its code does not change while it runs.
+    """
+    if pathlib.Path(root) == ROOT:
+        return _this_world()
     root = pathlib.Path(root)
     return content_fingerprint(code_of(root, WORLD_ENTRY_POINTS), _data_files(root, DATA_FOLDERS["world"]))
+
+
+@functools.lru_cache(maxsize=1)
+def _this_world() -> str:
+    return content_fingerprint(code_of(ROOT, WORLD_ENTRY_POINTS), _data_files(ROOT, DATA_FOLDERS["world"]))
 
 
 def results_fingerprint(root: pathlib.Path = ROOT) -> str:

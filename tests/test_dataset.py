@@ -1,4 +1,5 @@
 import os
+import subprocess
 
 import numpy as np
 import pyarrow as pa
@@ -28,7 +29,9 @@ def test_resume_after_interrupt_neither_duplicates_nor_loses(tmp_path, monkeypat
     CALLS.clear()
     monkeypatch.setenv("FSV_TEST_INTERRUPT", "1")
     (tmp_path / "episodes").mkdir()
-    (tmp_path / "episodes" / ".tmp-debris.parquet").write_bytes(b"half")  # a killed run's leftover
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    (tmp_path / "episodes" / f".tmp-lift-u0-g0-m0-s2.parquet.{dead.pid}.abcd1234.parquet").write_bytes(b"half")  # a killed run's
     with pytest.raises(KeyboardInterrupt):
         generate(spec, tmp_path, workers=1, progress=False, build=cheap_build)
     files = sorted(p.name for p in (tmp_path / "episodes").iterdir())

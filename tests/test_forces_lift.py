@@ -8,7 +8,7 @@ import pytest
 
 from benchmark.world.contact_error import contacts_from_truth
 from benchmark.world.motion import oracle_kinematics
-from benchmark.commands.stage import Run, complete_now
+from benchmark.commands.stage import Run, complete
 from benchmark.commands.stages.forces import STAGE, add_arguments, estimate_inputs
 from benchmark.scores.forces import score_forces, true_net_wrench_instant
 from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
@@ -82,7 +82,7 @@ def _run(episode, estimate, out=None):
     add_arguments(parser)
     record = Run(scenario=episode.scenario, out=out, method_spec=None, episode=episode, estimate=estimate)
     result = STAGE(record, parser.parse_args([]))
-    complete_now(result, out)
+    complete(result, out)
     return types.SimpleNamespace(summary=dict(result.blocks), lines=list(result.lines))
 
 

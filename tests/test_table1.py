@@ -114,13 +114,13 @@ def test_on_the_default_lift_algebraic_is_no_worse_than_central(lift_episode):
 def test_cli_stage_prints_and_writes_table1_and_labels_the_oracle(lift_episode, tmp_path, choice):
     from argparse import Namespace
 
-    from benchmark.commands.stage import Run, complete_now
+    from benchmark.commands.stage import Run, complete
     from benchmark.commands.stages import kinematics
 
     episode = lift_episode[0]
     record = Run(scenario=episode.scenario, out=tmp_path, method_spec=None, episode=episode)
     result = kinematics.STAGE(record, Namespace(kinematics=choice, contacts="vision"))
-    complete_now(result, tmp_path)
+    complete(result, tmp_path)
     summary = dict(result.blocks)
     block = summary["kinematics"]
     assert set(block) == {"central", "gaussian", "algebraic"}

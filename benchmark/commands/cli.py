@@ -23,11 +23,10 @@ import sys
 import time
 
 from benchmark import interrupt
-from benchmark.atomic import check_out, staging_folder, swap_folder, write_bytes
+from benchmark.atomic import check_out, staging_folder, swap_folder
 from benchmark.background import Background
-from benchmark.camera.episode_file import save_episode
 from benchmark.commands.report import write_json
-from benchmark.commands.stage import Run
+from benchmark.commands.stage import Run, complete
 from benchmark.commands.stages import STAGES
 from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.suites.evaluate import add_method_arguments, load_gates, spec_from_args
@@ -135,20 +134,16 @@ def method_spec_from_args(args: argparse.Namespace):
 def run_stages(record: Run, args: argparse.Namespace, background: Background) -> tuple:
     """Runs every stage on ``record``; returns ``(summary, lines, timing_s, last record)``.
 
-    Files go into ``record.out``; pictures and the episode archive are started on ``background``.
+    Files go into ``record.out``; pictures (and the episode archive) are started on ``background``.
     """
     summary, lines, timing = {}, [], {}
     for stage in STAGES:
         t0 = time.perf_counter()
         result = stage(record, args)
         record = dataclasses.replace(record, **result.updates())
-        for name, data in result.files:
-            write_bytes(record.out / name, data)
-        for picture in result.pictures:
-            background.process(picture.name, picture.draw, *picture.args, **dict(picture.kwargs))
-        if stage.name == "render":  # the episode is complete: its archive is written beside the later stages
-            background.thread("episode.npz", save_episode, record.episode, record.out / "episode.npz")
-            background.preload("matplotlib.pyplot")  # for the later stages' pictures, while the next stage tracks
+        complete(result, record.out, background)
+        if result.pictures:  # for the later stages' figures, imported while the next stage works
+            background.preload("matplotlib.pyplot")
         summary.update(result.blocks)
         lines += result.lines
         timing[stage.name] = time.perf_counter() - t0

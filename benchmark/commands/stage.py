@@ -27,12 +27,15 @@ class Picture:
         draw: A module-level function that writes it.
         args: Positional arguments of ``draw``.
         kwargs: Keyword arguments of ``draw``.
+        in_thread: Draw it in a thread (work that releases the interpreter lock, e.g. compressing
+            the episode archive) instead of a forked process (matplotlib figures).
     """
 
     name: str
     draw: Callable
     args: tuple = ()
     kwargs: Mapping = field(default_factory=dict)
+    in_thread: bool = False
 
 
 @dataclass(frozen=True)
@@ -116,12 +119,17 @@ class Stage:
         return result
 
 
-def complete_now(result: StageResult, out) -> None:
-    """Writes a result's files into ``out`` and draws its pictures in this process, at once (a stage
-    run on its own; the main command draws them beside its later stages instead)."""
+def complete(result: StageResult, out, background=None) -> None:
+    """Writes a result's files into ``out`` and draws its pictures: on ``background``
+    (:class:`benchmark.background.Background`, beside the later stages), or at once without one
+    (a stage run on its own)."""
     from benchmark.atomic import write_bytes
 
     for name, data in result.files:
         write_bytes(out / name, data)
     for picture in result.pictures:
-        picture.draw(*picture.args, **dict(picture.kwargs))
+        if background is None:
+            picture.draw(*picture.args, **dict(picture.kwargs))
+        else:
+            start = background.thread if picture.in_thread else background.process
+            start(picture.name, picture.draw, *picture.args, **dict(picture.kwargs))

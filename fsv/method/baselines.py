@@ -24,6 +24,7 @@ from fsv.features import grasp_features
 from fsv.forces import ForceSettings, ForceSolution, nominal_forces, reconstruct_forces
 from fsv.hand import fingertip_centres, forward_kinematics
 from fsv.method.estimate import TrackOutput
+from fsv.method.method import make_method
 from fsv.types import Contacts, Kinematics, Poses
 
 FIRST_FRAME_CONTACT_M = 0.01
@@ -154,18 +155,12 @@ class GripLineForces:
         return solution, predicted
 
 
-def _method(**stages):
-    from fsv.method.method import make_method
-
-    return make_method(**stages)
-
-
 BASELINES = {
-    "static": lambda: _method(tracker=StaticTracker()),
-    "zero-kinematics": lambda: _method(differentiator=ZeroKinematics()),
-    "gravity-forces": lambda: _method(forces=GravityForces()),
-    "no-internal": lambda: _method(internal=NoInternalForces()),
-    "grip-line": lambda: _method(internal=GripLineForces()),
+    "static": lambda: make_method(tracker=StaticTracker()),
+    "zero-kinematics": lambda: make_method(differentiator=ZeroKinematics()),
+    "gravity-forces": lambda: make_method(forces=GravityForces()),
+    "no-internal": lambda: make_method(internal=NoInternalForces()),
+    "grip-line": lambda: make_method(internal=GripLineForces()),
 }
 """Each baseline as a method: the reference with that one stage replaced (``--method NAME``)."""
 

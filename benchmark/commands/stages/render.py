@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from benchmark.camera.episode_file import save_episode
 from benchmark.camera.render import render
 from benchmark.camera.scene import LABEL_BOX
 from benchmark.commands.pictures.depth_preview import preview_paths, write_preview
@@ -35,8 +36,10 @@ def run(record: Run, options) -> StageResult:
     line = (f"render: {T} depth frames {W}x{H} at {depth.fps:g} Hz, noise {record.scenario.noise_m:g} m, "
             f"{100 * block['valid_fraction']:.0f} % of pixels measured, box on {block['box_pixels_median']:.0f} px; "
             f"preview {paths[0]}")
-    picture = Picture("depth preview", write_preview, (depth.depth_m, depth.fps, record.out), {"gif": gif})
-    return StageResult(blocks=(("render", block),), lines=(line,), pictures=(picture,), episode=episode)
+    pictures = (Picture("depth preview", write_preview, (depth.depth_m, depth.fps, record.out), {"gif": gif}),
+                # the episode is complete: its archive is compressed beside the later stages
+                Picture("episode.npz", save_episode, (episode, record.out / "episode.npz"), in_thread=True))
+    return StageResult(blocks=(("render", block),), lines=(line,), pictures=pictures, episode=episode)
 
 
 STAGE = Stage(name="render", run=run, options=("no_gif",), add_arguments=add_arguments)

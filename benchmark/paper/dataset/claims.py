@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import glob
 import json
 import os
 import time
@@ -51,10 +50,6 @@ class Claims:
             self.mine.add(episode)
             return True
         return False
-
-    def others_live(self) -> bool:
-        """Whether another live run holds a claim in this folder (its temporary files are not debris)."""
-        return any(not self._stale(c) for c in glob.glob(os.path.join(self.folder, "*.claim")))
 
     def _stale(self, path: str) -> bool:
         try:

@@ -14,9 +14,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from benchmark.atomic import write_bytes, write_text
+from benchmark.atomic import remove_stale_temporaries, write_bytes, write_text
 from benchmark.errors import DatasetError, DatasetFileError
-from benchmark.paper.dataset.claims import Claims
 from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec
 from benchmark.world.scenario import episode_name
 from benchmark.scores.samples import nominal_excess_n
@@ -53,9 +52,8 @@ def read_header(out) -> dict:
 def _prepare(spec: DatasetSpec, out: str) -> str:
     episodes = os.path.join(out, "episodes")
     os.makedirs(episodes, exist_ok=True)
-    if not Claims(out).others_live():  # no other run is writing here: leftovers are a killed run's
-        for tmp in glob.glob(os.path.join(out, ".tmp-*")) + glob.glob(os.path.join(episodes, ".tmp-*")):
-            os.unlink(tmp)  # never a complete file
+    for folder in (out, episodes):  # a killed run's half-written files (a live run's are kept)
+        remove_stale_temporaries(folder)
     from benchmark.fingerprint import world_fingerprint
 
     header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict(), world=world_fingerprint())
