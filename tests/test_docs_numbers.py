@@ -19,6 +19,7 @@ QUOTES = [  # (document, text before the number, metric, statistic, format, text
     ("docs/suites.md", "acceleration RMS ", "acc_err_rms", "median", "{:.3f}", " m/s²"),
     ("docs/suites.md", "net force ", "net_force_err_n_rms", "median", "{:.3f}", " N, mean"),
     ("docs/suites.md", "learned forces ", "learned_rel_err_pct", "median", "{:.1f}", " % (`results/smoke"),
+    ("docs/suites.md", "the reference's 1.19 mm, 0.33 m/s², 0.17 N and ", "learned_rel_err_pct", "median", "{:.1f}", " %)"),
 ]
 
 
@@ -27,3 +28,28 @@ def test_a_quoted_smoke_number_is_the_committed_one(doc, before, metric, statist
     text = (ROOT / doc).read_text()
     quoted = before + fmt.format(_smoke(metric, statistic)) + after
     assert quoted in text, f"{doc} should quote {quoted!r} (results/smoke/scores.json)"
+
+
+def _standard(metric: str, unit: str = "") -> str:
+    """The reference's median on `standard` with its interval, as the docs print it: ``14.1 [11.3, 17.5]``
+    (``14.1 % [11.3, 17.5]`` with ``unit=" %"``)."""
+    scores = json.loads((ROOT / "results/standard/reference/scores.json").read_text())
+    m = scores["aggregate"][metric]["median"]
+    return f"{m['value']:.1f}{unit} [{m['ci_low']:.1f}, {m['ci_high']:.1f}]"
+
+
+STANDARD_QUOTES = [  # (document, text before, metric, unit, text after)
+    ("README.md", "| **reference** | 0.278 [0.238, 0.317] | 0.117 [0.103, 0.132] | 0.176 [0.140, 0.224] | 0.099 % [0.021, 0.198] | ",
+     "learned_rel_err_pct", "", " | "),
+    ("README.md", "failures): median ", "learned_rel_err_pct", " %", " against\n  the bar"),
+    ("README.md", "the same forces score ", "learned_rel_err_pct_paper", " %", " (the paper's\n  Table 2"),
+    ("docs/results.md", "| learned forces, every contact frame, relative error [%] | ", "learned_rel_err_pct", "", " |"),
+    ("docs/results.md", "| learned forces, the paper's sample rule [%] | ", "learned_rel_err_pct_paper", "", " |"),
+]
+
+
+@pytest.mark.parametrize("doc, before, metric, unit, after", STANDARD_QUOTES)
+def test_a_quoted_standard_number_is_the_committed_one(doc, before, metric, unit, after):
+    text = (ROOT / doc).read_text()
+    quoted = before + _standard(metric, unit) + after
+    assert quoted in text, f"{doc} should quote {quoted!r} (results/standard/reference/scores.json)"

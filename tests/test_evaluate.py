@@ -46,11 +46,21 @@ def test_eval_writes_scores_report_junit_and_the_second_run_renders_nothing(tiny
     assert "provenance" in first and (out / "report.md").read_text().startswith("# tiny (version 1)")
     junit = (out / "junit.xml").read_text()
     assert junit.count("<testcase") == 2 and "<failure" not in junit
-    assert "every gate holds" in (out / "report.md").read_text()
+    report = (out / "report.md").read_text()
+    assert "every gate holds" in report
+    # the trivial baselines ran on the same episode: the skill against the best of each metric's stage
+    base = first["baselines"]
+    assert set(base) == {"static", "zero-kinematics", "gravity-forces", "no-internal", "grip-line"}
+    assert base["static"]["stage"] == "tracker" and base["no-internal"]["stage"] == "internal"
+    static_box = base["static"]["aggregate"]["box_pos_err_mm"]["median"]["value"]
+    assert static_box > 10 * ep["box_pos_err_mm"]  # no vision
+    skill_row = next(line for line in report.splitlines() if line.startswith("| this method |")).split(" | ")
+    assert float(skill_row[1]) == pytest.approx(1 - ep["box_pos_err_mm"] / static_box, abs=0.006)
     capsys.readouterr()
     assert main(["eval", "--suite", "tiny", "--out", str(out), "--cache", str(cache), "--quiet"]) == 0
     second = json.loads((out / "scores.json").read_text())
     assert second["rendered"] == 0  # the episode came from the cache
+    assert second["baselines"] == first["baselines"]
     assert [{k: v for k, v in e.items() if k not in ("seconds", "rendered")} for e in second["episodes"]] == \
            [{k: v for k, v in e.items() if k not in ("seconds", "rendered")} for e in first["episodes"]]
     assert "(0 rendered" in capsys.readouterr().out

@@ -18,9 +18,10 @@ import time
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.options import add_suite_arguments
+    from benchmark.suites.options import add_baseline_argument, add_suite_arguments
 
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
+    add_baseline_argument(p)
     p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--format", choices=("npz", "hdf5"), default="npz",
@@ -90,6 +91,15 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
                            seconds=time.perf_counter() - t0)
 
 
+def with_baselines(scores: dict, suite, *, gates, cache, progress: bool) -> dict:
+    """``scores`` with its ``baselines`` entry: every trivial baseline run on the same (cached) episodes."""
+    from benchmark.suites.evaluate import baseline_specs, baselines_block, evaluate_many
+
+    specs = baseline_specs()
+    documents = evaluate_many(suite, list(specs.values()), gates=gates, cache=cache, progress=progress)
+    return {**scores, "baselines": baselines_block(specs, documents)}
+
+
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
     from benchmark.suites.evaluate import load_gates, print_verdict, write_outputs
@@ -108,10 +118,14 @@ def run(args: argparse.Namespace) -> dict:
             writer = EpisodePictures(folder)
             scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
                                  observer=writer, container=args.format)
+            if not args.no_baselines:
+                scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet)
             write_outputs(scores, suite, args.out, chosen(writer, args.pictures)(scores, gates or suite.gates))
     else:
         scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
                              container=args.format)
+        if not args.no_baselines:
+            scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet)
         write_outputs(scores, suite, args.out)
     print_verdict(scores, args.out, "score")
     return scores

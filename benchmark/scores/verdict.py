@@ -113,8 +113,9 @@ def _fmt_ci(ci, n: int | None = None) -> str:
 
 
 def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_task: dict, results: list,
-                    metrics) -> str:
-    """``report.md``: the verdict, the gates, the aggregates with intervals, per task and per episode."""
+                    metrics, baselines: dict | None = None) -> str:
+    """``report.md``: the verdict, the gates, the skill against the baselines (with ``baselines``, the
+    ``baselines`` entry of ``scores.json``), the aggregates with intervals, per task and per episode."""
     ok = all(r.passed for r in results)
     lines = [f"# {suite.name} (version {suite.version}): {method}", "",
              f"**Verdict: {'every gate holds' if ok else 'FAILED: ' + ', '.join(r.name for r in results if not r.passed)}**",
@@ -125,6 +126,14 @@ def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_
     for r in results:
         lines.append(f"| {r.name} | {_fmt(r.value)} | {_interval(r.ci)} | {r.n} | "
                      f"{'pass' if r.passed else '**FAIL**'} |")
+    if baselines:
+        from benchmark.scores.leaderboard import skill_table
+
+        entries = [("this method", {"aggregate": aggregates})]
+        entries += [(f"baseline-{name}", {"aggregate": b["aggregate"]}) for name, b in baselines.items()]
+        table = skill_table(entries, {name: b["stage"] for name, b in baselines.items()})
+        lines += ["", "## Skill against the trivial baselines", "",
+                  "The baselines (`fsv.method.baselines`) ran on the same episodes."] + table
     lines += ["", f"## Aggregates over {len(rows)} episodes (median [95 % CI], mean)", "",
               "| metric | median | 95 % CI | mean |", "|---|---|---|---|"]
     for m in metrics:

@@ -171,6 +171,23 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
             for m, spec in enumerate(specs)]
 
 
+def baseline_specs() -> dict:
+    """``{name: MethodSpec}`` of every stage's trivial baseline (:mod:`fsv.method.baselines`)."""
+    from benchmark.method import MethodSpec
+    from fsv.method.baselines import BASELINES
+
+    return {name: MethodSpec(method=name) for name in BASELINES}
+
+
+def baselines_block(names, documents) -> dict:
+    """The ``baselines`` entry of ``scores.json``: per baseline, the stage it stands in for and its
+    aggregates on the same episodes (what :func:`benchmark.scores.leaderboard.skill_table` measures
+    a method's skill against)."""
+    from fsv.method.baselines import BASELINE_STAGE
+
+    return {name: {"stage": BASELINE_STAGE[name], "aggregate": doc["aggregate"]} for name, doc in zip(names, documents)}
+
+
 def scores_document(suite: Suite, rows: list, gates, *, method: str, stages: dict, method_spec, seconds: float) -> dict:
     """The content of ``scores.json`` for one method's per-episode rows: aggregates, gates, verdict.
 
@@ -223,7 +240,8 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path, pictures=()) ->
     try:
         (tmp / "scores.json").write_text(json.dumps(strict(scores), indent=1, allow_nan=False) + "\n")
         (tmp / "report.md").write_text(report_markdown(suite, scores["method"], scores["episodes"], scores["aggregate"],
-                                                       scores["per_task"], results, METRICS))
+                                                       scores["per_task"], results, METRICS,
+                                                       baselines=scores.get("baselines")))
         (tmp / "junit.xml").write_bytes(junit_xml(suite.name, results, scores["seconds"]))
         if pictures:
             (tmp / "pictures").mkdir()
@@ -283,9 +301,10 @@ def load_gates(path) -> tuple:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.options import add_suite_arguments
+    from benchmark.suites.options import add_baseline_argument, add_suite_arguments
 
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)")
+    add_baseline_argument(p)
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--ray-address", default=None,
                    help="run the episodes as tasks on this Ray cluster ('auto', host:port or ray://host:port; needs the ray extra)")
@@ -342,11 +361,27 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
         from benchmark.parallel import check_ray_address
 
         check_ray_address(args.ray_address)
-    scores = evaluate(suite, spec=spec, gates=gates, cache=args.cache, progress=not args.quiet, workers=args.workers,
-                      ray_address=args.ray_address, observer=observer)
+    extra = {} if args.no_baselines else baseline_specs()
+    documents = evaluate_many(suite, [spec, *extra.values()], gates=gates, cache=args.cache, progress=not args.quiet,
+                              workers=args.workers, ray_address=args.ray_address,
+                              observer=None if observer is None else _first_method_only(observer))
+    scores = documents[0]
+    if extra:
+        scores["baselines"] = baselines_block(extra, documents[1:])
     write_outputs(scores, suite, args.out, () if pictures is None else pictures(scores, gates or suite.gates))
     print_verdict(scores, args.out, "eval")
     return scores
+
+
+class _first_method_only:
+    """An observer that sees only the first method's estimates (not the baselines run beside it)."""
+
+    def __init__(self, observer):
+        self.observer = observer
+
+    def __call__(self, episode, estimate, index):
+        if index == 0:
+            self.observer(episode, estimate, index)
 
 
 def print_verdict(scores: dict, out, command: str) -> None:

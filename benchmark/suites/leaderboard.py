@@ -43,7 +43,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> list:
     from benchmark.atomic import check_out
-    from benchmark.suites.evaluate import GateFailure, evaluate_many, write_outputs
+    from benchmark.suites.evaluate import GateFailure, baselines_block, evaluate_many, write_outputs
     from benchmark.scores.leaderboard import leaderboard_markdown
     from benchmark.suites import get_suite
 
@@ -54,6 +54,11 @@ def run(args: argparse.Namespace) -> list:
     results = evaluate_many(suite, list(VARIANTS.values()), cache=args.cache, progress=not args.quiet,
                             workers=args.workers)
     entries = list(zip(VARIANTS, results))
+    names = [n for n in VARIANTS if n.startswith("baseline-")]
+    block = baselines_block([n[9:] for n in names], [dict(entries)[n] for n in names])
+    for name, scores in entries:
+        if not name.startswith("baseline-"):
+            scores["baselines"] = block
     out = pathlib.Path(args.out)
     tmp = staging_folder(out)
     try:

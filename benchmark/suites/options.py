@@ -1,4 +1,5 @@
-"""The command-line options every suite command shares, declared once: ``--suite --sensor --out --cache --workers --quiet``."""
+"""The command-line options every suite command shares, declared once: ``--suite --sensor --out --cache --workers --quiet``
+(and ``--no-baselines`` for the commands that score one method)."""
 
 from __future__ import annotations
 
@@ -19,3 +20,9 @@ def add_suite_arguments(p: argparse.ArgumentParser, *, out_help: str, sensor: bo
     if workers:
         p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_baseline_argument(p: argparse.ArgumentParser) -> None:
+    """Adds ``--no-baselines``: skip the trivial baselines scored beside the method for its skill."""
+    p.add_argument("--no-baselines", action="store_true",
+                   help="do not score the trivial baselines beside the method (report.md then gives no skill)")

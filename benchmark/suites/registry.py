@@ -7,7 +7,7 @@ from benchmark.suites.suite import Gate, Suite
 
 SMOKE = Suite(
     name="smoke",
-    version=3,
+    version=4,
     scenarios=(
         Scenario(task="lift", user=0, grasp=0, mass=0, seed=11, duration_s=4.0),
         Scenario(task="place", user=2, grasp=2, mass=1, seed=12, duration_s=4.0),
@@ -18,7 +18,7 @@ SMOKE = Suite(
     # tracker), and set so that the trivial baseline of each stage (fsv.method.baselines) fails its
     # stage's gates: the static box (no vision) the tracker's, zero kinematics the acceleration gate
     # (median 0.73 m/s^2), gravity-only forces the net-force gate (0.48 N), no internal forces and the
-    # grip line alone the learned-force gate (81.7 % and 40.2 %)
+    # grip line alone the learned-force gate (every contact frame: 83.8 % and 44.2 %)
     gates=(
         Gate("box_pos_err_mm", "<=", 2.0, measured="median 1.19 mm (1.17-1.30); the static box 127 mm"),
         Gate("contact_err_mm_std", "<=", 5.0, measured="median 1.52 mm (0.94-2.21; rotate the worst)"),
@@ -27,8 +27,9 @@ SMOKE = Suite(
         Gate("acc_err_rms", "<=", 0.5, measured="median 0.33 m/s^2 (0.29-0.57; release the worst); zero kinematics 0.73"),
         Gate("net_force_err_n_rms", "<=", 0.3, measured="median 0.17 N (0.07-0.29; place the worst); gravity alone 0.48"),
         Gate("least_violation_frac", "<=", 0.25, statistic="mean", measured="mean 0 (no frame on any task)"),
-        Gate("learned_rel_err_pct", "<=", 20.0,
-             measured="median 10.3 % (8.0-16.0; rotate the worst); the grip line alone 40.2, no internal forces 81.7"),
+        Gate("learned_rel_err_pct", "<=", 30.0,
+             measured="median 17.3 % over every contact frame (10.9-21.1; rotate the worst; 10.3 under the "
+                      "paper's sample rule); the grip line alone 44.2 (42.0-55.5), no internal forces 83.8"),
     ),
     description=(
         "For CI: four 4 s episodes, one per task family (lift, place, rotate, release), each with "
@@ -64,16 +65,20 @@ DEV_DRAW_SEED = 2027  # seeds the masses of the dev suite
 
 STANDARD = Suite(
     name="standard",
-    version=2,
+    version=3,
     scenarios=_standard_scenarios(),
     gates=(  # the bar a method should reach away from the default lift (not tuned to pass)
         Gate("box_pos_err_mm", "<=", 1.5),
         Gate("contact_err_mm_std", "<=", 4.0),
         Gate("contact_recall", ">=", 0.9),
         Gate("contact_precision", ">=", 0.9),
+        Gate("acc_err_rms", "<=", 0.45,  # set after measuring, so that zero kinematics fails its stage
+             measured="median 0.278 m/s^2 [0.238, 0.317]; zero kinematics 0.582 [0.491, 0.637]"),
         Gate("net_force_err_n_rms", "<=", 0.3),
         Gate("least_violation_frac", "<=", 0.01, statistic="mean"),
-        Gate("learned_rel_err_pct", "<=", 15.0),
+        Gate("learned_rel_err_pct", "<=", 15.0,  # every contact frame: the bar sits inside the reference's interval
+             measured="median 14.1 % [11.3, 17.5] over every contact frame (11.4 [9.6, 13.4] under the paper's "
+                      "sample rule); the grip line alone 40.4"),
     ),
     description=(
         "The headline: 48 ten-second episodes over every task (the six manipulations and the six "
@@ -86,7 +91,7 @@ STANDARD = Suite(
 
 DEV = Suite(
     name="dev",
-    version=1,
+    version=2,
     scenarios=_grid_scenarios(500, DEV_DRAW_SEED),
     gates=STANDARD.gates,
     description=(
@@ -118,17 +123,18 @@ TABLE1 = Suite(
 
 TABLE2 = Suite(
     name="table2",
-    version=1,
+    version=2,
     scenarios=tuple(Scenario(task="lift", user=u, grasp=g, mass=m, seed=s)
                     for u in (0, 4) for g in (0, 1) for m in (1, 4) for s in range(6)),
-    gates=(  # the paper's Table 2 with full training: 9.7-10.9 %
-        Gate("learned_rel_err_pct", "<=", 10.9),
+    gates=(  # the paper's Table 2 with full training: 9.7-10.9 %, under its sample rule
+        Gate("learned_rel_err_pct_paper", "<=", 10.9),
     ),
     description=(
         "The paper's Table 2 cohort: lifts by users 0 and 4 with grasps 0-1, masses 1 and 4, seeds 0-5 "
         "(the episodes of `fsv-bench table2`'s dataset, which trains and tests by cross-validation). Here "
         "the method's own internal-force model is scored on them (the shipped one was trained on other "
-        "users, masses and seeds). Gate: the paper's full-training error, 10.9 %."
+        "users, masses and seeds). Gate: the paper's full-training error, 10.9 %, on the frames the paper's "
+        "sample rule keeps (its protocol)."
     ),
 )
 
