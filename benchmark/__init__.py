@@ -8,10 +8,6 @@ not load MuJoCo and the renderer.
 import importlib
 import os
 
-# Headless by design: MuJoCo and pyrender pick their GL platform when first imported, so the
-# choice is made here, before any submodule imports them (a caller's own setting wins).
-os.environ.setdefault("MUJOCO_GL", "egl")
-os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 _EXPORTS = {
     "BenchmarkError": "benchmark.errors", "EpisodeFileError": "benchmark.errors", "RenderError": "benchmark.errors",

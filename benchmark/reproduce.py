@@ -51,8 +51,9 @@ ABS_TOL = 1e-9
 
 _UNCOMPARED = frozenset({"timing_s", "provenance", "rendered", "seconds", "train_seconds", "frames_per_s",
                          "frames_per_s_after_first", "first_frame_s", "steps_per_s", "stage_ms_per_frame",
-                         "overlay", "plot", "fig6", "command", "episode", "summary", "path"})
-"""Keys whose values measure this run's speed or name where it ran or what it wrote: never compared."""
+                         "overlay", "plot", "fig6", "command", "episode", "summary", "path", "digests"})
+"""Keys whose values measure this run's speed or name where it ran or what it wrote: never compared
+(``digests`` are compared as a whole, :func:`_compare_run`)."""
 
 class ReproduceError(BenchmarkError):
     """A committed result differs from its regeneration, or a regeneration failed."""
@@ -149,6 +150,26 @@ def _compare_csv(name: str):
     return compare
 
 
+def _compare_run(new: pathlib.Path, old: pathlib.Path) -> list[str]:
+    """The main command's run: first the first stage whose output differs (from the runs'
+    ``digests``), then every value that moved and Table 1's table."""
+    from benchmark.commands.digests import STAGES, first_difference
+
+    diffs = _compare_json("summary.json")(new, old) + _compare_csv("table1.csv")(new, old)
+    if not (old / "summary.json").exists():
+        return diffs
+    a = json.loads((new / "summary.json").read_text()).get("digests")
+    b = json.loads((old / "summary.json").read_text()).get("digests")
+    stage = first_difference(a, b)
+    if stage is None:
+        return diffs
+    if stage == "digests":
+        return [f"{old.name}/summary.json: no stage digests to compare (regenerate with --write)"] + diffs
+    same = STAGES[:STAGES.index(stage)]
+    return [f"{old.name}/summary.json: the first stage whose output differs is {stage}"
+            + (f" ({', '.join(same)} identical)" if same else "")] + diffs
+
+
 def _compare_model(new: pathlib.Path, old: pathlib.Path) -> list[str]:
     from fsv.learn import load
 
@@ -186,7 +207,7 @@ RESULTS = (
            compare=_compare_model),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
-           compare=lambda new, old: _compare_json("summary.json")(new, old) + _compare_csv("table1.csv")(new, old)),
+           compare=_compare_run),
     Result(name="world", path="results/world", datasets=(),
            commands=(("python", "-m", "benchmark.commands.humanness", "--suite", "standard", "--quiet", "--out", "{out}"),),
            compare=_compare_json("humanness.json")),

@@ -16,6 +16,27 @@ def test_compare_values_tolerates_rounding_and_names_what_moved():
     assert diffs == ["s/a: 1.0 -> 1.01", "s/b/c[1]: 3.0 -> '<missing>'", "s/name: 'x' -> 'y'"]
 
 
+def test_a_moved_run_names_the_first_stage_whose_output_differs(tmp_path):
+    import json
+    import shutil
+
+    result = {r.name: r for r in reproduce.RESULTS}["reference-run"]
+    committed = reproduce.ROOT / result.path
+    summary = json.loads((committed / "summary.json").read_text())
+    assert list(summary["digests"]) == ["truth", "depth", "tracking", "kinematics", "nominal_forces", "final_forces"]
+    new = tmp_path / "run"
+    shutil.copytree(committed, new)
+    assert result.compare(new, committed) == []
+    moved = json.loads(json.dumps(summary))
+    for stage in ("depth", "kinematics", "final_forces"):  # a depth of other bits moves everything after it
+        moved["digests"][stage] = "0" * 16
+    moved["forces"]["net_force_err_n_rms"] *= 1.01
+    (new / "summary.json").write_text(json.dumps(moved))
+    diffs = result.compare(new, committed)
+    assert diffs[0] == f"{committed.name}/summary.json: the first stage whose output differs is depth (truth identical)"
+    assert len(diffs) == 2 and "net_force_err_n_rms" in diffs[1]
+
+
 def test_committed_results_were_made_by_this_code():
     """Fails when the world, the method or the learning changed after the last
     `fsv-bench reproduce --write`: regenerate the committed results in the same change."""

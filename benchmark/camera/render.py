@@ -2,28 +2,26 @@
 
 The rendered scene mirrors the MuJoCo geoms one to one (the table, the box, every capsule and
 sphere of the hand): each geom's triangle mesh is built once from the MjModel in its body's
-frame, and per frame only the bodies' poses (``data.xpos`` / ``data.xmat``) are applied. One
-off-screen pass per frame, in pyrender's headless GL context, gives the exact depth along the
-optical axis and a label image (which geom is seen where).
+frame, and per frame only the bodies' poses (``data.xpos`` / ``data.xmat``) are applied. One pass
+per frame of this project's CPU rasteriser (:mod:`benchmark.camera.depth`) gives the exact depth
+along the optical axis and a label image (which geom is seen where), the same bits on every
+machine, with or without a GPU.
 The sensor model (:mod:`benchmark.camera.sensor`) then turns the exact depth into a measurement.
 
 Camera conventions: `fsv` and :class:`fsv.Calibration` use OpenCV's pinhole camera (x right,
-y down, z forward; pixel centres at integer coordinates). OpenGL uses x right, y up, z backward
-and puts pixel centres at half-integers. The conversion happens once, here: the shader works in
-the OpenCV camera frame and :func:`clip_from_cam` projects it with the OpenCV intrinsics, the
-half-pixel shift and image rows top first; ``GL_FROM_CV`` converts camera poses for OpenGL-style
-cameras (pyrender's, MuJoCo's).
+y down, z forward; pixel centres at integer coordinates); the rasteriser casts each pixel's ray
+in that frame. ``GL_FROM_CV`` converts camera poses for OpenGL-style cameras (MuJoCo's, a peer in
+the tests and the speed script).
 
-Rendering is headless through EGL (Mesa's llvmpipe on a CPU-only machine): the renderer is
-:mod:`benchmark.camera.gl`, the camera :mod:`benchmark.camera.camera`, the scene's meshes and
-labels :mod:`benchmark.camera.scene`."""
+The renderer is :mod:`benchmark.camera.depth` (kernels :mod:`benchmark.camera.raster_kernels`),
+the camera :mod:`benchmark.camera.camera`, the scene's meshes and labels :mod:`benchmark.camera.scene`."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from benchmark.camera.camera import Camera, load_camera
-from benchmark.camera.gl import DepthRenderer
+from benchmark.camera.depth import DepthRenderer
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from benchmark.errors import BenchmarkError

@@ -25,6 +25,7 @@ import time
 from benchmark import interrupt
 from benchmark.atomic import check_out, staging_folder, swap_folder
 from benchmark.background import Background
+from benchmark.commands.digests import stage_digests
 from benchmark.commands.report import write_json
 from benchmark.commands.stage import Run, complete
 from benchmark.commands.stages import STAGES
@@ -179,6 +180,7 @@ def main(argv: list | None = None) -> int:
         background.wait()
         timing["wait_background"] = time.perf_counter() - t0
         timing["total"] = time.perf_counter() - start
+        summary["digests"] = stage_digests(record.episode, record.estimate)
         summary["timing_s"] = timing
         summary["provenance"] = provenance()
         write_json(tmp / "summary.json", summary)

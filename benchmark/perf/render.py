@@ -3,15 +3,15 @@
 Run: ``python -m benchmark.perf.render [--frames N]``. It simulates a short lift of the
 default scenario, then renders its frames at 320 x 240 three ways in this process:
 
-- this benchmark's renderer (:class:`benchmark.camera.gl.DepthRenderer`, in pyrender's EGL
-  context): exact depth + label image per frame;
+- this benchmark's renderer (:class:`benchmark.camera.depth.DepthRenderer`, the CPU rasteriser on
+  one core): exact depth + label image per frame;
 - the same + the sensor model (what ``render()`` does per frame);
 - MuJoCo's ``mujoco.Renderer`` with depth rendering (EGL) from an identical camera (same
   pose and intrinsics, added to the model as a MuJoCo camera).
 
 The three are timed in turn within each of ``--repeats`` rounds (so a change of the machine's
 load hits all of them alike). It prints, per way, the best and the median frames per second over
-the rounds (wall clock) and the process's CPU time per frame (all threads, llvmpipe's included),
+the rounds (wall clock) and the process's CPU time per frame (all threads, MuJoCo's llvmpipe's included),
 the ratios against MuJoCo, and how far the two renderers' depths differ on the pixels both see
 (a check that the scenes and cameras really are the same).
 """
@@ -29,7 +29,7 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmark.camera.camera import GL_FROM_CV, Camera, load_camera  # noqa: E402
-from benchmark.camera.gl import DepthRenderer  # noqa: E402
+from benchmark.camera.depth import DepthRenderer  # noqa: E402
 
 
 def add_mujoco_camera(spec, camera: Camera, name: str = "depth_camera"):
@@ -144,8 +144,8 @@ def main(argv=None) -> dict:
         peer.render()
 
     timed = _rates(
-        {"pyrender_depth_labels": render_only,
-         **{f"pyrender_depth_labels_sensor_{name}": render_and_sense(name) for name in SENSORS},
+        {"depth_labels": render_only,
+         **{f"depth_labels_sensor_{name}": render_and_sense(name) for name in SENSORS},
          "mujoco_depth": mujoco_depth},
         args.frames,
         args.repeats,
@@ -164,8 +164,8 @@ def main(argv=None) -> dict:
     diff = np.abs(mine - theirs)[both]
     rates["agreement_median_m"] = float(np.median(diff))
     rates["agreement_within_0.1mm"] = float(np.mean(diff < 1e-4))
-    _print_rates(rates, f"scene: {model.ngeom} geoms, {ours.triangles} triangles, {ours.draw_calls} draw calls "
-                        f"per frame; {camera.width}x{camera.height}; {args.frames} frames per pass, {args.repeats} rounds")
+    _print_rates(rates, f"scene: {model.ngeom} geoms, {ours.triangles} triangles and {ours.capsules} "
+                        f"ray-cast capsules per frame; {camera.width}x{camera.height}; {args.frames} frames per pass, {args.repeats} rounds")
     peer.close()
     return rates
 
@@ -187,16 +187,16 @@ def _print_rates(rates: dict, scene: str) -> None:
     print(scene)
     print("                                   best fps  median fps  CPU ms/frame (all threads)")
     for name, text in (
-        ("pyrender_depth_labels", "depth + labels                 "),
-        *((f"pyrender_depth_labels_sensor_{n}", f"depth + labels + {n:<14s}") for n in SENSORS),
+        ("depth_labels", "depth + labels                 "),
+        *((f"depth_labels_sensor_{n}", f"depth + labels + {n:<14s}") for n in SENSORS),
         ("mujoco_depth", "MuJoCo Renderer depth (peer)   "),
     ):
         print(f"{text}: {rates[name + '_fps']:8.1f}  {rates[name + '_fps_median']:10.1f}  {rates[name + '_cpu_ms']:8.2f}")
     peer_fps = rates["mujoco_depth_fps"]
     print(
-        f"ratio ours / MuJoCo (best fps)   : {rates['pyrender_depth_labels_fps'] / peer_fps:7.2f} "
+        f"ratio ours / MuJoCo (best fps)   : {rates['depth_labels_fps'] / peer_fps:7.2f} "
         "(with a sensor preset: " + ", ".join(
-            f"{n} {rates[f'pyrender_depth_labels_sensor_{n}_fps'] / peer_fps:.2f}" for n in SENSORS) + ")"
+            f"{n} {rates[f'depth_labels_sensor_{n}_fps'] / peer_fps:.2f}" for n in SENSORS) + ")"
     )
     print(
         f"depth agreement with MuJoCo      : median {rates['agreement_median_m'] * 1e6:.2f} um, "

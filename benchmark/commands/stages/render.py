@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.camera.episode_file import save_episode
+from benchmark.camera.depth import RASTERISER
 from benchmark.camera.render import render
 from benchmark.camera.scene import LABEL_BOX
 from benchmark.commands.pictures.depth_preview import preview_paths, write_preview
@@ -29,6 +30,7 @@ def run(record: Run, options) -> StageResult:
         "height": H,
         "fps": depth.fps,
         "noise_m": record.scenario.noise_m,
+        "rasteriser": RASTERISER,
         "valid_fraction": float(np.mean(depth.depth_m > 0)),
         "box_pixels_median": float(np.median(np.sum(episode.labels == LABEL_BOX, axis=(1, 2)))),
         "preview": [p.name for p in paths],
