@@ -25,9 +25,9 @@ class RayAddressError(DatasetError):
 
 
 ONE_CORE_ENV = {"LP_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
-"""Environment of a local worker process: one core's work each. Mesa's software rasteriser
-(llvmpipe) would otherwise start a thread per core in every worker, and the workers would compete
-for the cores the pool divides among them (a rendered frame is the same bits at any thread count)."""
+"""Environment of a local worker process: one core's work each. The numerical libraries (and
+Mesa's llvmpipe, where a worker draws with MuJoCo's GL renderer) would otherwise start a thread per
+core in every worker, and the workers would compete for the cores the pool divides among them."""
 
 
 def one_core_worker() -> None:

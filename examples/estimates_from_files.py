@@ -26,7 +26,8 @@ def write_estimates(inputs_dir, out_dir, method, label: str) -> list:
     for ep in json.loads((inputs_dir / "suite.json").read_text())["episodes"]:
         inputs, meta = load_camera_input(inputs_dir / ep["file"])
         estimate = method(inputs, rng_generator(meta))
-        written.append(save_estimate(estimate, out_dir / ep["file"], episode=ep["episode"], method=label))
+        written.append(save_estimate(estimate, out_dir / ep["file"], episode=ep["episode"], method=label,
+                                     knowledge=meta.get("knowledge", {}).get("knowledge")))
     return written
 
 

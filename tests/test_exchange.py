@@ -18,24 +18,28 @@ def tiny(monkeypatch):
     return TINY
 
 
-def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys):
+@pytest.mark.parametrize("knowledge", ["exact", "lab"])
+def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys, knowledge):
     from benchmark.suites.evaluate import evaluate
     from benchmark.method import MethodSpec, method_label
     from examples.estimates_from_files import write_estimates
 
     cache, inputs, estimates = tmp_path / "cache", tmp_path / "inputs", tmp_path / "estimates"
-    spec = MethodSpec(differentiator="central")
+    spec = MethodSpec(differentiator="central", knowledge=knowledge)
     in_process = evaluate(TINY, spec=spec, cache=cache, progress=False)
-    assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(cache), "--quiet"]) == 0
+    assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(cache), "--quiet",
+                 "--knowledge", knowledge]) == 0
     index = json.loads((inputs / "suite.json").read_text())
     assert [e["episode"] for e in index["episodes"]] == ["lift-u0-g0-m0-s21"]
     with zipfile.ZipFile(inputs / "lift-u0-g0-m0-s21.npz") as z:  # camera inputs only, no truth
         sections = {n.split("/")[0] for n in z.namelist() if n != "meta.json.npy"}
     assert sections == {"camera", "init", "object", "hand", "grip"}  # grip: measured on other recordings
+    given = load_camera_input(inputs / "lift-u0-g0-m0-s21.npz")[1]["knowledge"]
+    assert given["knowledge"] == knowledge and "error" not in json.dumps(given)  # what was given, never the truth
     write_estimates(inputs, estimates, spec.build(), method_label(spec))
     capsys.readouterr()
     code = main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "scores"),
-                 "--cache", str(cache), "--quiet"])
+                 "--cache", str(cache), "--quiet", "--knowledge", knowledge])
     assert code == (1 if in_process["verdict"] == "fail" else 0)  # the same verdict from files
     from_files = json.loads((tmp_path / "scores" / "scores.json").read_text())
     drop = ("seconds", "rendered")
@@ -43,6 +47,11 @@ def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys):
            [{k: v for k, v in r.items() if k not in drop} for r in in_process["episodes"]]
     assert from_files["aggregate"] == in_process["aggregate"] and from_files["rendered"] == 0
     assert from_files["stages"]["differentiator"].startswith("central differentiation")
+    if knowledge == "lab":  # estimates made under one knowledge are refused under the other, naming both
+        capsys.readouterr()
+        assert main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "s2"),
+                     "--cache", str(cache), "--quiet", "--knowledge", "exact"]) == 2
+        assert "made from camera inputs with --knowledge lab, scored with --knowledge exact" in capsys.readouterr().err
 
 
 def test_camera_file_round_trips_the_inputs(tiny, tmp_path):

@@ -27,8 +27,22 @@ def test_a_sweep_of_the_initialisation_error_moves_the_tracking_error(tiny, tmp_
     assert "| 3.0 |" in (out / "sweep.md").read_text()
 
 
+def test_a_sweep_of_the_knowledge_tells_the_method_exact_then_measured_values(tiny, tmp_path):
+    out = tmp_path / "sweep"
+    assert main(["sweep", "--suite", "tiny", "--axis", "knowledge", "--values", "exact,lab-camera", "--out", str(out),
+                 "--cache", str(tmp_path / "c"), "--quiet", "--internal", "none"]) == 0
+    doc = json.loads((out / "sweep.json").read_text())
+    assert doc["values"] == ["exact", "lab-camera"]
+    told = [eps[0]["knowledge"] for eps in doc["episodes"]]
+    assert [t["knowledge"] for t in told] == ["exact", "lab-camera"]
+    assert told[0]["cx_px"]["error"] == 0.0 != told[1]["cx_px"]["error"] and told[1]["mass_kg"]["error"] == 0.0
+    exact, lab = (a["box_pos_err_mm"]["median"]["value"] for a in doc["aggregate"])
+    assert lab != exact  # the calibration's error moves the box as the method sees it
+
+
 @pytest.mark.parametrize("argv, needle", [
-    (["--axis", "friction", "--values", "0.5,1"], "--axis 'friction': accepted: noise, mass, fps, init"),
+    (["--axis", "friction", "--values", "0.5,1"], "--axis 'friction': accepted: noise, mass, fps, init, sensor, knowledge"),
+    (["--axis", "knowledge", "--values", "exact,psychic"], "--knowledge 'psychic': accepted: exact, lab"),
     (["--axis", "mass", "--values", "0,x"], "--values '0,x': 'x' is not an integer"),
     (["--axis", "mass", "--values", "0,42"], "mass 42 does not exist"),
     (["--axis", "noise", "--values", "0.01"], "need at least two distinct values"),

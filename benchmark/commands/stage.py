@@ -49,6 +49,8 @@ class Run:
         quiet: No progress bars.
         episode: The episode, once simulated (rendered after the render stage).
         estimate: The method's ``fsv.method.Estimate`` on the episode, once the track stage ran it.
+        knowledge: What the method was told (``benchmark.method.knowledge.Knowledge``), from the
+            track stage on.
     """
 
     scenario: Scenario
@@ -57,6 +59,7 @@ class Run:
     quiet: bool = False
     episode: Episode | None = None
     estimate: Any = None
+    knowledge: Any = None
 
 
 @dataclass(frozen=True)
@@ -70,6 +73,7 @@ class StageResult:
         pictures: Pictures to draw beside the later stages.
         episode: The stage's new episode (the rendered one), or None to keep the run's.
         estimate: The method's estimate, if this stage ran the method, else None.
+        knowledge: What the method was told, if this stage ran it, else None.
     """
 
     blocks: tuple = ()
@@ -78,6 +82,7 @@ class StageResult:
     pictures: tuple = ()
     episode: Episode | None = None
     estimate: Any = None
+    knowledge: Any = None
 
     def __post_init__(self):
         for name in ("blocks", "lines", "files", "pictures"):
@@ -86,7 +91,8 @@ class StageResult:
 
     def updates(self) -> dict:
         """The fields of :class:`Run` this result replaces."""
-        return {k: v for k, v in (("episode", self.episode), ("estimate", self.estimate)) if v is not None}
+        return {k: v for k, v in (("episode", self.episode), ("estimate", self.estimate), ("knowledge", self.knowledge))
+                if v is not None}
 
 
 def _no_arguments(parser) -> None:

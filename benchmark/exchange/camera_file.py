@@ -53,7 +53,7 @@ class CameraFileError(BenchmarkError, ValueError):
     """A camera-input file is missing, damaged or of another format."""
 
 
-def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list) -> pathlib.Path:
+def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list, knowledge: dict | None = None) -> pathlib.Path:
     """Writes a method's camera inputs (an ``fsv.method.CameraInput``) as a camera-input file.
 
     Args:
@@ -62,6 +62,8 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list) -> p
         episode: The episode's name in its suite.
         suite: The ``benchmark.suites.Suite`` it belongs to.
         rng_seed: Entropy of the generator an in-process method gets (see ``FORMAT_DOC``).
+        knowledge: What the method was told and how precisely
+            (``benchmark.method.knowledge.Knowledge.given_record``: no truth), stored in the meta.
     """
     from benchmark.camera.episode_file import model_sections, quantise_depth
 
@@ -78,6 +80,8 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list) -> p
 
     meta = {"episode": episode, "suite": {"name": suite.name, "version": suite.version}, "world": world_fingerprint(),
             "frames": inputs.num_frames, "rng_seed": [int(v) for v in rng_seed]}
+    if knowledge is not None:
+        meta["knowledge"] = knowledge
     if inputs.grip is not None:
         arrays.update({"grip/baseline_n": np.float64(inputs.grip.baseline_n), "grip/gain": np.float64(inputs.grip.gain),
                        "grip/samples": np.int64(inputs.grip.samples)})

@@ -35,7 +35,8 @@ def check(path: pathlib.Path, inputs: pathlib.Path | None = None) -> str:
     if inputs is not None:
         camera, cmeta = load_camera_input(inputs)
         suite = argparse.Namespace(**cmeta["suite"])
-        check_identity(path, meta, episode=cmeta["episode"], suite=suite, world=world_fingerprint())
+        check_identity(path, meta, episode=cmeta["episode"], suite=suite, world=world_fingerprint(),
+                       knowledge=cmeta.get("knowledge", {}).get("knowledge"))
         T, fps, names = camera.num_frames, camera.depth.fps, tuple(camera.hand_model.finger_names)
     else:
         pos = arrays.get("box", {}).get("pos")

@@ -64,10 +64,12 @@ UNIT_TOL = 1e-5
 """How far an active contact's normal may be from unit length."""
 
 
-def check_identity(path, meta: dict, *, episode: str, suite, world: str | None = None) -> None:
+def check_identity(path, meta: dict, *, episode: str, suite, world: str | None = None,
+                   knowledge: str | None = None) -> None:
     """Refuses an estimates file of another episode: ``meta["episode"]`` must be ``episode`` (the name
-    the file is found under); ``meta["suite"]`` (``{"name", "version"}``) and ``meta["world"]``, copied
-    from the camera-input file, must match where the file carries them.
+    the file is found under); ``meta["suite"]`` (``{"name", "version"}``), ``meta["world"]`` and
+    ``meta["knowledge"]`` (the camera-input file's ``knowledge.knowledge``), copied from the
+    camera-input file, must match where the file carries them.
 
     Raises:
         EstimatesFileError: Naming the file and what it holds instead.
@@ -82,6 +84,9 @@ def check_identity(path, meta: dict, *, episode: str, suite, world: str | None =
     if world is not None and "world" in meta and meta["world"] != world:
         raise EstimatesFileError(f"{path}: made for another world (meta.json world {str(meta['world'])[:12]}..., this "
                                  f"benchmark's {world[:12]}...): export the camera inputs again")
+    if knowledge is not None and "knowledge" in meta and meta["knowledge"] != knowledge:
+        raise EstimatesFileError(f"{path}: made from camera inputs with --knowledge {meta['knowledge']}, scored with "
+                                 f"--knowledge {knowledge}: score with --knowledge {meta['knowledge']}")
 
 
 def check_physics(path, box, contacts, kinematics, solutions: dict) -> None:
@@ -127,7 +132,7 @@ def check_physics(path, box, contacts, kinematics, solutions: dict) -> None:
                 bad(f"{group}/{name}", inf, "is infinite (NaN marks an unsolved frame)")
 
 
-def save_estimate(estimate, path, *, episode: str, method: str) -> pathlib.Path:
+def save_estimate(estimate, path, *, episode: str, method: str, knowledge: str | None = None) -> pathlib.Path:
     """Writes an ``fsv.method.Estimate`` as an estimates file (with digests).
 
     Args:
@@ -135,6 +140,8 @@ def save_estimate(estimate, path, *, episode: str, method: str) -> pathlib.Path:
         path: Destination ``.npz``.
         episode: The episode's name in its suite.
         method: One line naming the method.
+        knowledge: The camera-input file's knowledge (its meta's ``knowledge.knowledge``), if known:
+            ``fsv-bench score`` then refuses to score it under another.
     """
     c, k = estimate.contacts, estimate.kinematics
     arrays = {"box/pos": estimate.box.pos, "box/rot": estimate.box.rot,
@@ -149,6 +156,8 @@ def save_estimate(estimate, path, *, episode: str, method: str) -> pathlib.Path:
         arrays["hand/fingertips"] = np.asarray(estimate.fingertips, float)
     meta = {"episode": episode, "finger_names": list(c.finger_names), "method": method,
             "stages": dict(estimate.labels), "oracle": list(estimate.oracle)}
+    if knowledge is not None:
+        meta["knowledge"] = knowledge
     return write_archive(path, FORMAT, VERSION, meta, arrays)
 
 

@@ -1,10 +1,11 @@
 """``fsv-bench export``: a suite's camera inputs as files, for a method in any language.
 
-    fsv-bench export --suite smoke --out DIR [--cache DIR] [--quiet]
+    fsv-bench export --suite smoke --out DIR [--knowledge exact|lab] [--cache DIR] [--quiet]
 
 Writes ``DIR/suite.json`` (the suite, its episodes, the formats' versions, provenance) and one
 camera-input file per episode, ``DIR/<episode>.npz`` (:mod:`benchmark.exchange.camera_file`): depth,
-calibration, object and hand models, the coarse first-frame initialisation, and no truth. Episodes
+calibration, object and hand models (as ``--knowledge`` says, with the measurements' precision in
+the meta), the coarse first-frame initialisation, and no truth. Episodes
 come from the same cache as ``fsv-bench eval``. The folder is written into a temporary one and moved
 into place when complete. Score the method's estimates with ``fsv-bench score``.
 """
@@ -17,12 +18,16 @@ import pathlib
 import shutil
 
 from benchmark.atomic import staging_folder, swap_folder
+from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.options import add_suite_arguments
 
+    from benchmark.suites.evaluate import add_knowledge_argument
+
     add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz or .h5)", workers=False)
+    add_knowledge_argument(p)
     p.add_argument("--format", choices=FORMATS, default="npz",
                    help="the files' container: npz (NumPy) or hdf5 (for C, C++, Julia, MATLAB, R, JS; <episode>.h5)")
 
@@ -31,13 +36,15 @@ FORMATS = {"npz": ".npz", "hdf5": ".h5"}
 """``--format``: the container of the camera-input and estimates files, by its file suffix."""
 
 
-def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True, container: str = "npz") -> dict:
+def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True, container: str = "npz",
+                 knowledge: str = DEFAULT_KNOWLEDGE) -> dict:
     """Writes the camera inputs of every episode of ``suite`` into ``out`` (as ``<episode>.npz``, or
-    ``.h5`` with ``container="hdf5"``); returns ``suite.json``'s content."""
+    ``.h5`` with ``container="hdf5"``), the hand, box and camera as ``knowledge`` says; returns
+    ``suite.json``'s content."""
     from benchmark.suites.evaluate import cached_episode, default_cache
     from benchmark.world.scenario import episode_name
     from benchmark.exchange import camera_file, estimates_file
-    from benchmark.method import camera_input
+    from benchmark.method.run import camera_input_and_knowledge
     from fsv.provenance import provenance
 
     cache = pathlib.Path(cache or default_cache())
@@ -54,17 +61,18 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
         for sc in scenarios:
             episode, _ = cached_episode(suite, sc, cache)
             name = episode_name(sc)
-            inputs = camera_input(episode)
+            inputs, known = camera_input_and_knowledge(episode, knowledge=knowledge)
             camera_file.save_camera_input(inputs, tmp / f"{name}{suffix}", episode=name, suite=suite,
-                                          rng_seed=sc.rng_entropy("tracker"))
+                                          rng_seed=sc.rng_entropy("tracker"), knowledge=known.given_record())
             episodes.append({"episode": name, "file": f"{name}{suffix}", "frames": inputs.num_frames,
                              "task": sc.task})
         index = {"suite": {"name": suite.name, "version": suite.version, "description": suite.description},
-                 "episodes": episodes,
+                 "knowledge": knowledge, "episodes": episodes,
                  "formats": {"camera": [camera_file.FORMAT, camera_file.VERSION],
                              "estimates": [estimates_file.FORMAT, estimates_file.VERSION]},
                  "estimates": f"write <episode>{suffix} per episode into one folder; fsv-bench score --suite "
-                              f"{suite.name} --estimates FOLDER --out OUT" + (" --format hdf5" if suffix == ".h5" else ""),
+                              f"{suite.name} --estimates FOLDER --out OUT --knowledge {knowledge}"
+                              + (" --format hdf5" if suffix == ".h5" else ""),
                  "provenance": provenance()}
         (tmp / "suite.json").write_text(json.dumps(index, indent=1) + "\n")
         swap_folder(tmp, out)
@@ -80,7 +88,8 @@ def run(args: argparse.Namespace) -> dict:
 
     suite = get_suite(args.suite, args.sensor)
     check_out(args.out)
-    index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format)
+    index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format,
+                         knowledge=args.knowledge)
     print(f"fsv-bench export: suite {suite.name} v{suite.version}, {len(index['episodes'])} camera-input files "
           f"in {args.out}/ (format {index['formats']['camera'][0]} v{index['formats']['camera'][1]})")
     return index

@@ -20,8 +20,11 @@ import time
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.options import add_baseline_argument, add_suite_arguments
 
+    from benchmark.suites.evaluate import add_knowledge_argument
+
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
     add_baseline_argument(p)
+    add_knowledge_argument(p)
     p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--format", choices=("npz", "hdf5"), default="npz",
@@ -50,13 +53,16 @@ def estimate_paths(suite, folder: pathlib.Path, container: str = "npz") -> dict:
 
 
 def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress: bool = True, observer=None,
-                container: str = "npz") -> dict:
+                container: str = "npz", knowledge: str | None = None) -> dict:
     """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``
-    (``observer(episode, estimate, 0)`` sees every estimate, e.g. to draw its pictures)."""
+    (``observer(episode, estimate, 0)`` sees every estimate, e.g. to draw its pictures).
+    ``knowledge`` is what the camera-input files told the method (``fsv-bench export --knowledge``):
+    its camera calibration carries the estimates into the true world frame."""
     from dataclasses import asdict
 
     from benchmark.archive import read_archive
     from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, check_identity, load_estimate
+    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
     from benchmark.fingerprint import world_fingerprint
     from benchmark.scores.episode import score_episode
     from benchmark.suites.evaluate import cached_episode, default_cache, scores_document
@@ -67,7 +73,8 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
                               digests_required=False)[0] for sc, p in paths.items()}  # every header before any work
     world = world_fingerprint()
     for sc, meta in metas.items():
-        check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world)
+        check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world,
+                       knowledge=knowledge or DEFAULT_KNOWLEDGE)
     cache = pathlib.Path(cache or default_cache())
     t0 = time.perf_counter()
     rows = []
@@ -82,8 +89,10 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
         estimate = load_estimate(paths[sc], t=episode.truth.t, finger_names=tuple(episode.hand_model.finger_names))
         if observer is not None:
             observer(episode, estimate, 0)
+        known = given(episode, knowledge or DEFAULT_KNOWLEDGE)[3]
         rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
-                     **score_episode(episode, estimate), "seconds": time.perf_counter() - t1, "rendered": made})
+                     **score_episode(episode, estimate, known.world_from_method), "knowledge": known.record(),
+                     "seconds": time.perf_counter() - t1, "rendered": made})
     first = metas[suite.scenarios[0]]
     return scores_document(suite, rows, suite.gates if gates is None else gates,
                            method=str(first.get("method") or f"estimates from {folder}"),
@@ -91,11 +100,12 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
                            seconds=time.perf_counter() - t0)
 
 
-def with_baselines(scores: dict, suite, *, gates, cache, progress: bool) -> dict:
-    """``scores`` with its ``baselines`` entry: every trivial baseline run on the same (cached) episodes."""
+def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowledge: str | None = None) -> dict:
+    """``scores`` with its ``baselines`` entry: every trivial baseline run on the same (cached)
+    episodes, told what ``knowledge`` says."""
     from benchmark.suites.evaluate import baseline_specs, baselines_block, evaluate_many
 
-    specs = baseline_specs()
+    specs = baseline_specs(knowledge)
     documents = evaluate_many(suite, list(specs.values()), gates=gates, cache=cache, progress=progress)
     return {**scores, "baselines": baselines_block(specs, documents)}
 
@@ -117,15 +127,17 @@ def run(args: argparse.Namespace) -> dict:
         with tempfile.TemporaryDirectory(prefix="fsv-bench-pictures-") as folder:
             writer = EpisodePictures(folder)
             scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
-                                 observer=writer, container=args.format)
+                                 observer=writer, container=args.format, knowledge=args.knowledge)
             if not args.no_baselines:
-                scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet)
+                scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet,
+                                        knowledge=args.knowledge)
             write_outputs(scores, suite, args.out, chosen(writer, args.pictures)(scores, gates or suite.gates))
     else:
         scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
-                             container=args.format)
+                             container=args.format, knowledge=args.knowledge)
         if not args.no_baselines:
-            scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet)
+            scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet,
+                                        knowledge=args.knowledge)
         write_outputs(scores, suite, args.out)
     print_verdict(scores, args.out, "score")
     return scores

@@ -2,29 +2,47 @@
 
 from __future__ import annotations
 
+import numpy as np
+
+from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
 from benchmark.method.spec import MethodSpec
+from fsv.track.tracker import TrackInit
 
 
-def camera_input(episode, init_scale: float = 1.0):
+def camera_input(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOWLEDGE):
     """What the method is given of a rendered episode: no truth beyond the perturbed first frame,
-    and the user's grip calibration (:func:`benchmark.method.grip_file.user_grip`), measured in
-    recordings of their own.
+    the hand, box and camera as ``knowledge`` says (:mod:`benchmark.method.knowledge`), and the
+    user's grip calibration (:func:`benchmark.method.grip_file.user_grip`), measured in recordings
+    of their own.
 
     Args:
         episode: A rendered ``benchmark.Episode``.
         init_scale: Scale of the seeded first-frame perturbation (``benchmark.method.init.INIT_PERTURBATION``).
+        knowledge: "exact" (the simulation's own values, an ablation) or "lab" (measured, with errors).
 
     Returns:
         An ``fsv.method.CameraInput``.
     """
-    from benchmark.method.init import tracker_init
+    return camera_input_and_knowledge(episode, init_scale, knowledge)[0]
+
+
+def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOWLEDGE) -> tuple:
+    """:func:`camera_input` and the :class:`benchmark.method.knowledge.Knowledge` record behind it."""
     from benchmark.method.grip_file import user_grip
+    from benchmark.method.init import tracker_init
+    from benchmark.method.knowledge import given
     from fsv.method import CameraInput
 
-    init = tracker_init(episode.truth, episode.scenario, episode.hand_model, init_scale)
-    return CameraInput(depth=episode.depth, calib=episode.calib, object_model=episode.object_model,
-                       hand_model=episode.hand_model, init=init, gravity=episode.truth.gravity,
-                       grip=user_grip(episode.scenario.user))
+    hand, obj, calib, known = given(episode, knowledge)
+    init = tracker_init(episode.truth, episode.scenario, hand, init_scale)
+    if known.name != "exact":  # the first frame in the method's world (its calibration's)
+        M = np.linalg.inv(known.world_from_method)
+        R, t = M[:3, :3], M[:3, 3]
+        init = TrackInit(box_pos=R @ init.box_pos + t, box_rot=R @ init.box_rot, palm_pos=R @ init.palm_pos + t,
+                         palm_rot=R @ init.palm_rot, joints=init.joints)
+    inputs = CameraInput(depth=episode.depth, calib=calib, object_model=obj, hand_model=hand, init=init,
+                         gravity=episode.truth.gravity, grip=user_grip(episode.scenario.user))
+    return inputs, known
 
 
 def oracle_inputs(episode, oracle: tuple) -> dict:
@@ -56,7 +74,7 @@ def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None, progres
         The ``fsv.method.Estimate``; the tracker's searches draw from ``episode.scenario.rng("tracker")``.
     """
     method = spec.build()
-    inputs = camera_input(episode) if inputs is None else inputs
+    inputs = camera_input(episode, knowledge=spec.knowledge) if inputs is None else inputs
     oracle = oracle_inputs(episode, spec.oracle)
     if tracking is not None:
         return method.after_tracking(inputs, tracking, **oracle)
@@ -77,6 +95,8 @@ def method_label(spec: MethodSpec) -> str:
     """One line naming the method and every stage (``oracle`` for inputs taken from the truth)."""
     method = spec.build()
     labels = dict(getattr(method, "labels", None) or {})
+    if spec.knowledge != DEFAULT_KNOWLEDGE:
+        labels["knowledge"] = spec.knowledge
     if spec.method:
         head = f"{spec.method}"
         return head + (f" ({'; '.join(f'{k}: {v}' for k, v in labels.items())})" if labels else "")

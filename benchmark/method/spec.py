@@ -5,6 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import lru_cache
 
+from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, check_knowledge
+
 ORACLE_STAGES = ("contacts", "kinematics")
 """The method's inputs the truth may replace (a labelled *oracle* ablation)."""
 
@@ -29,6 +31,8 @@ class MethodSpec:
         internal_model: A model file of ``fsv-bench train`` for the reference internal-force stage
             (default: the shipped model).
         oracle: Inputs replaced by the truth, a subset of :data:`ORACLE_STAGES`.
+        knowledge: What the method is told of the hand, the box and the camera
+            (:data:`benchmark.method.knowledge.KNOWLEDGE`: "exact" or "lab").
     """
 
     method: str | None = None
@@ -38,8 +42,10 @@ class MethodSpec:
     internal: str | None = None
     internal_model: str | None = None
     oracle: tuple = field(default_factory=tuple)
+    knowledge: str = DEFAULT_KNOWLEDGE
 
     def __post_init__(self):
+        check_knowledge(self.knowledge)
         object.__setattr__(self, "oracle", tuple(sorted(set(self.oracle))))
         bad = [o for o in self.oracle if o not in ORACLE_STAGES]
         if bad:
@@ -58,9 +64,10 @@ class MethodSpec:
         from fsv.method.baselines import BASELINE_STAGE
 
         if not self.method:
-            return ("tracker", self.tracker)
+            return ("tracker", self.tracker, self.knowledge)
         if self.method in BASELINE_STAGE:
-            return ("tracker", None) if BASELINE_STAGE[self.method] != "tracker" else ("baseline", self.method)
+            return (("tracker", None, self.knowledge) if BASELINE_STAGE[self.method] != "tracker"
+                    else ("baseline", self.method, self.knowledge))
         return None
 
     @property

@@ -29,22 +29,25 @@ METRICS = ("box_pos_err_mm", "box_rot_err_deg", "contact_err_mm_mean", "contact_
            "learned_rel_err_pct_paper")
 """Names of the per-episode metrics, in report order."""
 
-def score_episode(episode, estimate) -> dict:
+def score_episode(episode, estimate, world_from_method=None) -> dict:
     """Every metric of one episode.
 
     Args:
         episode: A rendered ``benchmark.Episode`` (its truth is the reference).
         estimate: The method's ``fsv.method.Estimate`` on the episode's camera inputs (learned
             metrics are NaN when it has no final forces).
+        world_from_method: Carries the method's world frame into the true one, (4, 4), when the
+            method was told the camera with an error (:mod:`benchmark.scores.frames`); None: the same.
 
     Returns:
         ``{metric: float}`` for every name in :data:`METRICS`.
     """
     from benchmark.scores.forces import score_forces
+    from benchmark.scores.frames import rot_in_true_world, tracking_in_true_world
     from benchmark.scores.tracking import score_tracking
 
     tr = episode.truth
-    t = score_tracking(estimate.tracking, tr, estimate.contacts)
+    t = score_tracking(tracking_in_true_world(estimate.tracking, world_from_method), tr, estimate.contacts)
     out = {
         "box_pos_err_mm": t["box_pos_err_mm_median"], "box_rot_err_deg": t["box_rot_err_deg_median"],
         "contact_err_mm_mean": t["contact_err_mm_mean"], "contact_err_mm_std": t["contact_err_mm_std"],
@@ -52,7 +55,7 @@ def score_episode(episode, estimate) -> dict:
     }
     out.update(kinematics_errors(estimate.kinematics, tr))
     if estimate.nominal is not None:
-        f = score_forces(estimate.nominal, tr, estimate.kinematics.rot)
+        f = score_forces(estimate.nominal, tr, rot_in_true_world(estimate.kinematics.rot, world_from_method))
         out.update(net_force_err_n_rms=f["net_force_err_n_rms"], net_force_err_n_rms_instant=f["net_force_err_n_rms_instant"],
                    net_torque_err_nm_rms=f["net_torque_err_nm_rms"], least_violation_frac=f["fallback_frac"])
     else:

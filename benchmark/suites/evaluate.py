@@ -87,27 +87,31 @@ def _episode_rows(job) -> list:
 
     Methods whose stages differ only after the tracker share one tracking run of the episode.
     """
-    from benchmark.method import camera_input, run_method
+    from benchmark.method import run_method
+    from benchmark.method.run import camera_input_and_knowledge
     from benchmark.scores.episode import score_episode
 
     suite, sc, cache, specs, init_scale, observer = job
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
-    inputs = camera_input(episode, init_scale)
+    given = {}  # knowledge -> (camera inputs, what the method was told)
     rows, tracked = [], {}
     for spec in specs:
         t1 = time.perf_counter()
+        if spec.knowledge not in given:
+            given[spec.knowledge] = camera_input_and_knowledge(episode, init_scale, spec.knowledge)
+        inputs, known = given[spec.knowledge]
         key = spec.tracking_key
         shared = None if key is None else tracked.get(key)
         estimate = run_method(spec, episode, inputs=inputs, tracking=shared)
         if key is not None:
             tracked.setdefault(key, estimate.tracking)
-        metrics = score_episode(episode, estimate)
+        metrics = score_episode(episode, estimate, known.world_from_method)
         if observer is not None:
             observer(episode, estimate, len(rows))
         seconds = time.perf_counter() - (t0 if not rows else t1)
         rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc), **metrics,
-                     "seconds": seconds, "rendered": made and not rows})
+                     "knowledge": known.record(), "seconds": seconds, "rendered": made and not rows})
     return rows
 
 
@@ -171,12 +175,14 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
             for m, spec in enumerate(specs)]
 
 
-def baseline_specs() -> dict:
-    """``{name: MethodSpec}`` of every stage's trivial baseline (:mod:`fsv.method.baselines`)."""
+def baseline_specs(knowledge: str | None = None) -> dict:
+    """``{name: MethodSpec}`` of every stage's trivial baseline (:mod:`fsv.method.baselines`), told
+    what ``knowledge`` says (default: the default)."""
     from benchmark.method import MethodSpec
     from fsv.method.baselines import BASELINES
 
-    return {name: MethodSpec(method=name) for name in BASELINES}
+    extra = {} if knowledge is None else {"knowledge": knowledge}
+    return {name: MethodSpec(method=name, **extra) for name in BASELINES}
 
 
 def baselines_block(names, documents) -> dict:
@@ -332,15 +338,28 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, intern
     if oracle:
         g.add_argument("--oracle", default="", metavar="LIST",
                        help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
+    add_knowledge_argument(g)
+
+
+def add_knowledge_argument(p) -> None:
+    """``--knowledge exact|lab``: what the method is told of the hand, the box and the camera."""
+    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE
+
+    p.add_argument("--knowledge", default=DEFAULT_KNOWLEDGE, metavar="|".join(KNOWLEDGE),
+                   help="what the method is told of the hand, the box and the camera: exact (the simulation's "
+                        "own values, an ablation) or lab (measured with a ruler, a scale, a tilt test and a "
+                        f"camera calibration, with their errors; default {DEFAULT_KNOWLEDGE})")
 
 
 def spec_from_args(args: argparse.Namespace):
     """The :class:`benchmark.method.MethodSpec` of the command line, loaded and checked (raises ValueError)."""
     from benchmark.method import MethodSpec
+    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
 
     spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=args.differentiator,
                       forces=args.forces, internal=args.internal, internal_model=getattr(args, "internal_model", None),
-                      oracle=tuple(o for o in getattr(args, "oracle", "").split(",") if o))
+                      oracle=tuple(o for o in getattr(args, "oracle", "").split(",") if o),
+                      knowledge=getattr(args, "knowledge", DEFAULT_KNOWLEDGE))
     spec.check()
     return spec
 
@@ -361,7 +380,7 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
         from benchmark.parallel import check_ray_address
 
         check_ray_address(args.ray_address)
-    extra = {} if args.no_baselines else baseline_specs()
+    extra = {} if args.no_baselines else baseline_specs(spec.knowledge)
     documents = evaluate_many(suite, [spec, *extra.values()], gates=gates, cache=args.cache, progress=not args.quiet,
                               workers=args.workers, ray_address=args.ray_address,
                               observer=None if observer is None else _first_method_only(observer))

@@ -3,8 +3,9 @@
     fsv-bench leaderboard --suite standard --out DIR [--workers N] [--cache DIR] [--quiet]
 
 The variants (:data:`VARIANTS`) replace one stage of the reference (another differentiator, or a
-stage's trivial baseline) or feed it truth (oracle contacts, oracle kinematics: ablations that show
-what each stage costs). They share every episode's rendering and tracking. The table gives each
+stage's trivial baseline), feed it truth (oracle contacts, oracle kinematics: ablations that show
+what each stage costs) or tell it the other knowledge of the hand, the box and the camera
+(:mod:`benchmark.method.knowledge`). They share every episode's rendering and tracking. The table gives each
 method's skill against the best baseline per metric. ``DIR/<variant>/`` gets the files of ``fsv-bench eval``
 (``scores.json``, ``report.md``, ``junit.xml``); ``DIR/leaderboard.md`` the table with intervals.
 The exit status is 0 when the reference passes the suite's gates, 1 when not.
@@ -18,9 +19,11 @@ import shutil
 
 from benchmark.atomic import staging_folder, swap_folder
 from benchmark.method import MethodSpec
+from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE
 from fsv.method.baselines import BASELINE_STAGE, BASELINES
 
 BASELINE_NAMES = tuple(BASELINES)
+OTHER_KNOWLEDGE = next(k for k in KNOWLEDGE if k != DEFAULT_KNOWLEDGE)
 
 VARIANTS = {
     "reference": MethodSpec(),
@@ -29,6 +32,7 @@ VARIANTS = {
     "oracle-contacts": MethodSpec(oracle=("contacts",)),
     "oracle-kinematics": MethodSpec(oracle=("kinematics",)),
     "oracle-contacts-kinematics": MethodSpec(oracle=("contacts", "kinematics")),
+    f"{OTHER_KNOWLEDGE}-knowledge": MethodSpec(knowledge=OTHER_KNOWLEDGE),
     **{f"baseline-{name}": MethodSpec(method=name) for name in BASELINE_NAMES},
 }
 """The leaderboard's rows: the reference (algebraic differentiation), its variants, and the trivial

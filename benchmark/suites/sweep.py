@@ -28,8 +28,10 @@ AXES = {
     "fps": ("fps", float, "frame rate [Hz]"),
     "init": (None, float, "first-frame perturbation scale"),
     "sensor": ("sensor", str, "depth sensor preset"),
+    "knowledge": (None, str, "what the method is told (benchmark.method.knowledge)"),
 }
-"""Axis name -> (Scenario field or None for the method's initialisation, type, label)."""
+"""Axis name -> (Scenario field, or None for what the method is given: its initialisation or its
+knowledge, type, label)."""
 
 PLOTTED = ("box_pos_err_mm", "contact_err_mm_std", "acc_err_rms", "net_force_err_n_rms", "least_violation_frac",
            "learned_rel_err_pct")
@@ -59,11 +61,17 @@ def parse_values(axis: str, text: str) -> list:
             raise ValueError(f"--values {text!r}: {item!r} is not a{'n integer' if kind is int else ' number'}") from None
     if len(set(values)) != len(values) or len(values) < 2:
         raise ValueError(f"--values {text!r}: need at least two distinct values")
+    if axis == "knowledge":
+        from benchmark.method.knowledge import check_knowledge
+
+        for v in values:
+            check_knowledge(v)
     return values
 
 
 def swept_suite(suite, axis: str, value):
-    """The suite with every scenario moved to ``value`` along ``axis`` (itself for the ``init`` axis)."""
+    """The suite with every scenario moved to ``value`` along ``axis`` (itself for the ``init`` and
+    ``knowledge`` axes, which change what the method is given)."""
     from benchmark.suites import Suite
     from benchmark.world.assets import validate
 
@@ -127,7 +135,8 @@ def run(args: argparse.Namespace) -> dict:
     results = []
     for value, s in zip(values, suites):
         scale = value if args.axis == "init" else 1.0
-        results.append(evaluate(s, spec=spec, cache=args.cache, progress=not args.quiet, workers=args.workers,
+        told = dataclasses.replace(spec, knowledge=value) if args.axis == "knowledge" else spec
+        results.append(evaluate(s, spec=told, cache=args.cache, progress=not args.quiet, workers=args.workers,
                                 init_scale=scale))
         print(f"  {args.axis} = {value}: done ({results[-1]['seconds']:.0f} s)")
     doc = {"suite": results[0]["suite"], "axis": args.axis, "label": AXES[args.axis][2], "values": values,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from benchmark.commands.pictures.fig5 import plot_fig5
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 from benchmark.scores.forces import PAPER_SENSITIVITY_N, score_forces, sensitivity
+from benchmark.scores.frames import rot_in_true_world
 from benchmark.world.contact_error import PAPER_CONTACT_ERROR_MM, contacts_from_truth, vision_like_contacts
 
 CONTACT_CHOICES = ("vision", "oracle")
@@ -49,7 +50,8 @@ def run(record: Run, options) -> StageResult:
     if sol is None:
         return StageResult(blocks=(("forces", {**labels, "program": None}),),
                            lines=(f"forces: the method has no force stage ({est.labels['forces']})",))
-    block = {**labels, "program": est.labels["forces"], **score_forces(sol, ep.truth, kin.rot)}
+    rot = rot_in_true_world(kin.rot, record.knowledge.world_from_method if record.knowledge else None)
+    block = {**labels, "program": est.labels["forces"], **score_forces(sol, ep.truth, rot)}
     truth_contacts = contacts_from_truth(ep.truth)
     vision = vision_like_contacts(truth_contacts, ep.object_model, ep.scenario.rng("contact-error"))
     block["sensitivity"] = {
@@ -81,7 +83,7 @@ def run(record: Run, options) -> StageResult:
            f"{block['sensitivity_tracker']['normal_diff_n_std']:.3f} N" if "sensitivity_tracker" in block else "")
         + f"; plot {plot.name}"
     )
-    picture = Picture("Fig. 5", plot_fig5, (sol, ep.truth, kin.rot, plot), {
+    picture = Picture("Fig. 5", plot_fig5, (sol, ep.truth, rot, plot), {
         "learned": est.forces,
         "title": f"forces — kinematics: {labels['kinematics']}; contacts: {labels['contacts']} [{tag}]"})
     return StageResult(blocks=(("forces", block),), lines=(line,), pictures=(picture,))

@@ -11,7 +11,9 @@ import numpy as np
 from benchmark.commands.pictures.overlay import plot_overlay
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 from benchmark.errors import ScenarioError
-from benchmark.method import camera_input, run_method
+from benchmark.method import run_method
+from benchmark.method.run import camera_input_and_knowledge
+from benchmark.scores.frames import tracking_in_true_world
 from benchmark.method.init import INIT_PERTURBATION
 from benchmark.scores.tracking import gate_report, score_tracking
 from benchmark.scores.verdict import gate_rows
@@ -35,12 +37,13 @@ def run(record: Run, options) -> StageResult:
     """Runs the method on the rendered episode; scores its tracking against the truth."""
     check_options(options)
     ep, scale = record.episode, float(options["init_perturbation"])
-    estimate = run_method(record.method_spec, ep, inputs=camera_input(ep, scale), progress=not record.quiet)
+    inputs, known = camera_input_and_knowledge(ep, scale, record.method_spec.knowledge)
+    estimate = run_method(record.method_spec, ep, inputs=inputs, progress=not record.quiet)
     tracking = estimate.tracking
     elapsed = estimate.timing_s["track"]
     stages = dict(getattr(tracking, "timing_s", None) or {})
     first = float(getattr(tracking, "first_frame_s", 0.0))
-    scores = score_tracking(tracking, ep.truth)
+    scores = score_tracking(tracking_in_true_world(tracking, known.world_from_method), ep.truth)
     overlay = record.out / "tracking_overlay.png"
     T = len(ep.truth.t)
     block = {
@@ -67,9 +70,12 @@ def run(record: Run, options) -> StageResult:
         + ("all gates hold" if not failed else f"gates NOT met: {', '.join(failed)}")
         + f"; overlay {overlay.name}"
     )
+    # drawn as the method sees it: its calibration, hand and box (the truth in gold, through its calibration)
     picture = Picture("tracking overlay", plot_overlay,
-                      (ep.depth, ep.calib, tracking, ep.object_model, ep.hand_model, overlay), {"truth": ep.truth})
-    return StageResult(blocks=(("tracking", block),), lines=(line,), pictures=(picture,), estimate=estimate)
+                      (ep.depth, inputs.calib, tracking, inputs.object_model, inputs.hand_model, overlay),
+                      {"truth": ep.truth})
+    return StageResult(blocks=(("knowledge", known.record()), ("tracking", block)), lines=(known.line(), line),
+                       pictures=(picture,), estimate=estimate, knowledge=known)
 
 
 STAGE = Stage(name="track", run=run, options=("init_perturbation",), add_arguments=add_arguments)

@@ -25,7 +25,8 @@ def run(record: Run, options) -> StageResult:
     """The episode's metrics against the gates; the ``verdict`` block and line."""
     gates_file = options["gates"]
     gates = load_gates(gates_file) if gates_file else get_suite("smoke").gates
-    metrics = score_episode(record.episode, record.estimate)
+    metrics = score_episode(record.episode, record.estimate,
+                            record.knowledge.world_from_method if record.knowledge else None)
     results = check_gates(gates, aggregate_all([metrics], METRICS))
     failed = [r.name for r in results if not r.passed]
     block = {
