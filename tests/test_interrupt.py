@@ -59,3 +59,46 @@ def test_ctrl_c_at_random_times_gives_130_and_keeps_the_previous_output(tmp_path
         leftovers = sorted(p.name for p in tmp_path.iterdir() if p.name != "run")
         assert not leftovers, leftovers
     assert interrupted >= 2  # most draws land while it runs
+
+
+def _group_alive(pgid: int) -> bool:
+    try:
+        os.killpg(pgid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+@pytest.mark.parametrize("argv, delay_s", [
+    (["eval", "--suite", "smoke", "--workers", "2", "--quiet", "--no-baselines"], 4.0),  # rendering and tracking in 2 workers
+    (["generate", "--tasks", "lift", "--users", "0", "--grasps", "0,1", "--masses", "0", "--seeds", "0",
+      "--workers", "2", "--no-progress"], 4.0),
+])
+def test_ctrl_c_ends_a_sub_command_with_130_and_no_worker_outlives_it(tmp_path, argv, delay_s):
+    """A sub-command with two worker processes: status 130 within the limit, the output folder as it
+    was, no temporary folder left, and no process of its group alive a moment later."""
+    out = tmp_path / "out"
+    if argv[0] == "eval":  # a previous output of eval's, to be kept
+        out.mkdir()
+        (out / OUTPUT_MARKER).write_text("")
+        (out / "note.txt").write_text("the previous output")
+    cmd = [sys.executable, "-m", "benchmark.commands.entry", *argv, "--out", str(out)]
+    if argv[0] == "eval":
+        cmd += ["--cache", str(tmp_path / "cache")]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+                            env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    time.sleep(delay_s)
+    sent = time.perf_counter()
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    took = time.perf_counter() - sent
+    assert proc.returncode == 130, (proc.returncode, err.decode()[-2000:])
+    assert took < LIMIT_S + 1.0, took  # the pool's workers end too
+    deadline = time.perf_counter() + 5.0
+    while _group_alive(proc.pid) and time.perf_counter() < deadline:
+        time.sleep(0.1)
+    assert not _group_alive(proc.pid), "a worker outlived the command"
+    if argv[0] == "eval":
+        assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARKER, "note.txt"]
+        leftovers = sorted(p.name for p in tmp_path.iterdir() if p.name not in ("out", "cache"))
+        assert not leftovers, leftovers
