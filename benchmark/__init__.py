@@ -6,7 +6,6 @@ not load MuJoCo and the renderer.
 """
 
 import importlib
-import os
 
 
 _EXPORTS = {

@@ -18,7 +18,8 @@ class EpisodeFileError(BenchmarkError):
 
 
 class RenderError(BenchmarkError):
-    """No depth renderer could be created (e.g. EGL or Mesa missing); the message says how to fix it."""
+    """The depth could not be rendered; the message says why and how to fix it. The CPU rasteriser
+    needs no system library and does not raise it; it stays in the API for code that catches it."""
 
 
 class SimulationError(BenchmarkError):

@@ -10,7 +10,6 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from benchmark.errors import RenderError  # noqa: E402
 
 # The module: the attribute `benchmark.camera.render` is the function render() of the public API.
 R = importlib.import_module("benchmark.camera.render")
