@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.camera.camera import Camera, load_camera
+from benchmark.camera.camera import Camera
+from benchmark.camera.views import camera_of
 from benchmark.camera.depth import DepthRenderer
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
@@ -70,7 +71,8 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
         sensor: The sensor model; default the scenario's preset with its noise,
             ``sensor_preset(scenario.sensor, scenario.noise_m)`` (docs/scenarios.md). Its
             ``noise_m`` must equal the scenario's.
-        camera: The camera; default ``sim_assets/camera.yaml``.
+        camera: The camera; default the scenario's view's (:func:`benchmark.camera.views.camera_of`:
+            ``sim_assets/camera.yaml``'s for view 0).
 
     Returns:
         The episode with ``depth`` (T frames at the scenario's fps, T = len(truth.t)),
@@ -86,7 +88,7 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
             f"sensor.noise_m = {sensor.noise_m} differs from the scenario's noise_m = {sc.noise_m}; "
             "the scenario sets the noise"
         )
-    camera = load_camera() if camera is None else camera
+    camera = camera_of(sc.view) if camera is None else camera
     world = build_world(sc)
     truth = episode.truth
 

@@ -103,6 +103,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
     p.add_argument("--seed", type=int, default=0, help="random seed")
+    p.add_argument("--view", type=int, default=0,
+                   help="the camera's pose: 0 the paper's set-up (sim_assets/camera.yaml), N >= 1 drawn around it with seed N")
     p.add_argument("--duration", type=float, default=None, help="episode length in seconds, up to 120 (default: the task's)")
     p.add_argument("--out", type=pathlib.Path, default=None,
                    help="output directory (default: runs/<task>-u<user>-g<grasp>-m<mass>-s<seed>)")
@@ -116,7 +118,7 @@ def build_parser() -> argparse.ArgumentParser:
 def scenario_from_args(args: argparse.Namespace) -> Scenario:
     """The scenario of the command line, fully validated (raises ScenarioError)."""
     sc = Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
-                  seed=args.seed, duration_s=args.duration, sensor=args.sensor)
+                  seed=args.seed, duration_s=args.duration, sensor=args.sensor, view=args.view)
     validate(sc)
     return sc
 

@@ -34,6 +34,8 @@ class Scenario:
         fps: Camera frame rate in [Hz].
         sensor: Name of a depth-sensor preset (:data:`SENSORS`: "ds325", the
             paper's camera, "kinect-v1" or "ideal"); ``noise_m`` is white noise added to its own.
+        view: The camera's pose: 0 is ``sim_assets/camera.yaml``'s (the paper's set-up); N >= 1
+            is drawn around it with seed N (``benchmark.camera.views``), the same for every scenario.
     """
 
     task: str = "lift"
@@ -45,9 +47,10 @@ class Scenario:
     duration_s: float | None = None
     fps: float = 30.0
     sensor: str = "ds325"
+    view: int = 0
 
     def __post_init__(self):
-        for name in ("user", "grasp", "mass", "seed"):
+        for name in ("user", "grasp", "mass", "seed", "view"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
                 raise ScenarioError(f"{name} must be a non-negative integer, got {v!r}")
@@ -74,6 +77,7 @@ class Scenario:
 
 
 def episode_name(scenario: Scenario) -> str:
-    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>``: how runs, cached episodes, score rows and dataset
-    files name a scenario."""
-    return f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
+    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0): how
+    runs, cached episodes, score rows and dataset files name a scenario."""
+    name = f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
+    return name + (f"-v{scenario.view}" if scenario.view else "")

@@ -7,6 +7,7 @@ import numpy as np
 from benchmark.camera.episode_file import save_episode
 from benchmark.camera.depth import RASTERISER
 from benchmark.camera.render import render
+from benchmark.camera.views import view_of
 from benchmark.camera.scene import LABEL_BOX
 from benchmark.commands.pictures.depth_preview import preview_paths, write_preview
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
@@ -31,6 +32,7 @@ def run(record: Run, options) -> StageResult:
         "fps": depth.fps,
         "noise_m": record.scenario.noise_m,
         "rasteriser": RASTERISER,
+        "view": view_of(record.scenario.view).record(),
         "valid_fraction": float(np.mean(depth.depth_m > 0)),
         "box_pixels_median": float(np.median(np.sum(episode.labels == LABEL_BOX, axis=(1, 2)))),
         "preview": [p.name for p in paths],
