@@ -26,7 +26,15 @@ def main() -> int:
         code = interrupt.EXIT_INTERRUPTED
     if interrupt.interrupted():  # every file is complete or removed: end now, before the interpreter's
         interrupt.exit_now(code)  # teardown, where a library could turn the interrupt into another status
+    if code == BAD_INPUT:  # refused before any work (no pool, cluster or file of ours open): end now too,
+        interrupt.exit_now(code)  # as a native library's thread torn down at exit can abort (status 134)
     return code
+
+
+BAD_INPUT = 2
+"""The status of input refused before any work: the command ends at once, skipping the interpreter's
+teardown (``table2`` on a damaged dataset once aborted there with "terminate called without an
+active exception", status 134, after printing the right line)."""
 
 
 if __name__ == "__main__":
