@@ -2,8 +2,9 @@
 
 :func:`install` makes SIGINT raise KeyboardInterrupt as usual (the command's handlers clean up and
 return 130) and also starts a watchdog: if the process is still alive :data:`GRACE_S` later (the
-interrupt was swallowed by a library that catches ``BaseException``, or the main thread is inside a
-long compiled kernel that cannot be interrupted), the watchdog removes the command's staging folders
+interrupt was swallowed by a library that catches ``BaseException``, the main thread is inside a
+long compiled kernel that cannot be interrupted, or it was compiling one, where no exception may be
+raised: :func:`_handler` then leaves the exit to the watchdog), the watchdog removes the command's staging folders
 (:func:`register`) and ends the process with status 130. An output folder being swapped into place
 (:func:`critical`) is finished first, so the previous output is either kept or wholly replaced.
 """
@@ -55,11 +56,29 @@ def _force_exit() -> None:
             os._exit(EXIT_INTERRUPTED)
 
 
+_COMPILERS = (f"{os.sep}llvmlite{os.sep}",)
+"""Packages in whose frames an exception must not be raised: LLVM calls back into Python while it
+compiles (numba's kernels, on a first run), and an exception raised there is ignored by ctypes and
+leaves LLVM's state broken (a segmentation fault followed). Only llvmlite's frames: numba's own
+Python code (type inference, dispatch) takes a KeyboardInterrupt like any other."""
+
+
+def _compiling(frame) -> bool:
+    """True when the interrupted frame, or one it was called from, belongs to llvmlite (LLVM is compiling)."""
+    while frame is not None:
+        if any(part in frame.f_code.co_filename for part in _COMPILERS):
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _handler(signum, frame):
     if _fired.is_set():  # a second Ctrl-C: the watchdog already ends the process within GRACE_S
         return
     _fired.set()
     threading.Thread(target=_force_exit, name="interrupt-watchdog", daemon=True).start()
+    if _compiling(frame):  # the watchdog ends the process within GRACE_S, staging folders removed
+        return
     raise KeyboardInterrupt
 
 
