@@ -116,7 +116,7 @@ class Knowledge:
         """What the method may read of it (camera-input files): the knowledge, each given quantity
         and the standard deviation of its measurement (0 where it was given exactly); never the
         truth or the error."""
-        on = {src: self.name in ("lab", f"lab-{src}") for src in SOURCES}
+        on = _sources(self.name)
         sd = {"hand_length_m": RULER_SD_M * on["hand"], "hand_breadth_m": RULER_SD_M * on["hand"],
               "mass_kg": SCALE_SD_KG * on["box"], "tilt_angle_rad": TILT_SD_RAD * on["box"],
               "focal_rel": FOCAL_SD_REL * on["camera"], "principal_px": PRINCIPAL_SD_PX * on["camera"],
@@ -137,6 +137,11 @@ class Knowledge:
                 f"({r['friction']['error']:+.3f}), focal {r['fx_px']['error']:+.2f}/{r['fy_px']['error']:+.2f} px, "
                 f"principal point {r['cx_px']['error']:+.2f}/{r['cy_px']['error']:+.2f} px, camera "
                 f"{r['camera_rot_err_deg']:.2f} deg and {1e3 * r['camera_pos_err_m']:.1f} mm off")
+
+
+def _sources(name: str) -> dict:
+    """Which sources (:data:`SOURCES`) a knowledge ``name`` takes with a lab's errors."""
+    return {src: name in ("lab", f"lab-{src}") for src in SOURCES}
 
 
 def check_knowledge(name: str) -> str:
@@ -184,7 +189,7 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
         return episode.hand_model, om, calib, knowledge
     rng = episode.scenario.rng("knowledge")
     # every draw, in a fixed order (a source left exact still draws: the others' errors stay the same)
-    on = {src: name in ("lab", f"lab-{src}") for src in SOURCES}
+    on = _sources(name)
     length_m = length + RULER_SD_M * rng.standard_normal() * on["hand"]
     breadth_m = breadth + RULER_SD_M * rng.standard_normal() * on["hand"]
     mass = om.mass_kg + SCALE_SD_KG * rng.standard_normal() * on["box"]
