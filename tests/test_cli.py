@@ -20,8 +20,11 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)
     assert verdict["method"]["tracker"] == "reference tracker" and f"verdict: {verdict['verdict'].upper()}" in \
         text.replace("verdict: pass", "verdict: PASS")
+    person, grasp = summary["scenario"].pop("person"), summary["scenario"].pop("grasp_spec")
     assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "sensor": "ds325", "noise_m": 0.01,
                                    "seed": 2, "frames": 46, "fps": 30.0}
+    assert person["name"] == "u0-average" and not person["drawn"] and person["anatomy"]["hand_length_m"] == 0.19
+    assert grasp["name"] == "g0-four-centred" and grasp["family"] == "width-four"
     assert summary["world"]["ne_force_residual_n"] < 0.01
     assert summary["world"]["lift_height_m"] > 0.05
     assert set(summary["timing_s"]) >= {"simulate", "total"}
@@ -53,7 +56,7 @@ def test_a_broken_tracker_fails_the_verdict_with_exit_1_naming_the_gates(tmp_pat
     (["--kinematics", "central", "--differentiator", "gaussian"], "--kinematics central and --differentiator gaussian"),
     (["--internal-model", "missing.npz"], "--internal-model missing.npz: no internal-force model"),
     (["--task", "juggle"], "'juggle'; accepted: lift"),
-    (["--user", "9"], "user 9 does not exist; accepted: 0 ("),
+    (["--user", "-9"], "user must be a non-negative integer, got -9"),
     (["--grasp", "-1"], "grasp must be a non-negative integer, got -1"),
     (["--mass", "42"], "mass 42 does not exist; accepted: 0 (light)"),
     (["--noise", "-0.5"], "got -0.5"),

@@ -367,7 +367,7 @@ def test_a_bad_ray_address_fails_within_seconds(tmp_path):
 
 @pytest.mark.parametrize("argv, needle", [
     (["--tasks", "nope"], "unknown task 'nope'; accepted: lift"),
-    (["--users", "9"], "user 9 does not exist; accepted: 0"),
+    (["--users", "x"], "expected integers like '0,2,5-7', got 'x'"),
     (["--duration", "0.1"], "duration 0.1 s is too short for task 'lift'; accepted: >= 1.0 s"),
 ])
 def test_generate_refuses_a_bad_grid_before_any_work_and_writes_nothing(tmp_path, capsys, argv, needle):

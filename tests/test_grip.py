@@ -136,10 +136,10 @@ def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
     assert len(stored) == len(users()) * len(grasps())
     for u in range(len(users())):
         for g in range(len(grasps())):
-            problem = _PlanProblem(u, g)
+            problem = _PlanProblem(u, grasps()[g])
             entry = stored[f"{problem.user_name}/{problem.grasp_name}"]
             assert entry["fingerprint"] == problem.fingerprint, f"stale plan for user {u}, grasp {g}: run python -m benchmark.world.grasp_plan --write-plans"
-    problem = _PlanProblem(0, 0)
+    problem = _PlanProblem(0, grasps()[0])
     x = np.array(stored[f"{problem.user_name}/{problem.grasp_name}"]["x"])
     # kernels move the solve by <= 3e-6 rad (measured: Haswell vs Sandybridge on the 20 plans)
     np.testing.assert_allclose(problem.solve(), x, atol=1e-5)

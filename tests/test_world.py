@@ -58,8 +58,6 @@ def test_set_frame_poses_box_and_hand_for_a_frame_of_the_truth(lift_episode):
 
 @pytest.mark.parametrize("kw, needle", [
     (dict(task="juggle"), "unknown task 'juggle'; accepted: lift, place"),
-    (dict(user=5), "user 5 does not exist; accepted: 0 (u0-average)"),
-    (dict(grasp=9), "grasp 9 does not exist"),
     (dict(mass=6), "mass 6 does not exist; accepted: 0 (light), 1 (medium)"),
     (dict(task="rotate", duration_s=2.0), "duration 2.0 s is too short for task 'rotate'; accepted: >= 2.5 s"),
 ])

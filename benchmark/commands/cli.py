@@ -99,7 +99,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
     p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres, 0 to 0.1")
     p.add_argument("--sensor", default="ds325", help="depth sensor preset: ds325 (the paper's camera), kinect-v1, ideal")
-    p.add_argument("--user", type=int, default=0, help="index into sim_assets/users.yaml")
+    p.add_argument("--user", type=int, default=0, help="the person: 0-4 the named cohort (sim_assets/users.yaml), N >= 5 drawn with seed N (anatomy and grip style)")
     p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
     p.add_argument("--seed", type=int, default=0, help="random seed")

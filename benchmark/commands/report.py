@@ -14,14 +14,19 @@ import pathlib
 import numpy as np
 
 from benchmark.atomic import write_text
+from benchmark.world.grasp_plan import grasp_spec
+from benchmark.world.people import person_record
 from benchmark.world.episode import Episode
 
 
 def scenario_block(episode: Episode) -> dict:
-    """The ``scenario`` block: task, user, grasp, mass, sensor, noise_m, seed, frames, fps."""
+    """The ``scenario`` block: task, user, grasp, mass, sensor, noise_m, seed, frames, fps, and the
+    ``person`` (``benchmark.world.people.person_record``: name, anatomy, grip style) and the
+    ``grasp_spec`` (family and spots, ``benchmark.world.grasp_plan.grasp_spec``)."""
     sc = episode.scenario
     return {"task": sc.task, "user": sc.user, "grasp": sc.grasp, "mass": sc.mass, "sensor": sc.sensor,
-            "noise_m": sc.noise_m, "seed": sc.seed, "frames": int(len(episode.truth.t)), "fps": sc.fps}
+            "noise_m": sc.noise_m, "seed": sc.seed, "frames": int(len(episode.truth.t)), "fps": sc.fps,
+            "person": person_record(sc.user), "grasp_spec": grasp_spec(sc)}
 
 
 def max_slip_m(episode: Episode) -> float:

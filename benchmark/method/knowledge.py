@@ -37,11 +37,6 @@ KNOWLEDGE = ("exact", "lab") + tuple(f"lab-{s}" for s in SOURCES)
 DEFAULT_KNOWLEDGE = "exact"
 """What the method is told unless the command says otherwise."""
 
-TEMPLATE_HAND_LENGTH_M = 0.190
-"""Hand length (wrist crease to the middle fingertip) of the template at scale 1 (sim_assets/hand.yaml)."""
-TEMPLATE_HAND_BREADTH_M = 0.085
-"""Hand breadth (across the metacarpal heads) of the template at scale 1 (sim_assets/hand.yaml)."""
-
 RULER_SD_M = 0.002
 """A hand length or breadth read off a ruler by a person: 2 mm (a choice; the inter-observer error
 of trained anthropometrists is about 1-2 mm for these two dimensions)."""
@@ -178,9 +173,10 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
     from fsv import Calibration
 
     check_knowledge(name)
-    scale = float(user_of(episode.scenario)["hand_scale"])
+    person = user_of(episode.scenario)
+    scale, anatomy = float(person["hand_scale"]), person["anatomy"]
     om, calib = episode.object_model, episode.calib
-    length, breadth = TEMPLATE_HAND_LENGTH_M * scale, TEMPLATE_HAND_BREADTH_M * scale
+    length, breadth = anatomy.hand_length_m, anatomy.hand_breadth_m
     K = np.asarray(calib.K, dtype=float)
     focal, principal = (K[0, 0], K[1, 1]), (K[0, 2], K[1, 2])
     if name == "exact":

@@ -24,7 +24,8 @@ import yaml
 
 from benchmark.errors import ScenarioError
 from benchmark.world.hand import hand_mjcf, pad_geoms
-from benchmark.world.hand import hand_model as _hand_model_at_scale
+from benchmark.world.hand import hand_model as _hand_model_of
+from benchmark.world.people import person, users  # noqa: F401 (users: re-exported)
 from benchmark.world.scenario import Scenario
 from fsv import HandModel, ObjectModel
 
@@ -46,11 +47,6 @@ def box_spec() -> dict:
     return _asset("box.yaml")
 
 
-def users() -> list[dict]:
-    """``sim_assets/users.yaml``: the synthetic users (hand scale and grip policy)."""
-    return _asset("users.yaml")
-
-
 def grasps() -> list[dict]:
     """``sim_assets/grasps.yaml``: the grasps (pad spots on the box faces, object frame)."""
     return _asset("grasps.yaml")
@@ -69,13 +65,9 @@ def _pick(kind: str, items: list, index: int) -> dict:
 
 
 def user_of(scenario: Scenario) -> dict:
-    """The scenario's user entry; raises ScenarioError naming the accepted indices."""
-    return _pick("user", users(), scenario.user)
-
-
-def grasp_of(scenario: Scenario) -> dict:
-    """The scenario's grasp entry; raises ScenarioError naming the accepted indices."""
-    return _pick("grasp", grasps(), scenario.grasp)
+    """The scenario's user: a named one of ``users.yaml`` (0-4) or a drawn person
+    (``benchmark.world.people.person``), with its ``anatomy``."""
+    return person(scenario.user)
 
 
 def mass_of(scenario: Scenario) -> dict:
@@ -97,9 +89,7 @@ def validate(scenario: Scenario) -> None:
     if scenario.duration_s is not None and scenario.duration_s < task.min_duration_s:
         raise ScenarioError(f"duration {scenario.duration_s!r} s is too short for task {task.name!r}; "
                             f"accepted: >= {task.min_duration_s} s")
-    user_of(scenario)
-    grasp_of(scenario)
-    mass_of(scenario)
+    mass_of(scenario)  # every user and grasp index exists: N beyond the named ones is drawn
 
 
 def object_model(scenario: Scenario) -> ObjectModel:
@@ -112,8 +102,8 @@ def object_model(scenario: Scenario) -> ObjectModel:
 
 
 def hand_model(scenario: Scenario) -> HandModel:
-    """The scenario's user's hand as the method knows it (the hand of the simulation, exactly)."""
-    return _hand_model_at_scale(float(user_of(scenario)["hand_scale"]))
+    """The scenario's user's hand, exactly: the hand of the simulation (its anatomy's)."""
+    return _hand_model_of(user_of(scenario)["anatomy"])
 
 
 @dataclass(frozen=True)

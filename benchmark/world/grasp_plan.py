@@ -14,6 +14,7 @@ import functools
 import hashlib
 import importlib.resources
 import json
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -21,7 +22,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from benchmark.errors import ScenarioError
-from benchmark.world.assets import build_world, grasp_of, user_of
+from benchmark.world.assets import build_world, grasps, user_of
+from benchmark.world.grasp_families import draw_candidate
 from benchmark.world.scenario import Scenario
 
 # Relaxed postures (radians): [abduction, flexion, flexion, flexion] per digit.
@@ -74,8 +76,26 @@ def _pitch_quat(pitch: float) -> np.ndarray:
     return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
 
 
+def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a b`` of two (w, x, y, z) quaternions."""
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
+
+
 PLANS_FILE = "grasp_plans.json"  # in sim_assets: the solved plans, so every machine builds the same world
 _PLANS_FORMAT = "fsv-bench grasp plans"
+MAX_TIP_ERROR_M = 0.010
+"""A drawn grasp is feasible if every active pad's planned centre ends within this of its target, [m]
+(a choice: the grip's torques close the last millimetres in the simulation; the named cohort's worst
+plan is 6.1 mm off, the small hand of user 1 on grasp 0, and grasps it in every episode)."""
+MIN_CLEARANCE_M = 0.004
+"""... and every other part of the hand keeps this margin, [m] (the named cohort's worst: 4.5 mm)."""
+MAX_ATTEMPTS = 40
+"""Candidates drawn before a grasp index is declared infeasible for a person."""
+PLAN_DECIMALS = 9
+"""A plan solved at run time is rounded to this many decimals (1 nm, 1 nrad): the same on every machine."""
 
 
 class _PlanProblem:
@@ -86,10 +106,9 @@ class _PlanProblem:
             grasp's spots, the priors and clearances): a stored solution is used only while it matches.
     """
 
-    def __init__(self, user: int, grasp: int):
-        sc = Scenario(user=user, grasp=grasp)
+    def __init__(self, user: int, spec: dict):
+        sc = Scenario(user=user)
         world = build_world(sc)
-        spec = grasp_of(sc)
         hand, m = world.hand, world.model
         self.world, self.spec, self.d = world, spec, mujoco.MjData(m)
         self.user_name, self.grasp_name = str(user_of(sc)["name"]), str(spec["name"])
@@ -100,11 +119,23 @@ class _PlanProblem:
         self.prior = np.clip(_prior(hand, active), self.lo, self.hi)
         self.body_geoms, self.clearance = _clearances(world, active)
         self.fingerprint = _plan_fingerprint(world, spec, self.target, self.prior, self.clearance)
+        self.yaw = float(spec.get("palm_yaw", 0.0))
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        self.R_yaw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        self.q_yaw = np.array([math.cos(self.yaw / 2), 0.0, 0.0, math.sin(self.yaw / 2)])
+
+    def palm_pose(self, x: np.ndarray) -> tuple:
+        """The palm's position (object frame, relative to the box centre) and orientation of a solution."""
+        offset = np.array([self.spec["palm_x"], x[0], x[1]])
+        if self.yaw == 0.0:  # the named grasps: no turn (and the same bits as before turns existed)
+            return offset, _pitch_quat(x[2])
+        return self.R_yaw @ offset, _quat_mul(self.q_yaw, _pitch_quat(x[2]))
 
     def pose(self, x: np.ndarray) -> None:
         w, d = self.world, self.d
-        d.qpos[w.hand_qadr[:3]] = self.box_pos + [self.spec["palm_x"], x[0], x[1]]
-        d.qpos[w.hand_qadr[3:7]] = _pitch_quat(x[2])
+        offset, quat = self.palm_pose(x)
+        d.qpos[w.hand_qadr[:3]] = self.box_pos + offset
+        d.qpos[w.hand_qadr[3:7]] = quat
         d.qpos[w.joint_qadr] = x[3:]
         mujoco.mj_kinematics(w.model, d)
 
@@ -146,8 +177,9 @@ class _PlanProblem:
                 for j, n in enumerate(hand.joint_names):
                     if n.startswith(f + "_") and n.endswith("flex"):
                         q_open[j] = np.clip(q_grasp[j] - 0.5, self.lo[j], self.hi[j])
+        palm_pos, palm_quat = self.palm_pose(x)
         return GraspPlan(active=self.active, spot=self.spot, normal_in=self.normal_in,
-                         palm_pos=np.array([self.spec["palm_x"], x[0], x[1]]), palm_quat=_pitch_quat(x[2]),
+                         palm_pos=palm_pos, palm_quat=palm_quat,
                          q_grasp=q_grasp, q_open=q_open, tip_error_m=tip_err, clearance_m=gap)
 
 
@@ -197,7 +229,10 @@ def _plan_fingerprint(world, spec: dict, target: np.ndarray, prior: np.ndarray, 
     for arr in (m.body_pos, m.body_quat, m.geom_size, m.geom_pos, m.geom_quat, m.geom_type, m.jnt_axis,
                 m.jnt_pos, m.jnt_range, target, prior, clearance, world.obj.half_extents):
         digest.update(np.ascontiguousarray(arr).tobytes())
-    digest.update(json.dumps([spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]).encode())
+    inputs = [spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]
+    if spec.get("palm_yaw", 0.0):
+        inputs.append(spec["palm_yaw"])
+    digest.update(json.dumps(inputs).encode())
     return digest.hexdigest()
 
 
@@ -215,23 +250,59 @@ def stored_plans() -> dict:
 
 @functools.lru_cache(maxsize=64)
 def _plan(user: int, grasp: int) -> GraspPlan:
-    problem = _PlanProblem(user, grasp)
+    if grasp >= len(grasps()):
+        return _drawn(user, grasp)[1]
+    problem = _PlanProblem(user, grasps()[grasp])
     entry = stored_plans().get(f"{problem.user_name}/{problem.grasp_name}")
     if entry is not None and entry["fingerprint"] == problem.fingerprint:
         x = np.array(entry["x"], dtype=float)
-    else:  # a user or grasp edited since the plans were stored: solved here, machine-dependent in the last digits
-        x = problem.solve()
+    else:
+        # A drawn person, or a user or grasp edited since the plans were stored: solved here. The
+        # solver's last digits depend on the BLAS kernel; rounded to PLAN_DECIMALS, the plan is the
+        # same on every machine unless a value falls within a rounding step's last bit of a tie.
+        x = np.round(problem.solve(), PLAN_DECIMALS)
     return problem.plan(x)
+
+
+def feasible(plan: GraspPlan) -> bool:
+    """Whether a plan is one the hand can make: every active pad within :data:`MAX_TIP_ERROR_M` of
+    its spot and every other part at least :data:`MIN_CLEARANCE_M` clear (the named cohort's worst)."""
+    return plan.tip_error_m <= MAX_TIP_ERROR_M and plan.clearance_m >= MIN_CLEARANCE_M
+
+
+@functools.lru_cache(maxsize=64)
+def _drawn(user: int, grasp: int) -> tuple:
+    """Drawn grasp ``grasp`` for ``user``: candidates from the grasp's generator until one is feasible."""
+    world = build_world(Scenario(user=user))
+    rng = np.random.default_rng(np.random.SeedSequence([int(grasp), *b"grasp"]))
+    for _ in range(MAX_ATTEMPTS):
+        spec = draw_candidate(rng, grasp, world.hand, world.obj.half_extents)
+        problem = _PlanProblem(user, spec)
+        plan = problem.plan(np.round(problem.solve(), PLAN_DECIMALS))
+        if feasible(plan):
+            return spec, plan
+    raise ScenarioError(f"grasp {grasp}: no feasible grasp for user {user} in {MAX_ATTEMPTS} draws; "
+                        f"accepted: another grasp index")
+
+
+def grasp_spec(scenario: Scenario) -> dict:
+    """The scenario's grasp: a ``grasps.yaml`` entry (0-3) or the drawn grasp its person can make
+    (N >= 4, ``benchmark.world.grasp_families``), with ``name`` and ``spots``."""
+    named = grasps()
+    if scenario.grasp < len(named):
+        return dict(named[scenario.grasp], family="width-five" if len(named[scenario.grasp]["spots"]) == 5
+                    else "width-four")
+    return _drawn(scenario.user, scenario.grasp)[0]
 
 
 def solve_all_plans() -> dict:
     """Solves every (user, grasp) plan from scratch: the content of ``sim_assets/grasp_plans.json``."""
-    from benchmark.world.assets import grasps, users
+    from benchmark.world.assets import users
 
     plans = {}
     for u in range(len(users())):
         for g in range(len(grasps())):
-            problem = _PlanProblem(u, g)
+            problem = _PlanProblem(u, grasps()[g])
             plans[f"{problem.user_name}/{problem.grasp_name}"] = {"fingerprint": problem.fingerprint,
                                                                   "x": [float(v) for v in problem.solve()]}
     return {"format": _PLANS_FORMAT, "version": 1,
@@ -246,8 +317,6 @@ def plan_grasp(scenario: Scenario) -> GraspPlan:
     Raises:
         ScenarioError: If the user or grasp does not exist.
     """
-    user_of(scenario)
-    grasp_of(scenario)
     return _plan(scenario.user, scenario.grasp)
 
 

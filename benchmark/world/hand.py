@@ -14,26 +14,18 @@ own frame. A fingertip pad is a sphere whose centre lies ``radius`` short of the
 from __future__ import annotations
 
 import functools
-import importlib.resources
 import xml.etree.ElementTree as ET
 
 import numpy as np
-import yaml
 
 from benchmark.errors import ScenarioError
+from benchmark.world.anatomy import Anatomy, hand_spec  # noqa: F401 (hand_spec: the template, used here and re-exported)
 from fsv import HandModel
 from fsv.linalg import dot, norm
 
 FINGERS = ("thumb", "index", "middle", "ring", "little")
 # Fraction of the pad radius used by the distal shaft, so that the pad sphere alone touches a face.
 _SHAFT_RADIUS_RATIO = 0.7
-
-
-@functools.lru_cache(maxsize=None)
-def hand_spec() -> dict:
-    """The parsed ``sim_assets/hand.yaml`` (cached; treat as read-only)."""
-    text = importlib.resources.files("sim_assets").joinpath("hand.yaml").read_text()
-    return yaml.safe_load(text)
 
 
 def _base_quat(finger: dict) -> np.ndarray:
@@ -51,12 +43,12 @@ def _base_quat(finger: dict) -> np.ndarray:
     return q / norm(q)
 
 
-@functools.lru_cache(maxsize=None)
-def hand_model(scale: float = 1.0) -> HandModel:
-    """The hand of ``sim_assets/hand.yaml`` at a given size, as the method's known model.
+def hand_model(anatomy: "Anatomy | float" = 1.0) -> HandModel:
+    """The hand of ``sim_assets/hand.yaml`` reshaped by an anatomy, as the method's known model.
 
     Args:
-        scale: Hand size factor; every length of the YAML is multiplied by it.
+        anatomy: A :class:`benchmark.world.anatomy.Anatomy`, or a uniform size factor (every
+            length of the YAML multiplied by it: ``Anatomy.template(scale)``).
 
     Returns:
         A :class:`fsv.HandModel` with 16 segments (palm, then three per finger, thumb first),
@@ -64,28 +56,36 @@ def hand_model(scale: float = 1.0) -> HandModel:
         finger.
 
     Raises:
-        ScenarioError: If ``scale`` is not a positive number.
+        ScenarioError: If a scale or a factor is out of its range (``benchmark.world.anatomy``).
     """
-    if not (np.isfinite(scale) and 0.5 <= scale <= 2.0):
-        raise ScenarioError(f"hand scale must be within [0.5, 2.0], got {scale!r}")
+    if not isinstance(anatomy, Anatomy):
+        if isinstance(anatomy, bool) or not isinstance(anatomy, (int, float, np.floating, np.integer)):
+            raise ScenarioError(f"hand anatomy must be an Anatomy or a scale, got {anatomy!r}")
+        anatomy = Anatomy.template(float(anatomy))
+    return _hand_model(anatomy)
+
+
+@functools.lru_cache(maxsize=256)
+def _hand_model(anatomy: Anatomy) -> HandModel:
     spec = hand_spec()
-    s = float(scale)
+    ls, bs = anatomy.length_scale, anatomy.breadth_scale
+    axes = np.array([bs, ls, bs])  # across, along, through the hand (palm frame x, y, z)
     seg_names, parent, off_pos, off_quat = ["palm"], [-1], [np.zeros(3)], [np.array([1.0, 0, 0, 0])]
     j_names, j_seg, j_axis, j_range = [], [], [], []
     g_seg, g_fromto, g_radius = [], [], []
     for g in spec["palm"]["geoms"]:
         g_seg.append(0)
-        g_fromto.append(s * np.asarray(g["fromto"], dtype=float))
-        g_radius.append(s * g["radius"])
+        g_fromto.append(np.tile(axes, 2) * np.asarray(g["fromto"], dtype=float))
+        g_radius.append(bs * g["radius"])
     tip_seg, tip_off, tip_rad = [], [], []
-    for finger in spec["fingers"]:
+    for d, finger in enumerate(spec["fingers"]):
         prev, prev_len = 0, None
         for i, segment in enumerate(finger["segments"]):
             b = len(seg_names)
             seg_names.append(f"{finger['name']}_{segment['name']}")
             parent.append(prev)
             if i == 0:
-                off_pos.append(s * np.asarray(finger["base_pos"], dtype=float))
+                off_pos.append(axes * np.asarray(finger["base_pos"], dtype=float))
                 off_quat.append(_base_quat(finger))
             else:
                 off_pos.append(np.array([0.0, prev_len, 0.0]))
@@ -96,7 +96,8 @@ def hand_model(scale: float = 1.0) -> HandModel:
                 axis = np.asarray(j["axis"], dtype=float)
                 j_axis.append(axis / norm(axis))
                 j_range.append(np.deg2rad(j["range_deg"]))
-            length, radius = s * segment["length"], s * segment["radius"]
+            length = ls * segment["length"] * anatomy.digit_length[d] * anatomy.phalanx_length[d][i]
+            radius = bs * segment["radius"] * anatomy.digit_radius[d]
             last = i == len(finger["segments"]) - 1
             if last:
                 centre = length - radius

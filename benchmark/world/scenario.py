@@ -25,7 +25,8 @@ class Scenario:
 
     Attributes:
         task: Name of a registered task (see ``benchmark.TASKS``).
-        user: Index into ``sim_assets/users.yaml``.
+        user: The person: 0-4 the named cohort of ``sim_assets/users.yaml``, N >= 5 a person drawn
+            with seed N (``benchmark.world.people``), the same for every scenario.
         grasp: Index into ``sim_assets/grasps.yaml``.
         mass: Index into ``sim_assets/masses.yaml``.
         noise_m: Standard deviation of the depth noise in [m].

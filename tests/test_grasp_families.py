@@ -1,0 +1,61 @@
+"""Drawn grasps (benchmark.world.grasp_families and grasp_plan's redraw): families, spots, feasibility."""
+
+import numpy as np
+import pytest
+
+from benchmark.world.assets import build_world
+from benchmark.world.grasp_families import FAMILIES, FINGER_GAP_M, PAD_HEIGHT_M, draw_candidate
+from benchmark.world.grasp_plan import MAX_TIP_ERROR_M, MIN_CLEARANCE_M, feasible, grasp_spec, plan_grasp
+from benchmark.world.scenario import Scenario
+
+WORLD = build_world(Scenario(user=0))
+HALF = WORLD.obj.half_extents
+
+
+def test_candidates_put_every_pad_on_its_face_a_pad_breadth_apart():
+    rng = np.random.default_rng(0)
+    seen = set()
+    for _ in range(200):
+        spec = draw_candidate(rng, 7, WORLD.hand, HALF)
+        seen.add(spec["family"])
+        assert spec["name"] == f"d7-{spec['family']}"
+        spots = spec["spots"]
+        assert spots["thumb"]["face"] == "-y" and spots["thumb"]["point"][1] == -HALF[1]
+        fingers = [f for f in ("index", "middle", "ring", "little") if f in spots]
+        assert len(fingers) == {"width-four": 3, "width-five": 4, "width-tripod": 2}[spec["family"]]
+        xs = [spots[f]["point"][0] for f in fingers]
+        for a, b, xa, xb in zip(fingers[:-1], fingers[1:], xs[:-1], xs[1:]):
+            ra, rb = (WORLD.hand.fingertip_radius[WORLD.hand.finger_names.index(f)] for f in (a, b))
+            assert ra + rb + FINGER_GAP_M[0] - 1e-12 <= xb - xa <= ra + rb + FINGER_GAP_M[1] + 1e-12
+        for f in fingers:
+            p = spots[f]["point"]
+            assert spots[f]["face"] == "+y" and p[1] == HALF[1] and abs(p[0]) < HALF[0]
+            assert PAD_HEIGHT_M[0] <= p[2] <= PAD_HEIGHT_M[1]
+        assert spec["palm_x"] == pytest.approx(np.mean(xs))
+    assert seen == set(FAMILIES)
+
+
+def test_a_drawn_grasp_is_feasible_for_its_person_and_the_same_every_time():
+    for user, grasp in ((0, 4), (17, 6), (123, 9)):
+        sc = Scenario(user=user, grasp=grasp)
+        plan = plan_grasp(sc)
+        assert feasible(plan) and plan.tip_error_m <= MAX_TIP_ERROR_M and plan.clearance_m >= MIN_CLEARANCE_M
+        spec = grasp_spec(sc)
+        assert spec is grasp_spec(Scenario(user=user, grasp=grasp, task="rotate", seed=3))
+        np.testing.assert_array_equal(plan.q_grasp, np.round(plan.q_grasp, 9))
+        active = [f for f, a in zip(WORLD.hand.finger_names, plan.active) if a]
+        assert set(active) == set(spec["spots"])
+
+
+def test_the_named_grasps_keep_their_spots_and_family():
+    for g, fam in enumerate(("width-four", "width-four", "width-five", "width-four")):
+        spec = grasp_spec(Scenario(grasp=g))
+        assert spec["family"] == fam and spec["name"].startswith(f"g{g}-")
+
+
+def test_a_quarter_turned_candidate_faces_the_ends_of_the_box():
+    spec = draw_candidate(np.random.default_rng(3), 5, WORLD.hand, HALF, family="length-four")
+    assert spec["palm_yaw"] == pytest.approx(-np.pi / 2)
+    assert spec["spots"]["thumb"]["face"] == "-x" and spec["spots"]["index"]["face"] == "+x"
+    with pytest.raises(ValueError, match="'sideways': accepted: width-four"):
+        draw_candidate(np.random.default_rng(3), 5, WORLD.hand, HALF, family="sideways")
