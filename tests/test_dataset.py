@@ -1,3 +1,4 @@
+import json
 import os
 import subprocess
 
@@ -368,6 +369,7 @@ def test_a_bad_ray_address_fails_within_seconds(tmp_path):
 @pytest.mark.parametrize("argv, needle", [
     (["--tasks", "nope"], "unknown task 'nope'; accepted: lift"),
     (["--users", "x"], "expected integers like '0,2,5-7', got 'x'"),
+    (["--split", "test"], "--split 'test': accepted: train"),
     (["--duration", "0.1"], "duration 0.1 s is too short for task 'lift'; accepted: >= 1.0 s"),
 ])
 def test_generate_refuses_a_bad_grid_before_any_work_and_writes_nothing(tmp_path, capsys, argv, needle):
@@ -459,3 +461,21 @@ def test_a_corrupt_dataset_header_is_refused_naming_the_file(tmp_path, capsys):
     header.write_text("[1, 2]")
     with pytest.raises(DatasetError, match=f"{header} is not a dataset header"):
         read_header(tmp_path / "d")
+
+
+def test_generate_from_the_training_split_draws_its_people_grasps_and_views(tmp_path, capsys):
+    from benchmark.commands.cli import main
+    from benchmark.suites.splits import split_of
+    from benchmark.world.scenario import Scenario
+
+    out = tmp_path / "train"
+    argv = ["generate", "--out", str(out), "--split", "train", "--users", "0-1", "--grasps", "3", "--views", "7",
+            "--duration", "1.5", "--kinematics", "oracle", "--contacts", "oracle", "--workers", "1", "--no-progress"]
+    assert main(argv) == 0
+    names = sorted(p.name for p in (out / "episodes").glob("*.parquet"))
+    assert names == ["lift-u1000-g1003-m0-s0-v1007.parquet", "lift-u1001-g1003-m0-s0-v1007.parquet"]
+    assert split_of(Scenario(user=1001, grasp=1003, view=1007)) == "train"
+    header = json.loads((out / "dataset.json").read_text())
+    assert header["spec"]["users"] == [1000, 1001] and header["spec"]["views"] == [1007]
+    # a dataset of the paper's view alone keeps the header it had before views existed
+    assert "views" not in DatasetSpec().as_dict()

@@ -1,6 +1,10 @@
 """``fsv-bench generate``: training data for the internal-force networks (:mod:`benchmark.paper.dataset`).
 
-    fsv-bench generate --out DIR [--tasks ... --users ... --grasps ... --masses ... --seeds ...]
+    fsv-bench generate --out DIR [--split train] [--tasks ... --users ... --grasps ... --views ... --masses ... --seeds ...]
+
+With ``--split train``, ``--users``, ``--grasps`` and ``--views`` are positions in the training
+split (``benchmark.suites.splits``): ``--split train --users 0-79`` is people 1000-1079, none of
+whom any dev or test episode meets.
 """
 
 from __future__ import annotations
@@ -36,8 +40,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """The arguments of ``fsv-bench generate``."""
     p.add_argument("--out", required=True, help="dataset folder (created, or resumed if it exists)")
     p.add_argument("--tasks", default="lift", help="comma-separated task names (default: lift)")
-    p.add_argument("--users", default="0", help="user indices, e.g. 0,1 or 0-3")
-    p.add_argument("--grasps", default="0", help="grasp indices")
+    p.add_argument("--split", default=None,
+                   help="draw people, grasps and views from the training split: --users/--grasps/--views are "
+                        "then positions in it (0 is index 1000)")
+    p.add_argument("--users", default="0", help="user indices, e.g. 0,1 or 0-3 (N >= 5: drawn people)")
+    p.add_argument("--grasps", default="0", help="grasp indices (N >= 4: drawn grasps)")
+    p.add_argument("--views", default="0", help="camera views (0: the paper's set-up; N >= 1 drawn)")
     p.add_argument("--masses", default="0", help="mass indices")
     p.add_argument("--seeds", default="0", help="seeds, e.g. 0-9")
     p.add_argument("--duration", type=float, default=None, help="episode length in seconds (default: the task's)")
@@ -54,9 +62,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> pd.DataFrame:
     """Runs ``fsv-bench generate`` with parsed arguments; prints a one-paragraph summary."""
+    users, grasps, views = parse_ints(args.users), parse_ints(args.grasps), parse_ints(args.views)
+    if args.split is not None:
+        from benchmark.suites.splits import SPLITS
+
+        if args.split != "train":
+            raise DatasetError(f"--split {args.split!r}: accepted: train (dev and test people never train a model)")
+        split = SPLITS[args.split]
+        try:
+            users, grasps, views = (tuple(split.index(p) for p in ps) for ps in (users, grasps, views))
+        except ValueError as e:
+            raise DatasetError(str(e)) from None
     spec = DatasetSpec(
-        tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()), users=parse_ints(args.users),
-        grasps=parse_ints(args.grasps), masses=parse_ints(args.masses), seeds=parse_ints(args.seeds), duration_s=args.duration,
+        tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()), users=users,
+        grasps=grasps, masses=parse_ints(args.masses), seeds=parse_ints(args.seeds), views=views, duration_s=args.duration,
         noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
     )
     from benchmark.atomic import check_out

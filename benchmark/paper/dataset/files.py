@@ -84,7 +84,8 @@ def _expected_stem(meta: dict) -> str | None:
     sc = meta.get("scenario")
     if not isinstance(sc, dict):
         return None
-    return f"{sc.get('task')}-u{sc.get('user')}-g{sc.get('grasp')}-m{sc.get('mass')}-s{sc.get('seed')}"
+    stem = f"{sc.get('task')}-u{sc.get('user')}-g{sc.get('grasp')}-m{sc.get('mass')}-s{sc.get('seed')}"
+    return stem + (f"-v{sc['view']}" if sc.get("view") else "")
 
 
 def read_episode_file(path: str, sha256: str | None = None, data: bytes | None = None) -> tuple[pa.Table, dict, str]:

@@ -23,7 +23,9 @@ class DatasetSpec:
 
     Attributes:
         tasks: Task names (see ``benchmark.TASKS``).
-        users, grasps, masses: Indices into ``sim_assets`` lists.
+        users, grasps, masses: People, grasps and masses: indices (people and grasps beyond the
+            named ones are drawn, see ``benchmark.world.people`` and ``grasp_families``).
+        views: Camera views (0: the paper's set-up; N >= 1 drawn, ``benchmark.camera.views``).
         seeds: Scenario seeds.
         duration_s: Episode length in [s]; None takes each task's default.
         fps: Frame rate in [Hz].
@@ -46,6 +48,7 @@ class DatasetSpec:
     grasps: tuple = (0,)
     masses: tuple = (0,)
     seeds: tuple = (0,)
+    views: tuple = (0,)
     duration_s: float | None = None
     fps: float = 30.0
     noise_m: float = 0.01
@@ -57,7 +60,7 @@ class DatasetSpec:
 
     def __post_init__(self):
         object.__setattr__(self, "tasks", tuple(str(t) for t in self.tasks))
-        for name in ("users", "grasps", "masses", "seeds"):
+        for name in ("users", "grasps", "masses", "seeds", "views"):
             vals = tuple(getattr(self, name))
             if not vals or any(isinstance(v, bool) or int(v) != v or v < 0 for v in vals):
                 raise DatasetError(f"{name} must be a non-empty list of non-negative integers, got {vals!r}")
@@ -93,12 +96,18 @@ class DatasetSpec:
     def scenarios(self) -> list[Scenario]:
         """Every scenario of the grid, in a fixed order."""
         return [
-            Scenario(task=t, user=u, grasp=g, mass=m, seed=s, noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)
+            Scenario(task=t, user=u, grasp=g, mass=m, seed=s, view=v, noise_m=self.noise_m, duration_s=self.duration_s,
+                     fps=self.fps)
             for t in self.tasks for u in self.users for g in self.grasps for m in self.masses for s in self.seeds
+            for v in self.views
         ]
 
     def as_dict(self) -> dict:
-        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+        """JSON of the spec (``views`` left out while it is the paper's view alone, as before views existed)."""
+        out = {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
+        if self.views == (0,):
+            del out["views"]
+        return out
 
 
 
