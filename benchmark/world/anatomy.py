@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import functools
 import importlib.resources
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import yaml
@@ -112,12 +112,6 @@ class Anatomy:
         """The template hand at a uniform size (every factor 1)."""
         return Anatomy(length_scale=float(scale), breadth_scale=float(scale))
 
-    @staticmethod
-    def generic(hand_length_m: float, hand_breadth_m: float) -> "Anatomy":
-        """The template stretched to a hand length and breadth (what a ruler's two numbers make of it)."""
-        return Anatomy(length_scale=float(hand_length_m) / TEMPLATE_HAND_LENGTH_M,
-                       breadth_scale=float(hand_breadth_m) / TEMPLATE_HAND_BREADTH_M)
-
     @property
     def hand_length_m(self) -> float:
         """Wrist crease to the middle fingertip, [m] (the palm's part scales with ``length_scale``)."""
@@ -170,10 +164,8 @@ def draw_anatomy(rng: np.random.Generator, sex: str) -> Anatomy:
     digit = 1.0 + DIGIT_LENGTH_SD * _truncated_normal(rng, DIGITS)
     phalanx = 1.0 + PHALANX_LENGTH_SD * _truncated_normal(rng, (DIGITS, PHALANGES))
     girth = 1.0 + DIGIT_RADIUS_SD * _truncated_normal(rng, DIGITS)
-    mid = _middle_lengths()
-    palm = TEMPLATE_HAND_LENGTH_M - sum(mid)
-    middle = sum(m * digit[2] * f for m, f in zip(mid, phalanx[2]))
-    return Anatomy(length_scale=float(length / (palm + middle)), breadth_scale=float(breadth / TEMPLATE_HAND_BREADTH_M),
-                   digit_length=tuple(float(v) for v in digit),
-                   phalanx_length=tuple(tuple(float(v) for v in row) for row in phalanx),
-                   digit_radius=tuple(float(v) for v in girth))
+    shape = Anatomy(length_scale=1.0, breadth_scale=float(breadth / TEMPLATE_HAND_BREADTH_M),
+                    digit_length=tuple(float(v) for v in digit),
+                    phalanx_length=tuple(tuple(float(v) for v in row) for row in phalanx),
+                    digit_radius=tuple(float(v) for v in girth))
+    return replace(shape, length_scale=float(length / shape.hand_length_m))  # the hand length is linear in it

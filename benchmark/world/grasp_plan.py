@@ -14,7 +14,6 @@ import functools
 import hashlib
 import importlib.resources
 import json
-import math
 from dataclasses import dataclass
 
 import mujoco
@@ -76,13 +75,6 @@ def _pitch_quat(pitch: float) -> np.ndarray:
     return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
 
 
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product ``a b`` of two (w, x, y, z) quaternions."""
-    w1, x1, y1, z1 = a
-    w2, x2, y2, z2 = b
-    return np.array([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2])
-
 
 PLANS_FILE = "grasp_plans.json"  # in sim_assets: the solved plans, so every machine builds the same world
 _PLANS_FORMAT = "fsv-bench grasp plans"
@@ -119,17 +111,10 @@ class _PlanProblem:
         self.prior = np.clip(_prior(hand, active), self.lo, self.hi)
         self.body_geoms, self.clearance = _clearances(world, active)
         self.fingerprint = _plan_fingerprint(world, spec, self.target, self.prior, self.clearance)
-        self.yaw = float(spec.get("palm_yaw", 0.0))
-        c, s = math.cos(self.yaw), math.sin(self.yaw)
-        self.R_yaw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-        self.q_yaw = np.array([math.cos(self.yaw / 2), 0.0, 0.0, math.sin(self.yaw / 2)])
 
     def palm_pose(self, x: np.ndarray) -> tuple:
         """The palm's position (object frame, relative to the box centre) and orientation of a solution."""
-        offset = np.array([self.spec["palm_x"], x[0], x[1]])
-        if self.yaw == 0.0:  # the named grasps: no turn (and the same bits as before turns existed)
-            return offset, _pitch_quat(x[2])
-        return self.R_yaw @ offset, _quat_mul(self.q_yaw, _pitch_quat(x[2]))
+        return np.array([self.spec["palm_x"], x[0], x[1]]), _pitch_quat(x[2])
 
     def pose(self, x: np.ndarray) -> None:
         w, d = self.world, self.d
@@ -229,10 +214,7 @@ def _plan_fingerprint(world, spec: dict, target: np.ndarray, prior: np.ndarray, 
     for arr in (m.body_pos, m.body_quat, m.geom_size, m.geom_pos, m.geom_quat, m.geom_type, m.jnt_axis,
                 m.jnt_pos, m.jnt_range, target, prior, clearance, world.obj.half_extents):
         digest.update(np.ascontiguousarray(arr).tobytes())
-    inputs = [spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]
-    if spec.get("palm_yaw", 0.0):
-        inputs.append(spec["palm_yaw"])
-    digest.update(json.dumps(inputs).encode())
+    digest.update(json.dumps([spec["palm_x"], _PRIOR_ACTIVE, _PRIOR_FREE, _CLEARANCE_M, _SHAFT_CLEARANCE_M]).encode())
     return digest.hexdigest()
 
 
@@ -290,8 +272,7 @@ def grasp_spec(scenario: Scenario) -> dict:
     (N >= 4, ``benchmark.world.grasp_families``), with ``name`` and ``spots``."""
     named = grasps()
     if scenario.grasp < len(named):
-        return dict(named[scenario.grasp], family="width-five" if len(named[scenario.grasp]["spots"]) == 5
-                    else "width-four")
+        return named[scenario.grasp]
     return _drawn(scenario.user, scenario.grasp)[0]
 
 

@@ -159,10 +159,7 @@ class Human:
         self.ctrl_every = ctrl_every
         self._jac = np.zeros((3, world.model.nv))
         self.R_palm_obj = _rot(plan.palm_quat)
-        # The palm comes from above and from the wrist's side: 6 cm back along the hand, 12 cm up.
-        back = mv(self.R_palm_obj, np.array([0.0, 1.0, 0.0]))  # the hand's +y (towards the fingers), object frame
-        turned = abs(back[0]) > abs(back[1])  # a quarter-turned grasp (across the box's length)
-        self.approach = np.array([-0.06 * np.sign(back[0]), 0.0, 0.12]) if turned else np.array([0.0, -0.06, 0.12])
+        self.approach = np.array([0.0, -0.06, 0.12])
         t = np.asarray(times, dtype=float)
         self.palm_pos, self.palm_quat, q = _palm_and_posture(t, motion, plan, phases, releases, self.R_palm_obj,
                                                              self.approach)

@@ -19,7 +19,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from benchmark.errors import ScenarioError
-from benchmark.world.anatomy import Anatomy, hand_spec  # noqa: F401 (hand_spec: the template, used here and re-exported)
+from benchmark.world.anatomy import Anatomy, hand_spec
 from fsv import HandModel
 from fsv.linalg import dot, norm
 
