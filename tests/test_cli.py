@@ -15,6 +15,7 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     code = main(["--task", "lift", "--noise", "0.01", "--duration", "1.5", "--seed", "2", "--quiet", "--out", str(out)])
     text = capsys.readouterr().out
     assert "Newton-Euler residual" in text and "grip while held" in text
+    assert "user 0 (u0-average, hand 190 x 85 mm), grasp 0 (g0-four-centred)" in text
     summary = json.loads((out / "summary.json").read_text())
     verdict = summary["verdict"]  # the smoke suite's gates on this episode; the exit status follows them
     assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)

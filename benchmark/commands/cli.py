@@ -191,9 +191,11 @@ def main(argv: list | None = None) -> int:
         background.cancel()
         shutil.rmtree(tmp, ignore_errors=True)
         return exit_status(e, "fsv-bench", f"{out} is as it was before the run", (ScenarioError, InputError))
-    sc = scenario
-    print(f"fsv-bench: task {sc.task}, user {sc.user}, grasp {sc.grasp}, mass {sc.mass}, seed {sc.seed}, "
-          f"sensor {sc.sensor}, noise {sc.noise_m} m, {len(record.episode.truth.t)} frames")
+    sc, person, grasp = scenario, summary["scenario"]["person"], summary["scenario"]["grasp_spec"]
+    hand = person["anatomy"]
+    print(f"fsv-bench: task {sc.task}, user {sc.user} ({person['name']}, hand {1e3 * hand['hand_length_m']:.0f} x "
+          f"{1e3 * hand['hand_breadth_m']:.0f} mm), grasp {sc.grasp} ({grasp['name']}), mass {sc.mass}, seed {sc.seed}, "
+          f"view {sc.view}, sensor {sc.sensor}, noise {sc.noise_m} m, {len(record.episode.truth.t)} frames")
     for line in lines:
         print(line.replace(str(tmp), str(out)))
     print(f"episode: {out / 'episode.npz'}\nsummary: {out / 'summary.json'} ({timing['total']:.1f} s)")
