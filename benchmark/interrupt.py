@@ -4,8 +4,9 @@
 return 130) and also starts a watchdog: if the process is still alive :data:`GRACE_S` later (the
 interrupt was swallowed by a library that catches ``BaseException``, the main thread is inside a
 long compiled kernel that cannot be interrupted, or it was compiling one, where no exception may be
-raised: :func:`_handler` then leaves the exit to the watchdog), the watchdog removes the command's staging folders
-(:func:`register`) and ends the process with status 130. An output folder being swapped into place
+raised: :func:`_handler` then leaves the exit to the watchdog), the watchdog kills the process's
+children (a child still drawing a picture would write it into a removed folder, creating it again),
+removes the command's staging folders (:func:`register`) and ends the process with status 130. An output folder being swapped into place
 (:func:`critical`) is finished first, so the previous output is either kept or wholly replaced.
 """
 
@@ -45,10 +46,23 @@ def critical():
     return _lock
 
 
+def _end_children() -> None:
+    """Kills this process's multiprocessing children (background pictures, worker pools) and reaps
+    them: a child still writing into a staging folder would create it again once it is removed."""
+    import multiprocessing
+
+    children = multiprocessing.active_children()
+    for child in children:
+        child.kill()
+    for child in children:
+        child.join(timeout=GRACE_S)
+
+
 def _force_exit() -> None:
     time.sleep(GRACE_S)
     if threading.main_thread().is_alive():
         with _lock:
+            _end_children()
             for folder in list(_staging):
                 shutil.rmtree(folder, ignore_errors=True)
             sys.stderr.write("fsv-bench: interrupted\n")

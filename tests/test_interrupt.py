@@ -116,3 +116,36 @@ def test_no_exception_is_raised_into_a_compilers_frame():
     inside = namespace["where"]()
     assert interrupt._compiling(inside)
     assert not interrupt._compiling(sys._getframe())
+
+
+_SWALLOWER = """
+import multiprocessing, pathlib, signal, sys, time
+from benchmark import interrupt
+interrupt.install()
+stage = pathlib.Path(sys.argv[1])
+stage.mkdir()
+interrupt.register(stage)
+def child():  # a background picture, slow to notice Ctrl-C: it writes into the staging folder late
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    time.sleep(2.0)
+    stage.mkdir(parents=True, exist_ok=True)
+    (stage / "late.png").write_text("x")
+multiprocessing.get_context("fork").Process(target=child, daemon=True).start()
+print("ready", flush=True)
+while True:
+    try:
+        time.sleep(10)
+    except KeyboardInterrupt:  # a library that swallows it: the watchdog must end the process
+        pass
+"""
+
+
+def test_the_watchdog_kills_children_before_it_removes_the_staging_folders(tmp_path):
+    stage = tmp_path / ".run.staging"
+    proc = subprocess.Popen([sys.executable, "-c", _SWALLOWER, str(stage)], stdout=subprocess.PIPE,
+                            env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert proc.stdout.readline().strip() == b"ready"
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(timeout=10) == 130
+    time.sleep(2.5)  # past the moment the child would have written
+    assert not stage.exists()  # measured before the fix: the child created it again with late.png
