@@ -60,18 +60,31 @@ class ReproduceError(BenchmarkError):
 
 
 _TABLE2_GRID = ["--tasks", "lift", "--grasps", "0,1", "--masses", "1,4", "--seeds", "0-5"]
+_ALL_TASKS = ",".join(("lift", "place", "release", "rotate", "shake", "free", "excite-tx", "excite-ty", "excite-tz",
+                       "excite-rx", "excite-ry", "excite-rz"))
+TRAIN_PEOPLE = 40
+"""People of the shipped model's training set (training split, 1000-1039): each through every task once."""
+SUITE_PEOPLE = 48
+"""People of each split's suite (``standard``: test 500-547; ``dev``: 100-147), each calibrated."""
+_RECORDING = ["--design", "people", "--tasks", "lift", "--masses", "0,2", "--seeds", "900,901", "--duration", "6"]
+"""A person's calibration recording: two 6 s lifts with their own grasp, the 0.30 and the 0.60 kg box."""
 
 DATASETS = {
     "table2": _TABLE2_GRID + ["--users", "0,4"],
     "table2-users-0-1": _TABLE2_GRID + ["--users", "0,1"],
     "table2-error-model": _TABLE2_GRID + ["--users", "0,4", "--contacts", "error-model"],
     "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
-    "default": ["--tasks", ",".join(("lift", "place", "release", "rotate", "shake", "free", "excite-tx", "excite-ty",
-                                     "excite-tz", "excite-rx", "excite-ry", "excite-rz")),
-                "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "100"],
+    "train": ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users", f"0-{TRAIN_PEOPLE - 1}",
+              "--masses", "0-5", "--seeds", "100"],
     "calibration": ["--tasks", "lift", "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "900"],
+    "calibration-train": ["--split", "train", "--users", f"0-{TRAIN_PEOPLE - 1}"] + _RECORDING,
+    "calibration-dev": ["--split", "dev", "--users", f"0-{SUITE_PEOPLE - 1}"] + _RECORDING,
+    "calibration-test": ["--split", "test", "--users", f"0-{SUITE_PEOPLE - 1}"] + _RECORDING,
 }
-"""``fsv-bench generate`` arguments of every dataset a committed result is made from."""
+"""``fsv-bench generate`` arguments of every dataset a committed result is made from: the Table 2
+cohort's, the shipped model's training set (training people only, :data:`TRAIN_PEOPLE`), and the
+calibration recordings (the named users' eight 10 s lifts each; every other person's
+:data:`_RECORDING`, never scored)."""
 
 
 @dataclass(frozen=True)
@@ -198,13 +211,19 @@ def _compare_calibration(new: pathlib.Path, old: pathlib.Path) -> list[str]:
 
 
 RESULTS = (
-    Result(name="grip-calibration", path="sim_assets/calibration/grip_calibration.json", datasets=("calibration",),
-           commands=(("fsv-bench", "calibrate", "--data", "{data}/calibration", "--out", "{out}"),),
+    Result(name="grip-calibration", path="sim_assets/calibration/grip_calibration.json",
+           datasets=("calibration", "calibration-train", "calibration-dev", "calibration-test"),
+           commands=(("fsv-bench", "calibrate", "--data", "{data}/calibration", "--data", "{data}/calibration-train",
+                      "--data", "{data}/calibration-dev", "--data", "{data}/calibration-test", "--out", "{out}"),),
            compare=_compare_calibration),
-    Result(name="shipped-model", path="fsv/data/internal_forces.npz", datasets=("default",),
-           commands=(("fsv-bench", "train", "--data", "{data}/default", "--out", "{out}", "--folds", "3",
+    Result(name="shipped-model", path="fsv/data/internal_forces.npz", datasets=("train",),
+           commands=(("fsv-bench", "train", "--data", "{data}/train", "--out", "{out}", "--folds", "3",
                       "--amount-loss", "relative", "--grip", "{root}/sim_assets/calibration/grip_calibration.json"),),
            compare=_compare_model),
+    Result(name="learning-curve", path="results/learning_curve", datasets=("train",),
+           commands=(("python", "-m", "benchmark.commands.learning_curve", "--data", "{data}/train", "--people",
+                      "5,20,40", "--suite", "dev", "--workers", "2", "--quiet", "--out", "{out}"),),
+           compare=_compare_json("learning_curve.json")),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
            compare=_compare_run),

@@ -369,7 +369,8 @@ def test_a_bad_ray_address_fails_within_seconds(tmp_path):
 @pytest.mark.parametrize("argv, needle", [
     (["--tasks", "nope"], "unknown task 'nope'; accepted: lift"),
     (["--users", "x"], "expected integers like '0,2,5-7', got 'x'"),
-    (["--split", "test"], "--split 'test': accepted: train"),
+    (["--split", "cohort"], "--split 'cohort': accepted: train, dev, test"),
+    (["--design", "pairs"], "design source must be one of ('grid', 'people'), got 'pairs'"),
     (["--duration", "0.1"], "duration 0.1 s is too short for task 'lift'; accepted: >= 1.0 s"),
 ])
 def test_generate_refuses_a_bad_grid_before_any_work_and_writes_nothing(tmp_path, capsys, argv, needle):
@@ -479,3 +480,19 @@ def test_generate_from_the_training_split_draws_its_people_grasps_and_views(tmp_
     assert header["spec"]["users"] == [1000, 1001] and header["spec"]["views"] == [1007]
     # a dataset of the paper's view alone keeps the header it had before views existed
     assert "views" not in DatasetSpec().as_dict()
+
+
+def test_the_people_design_gives_each_person_their_own_grasp_and_view_and_rotates_the_masses():
+    spec = DatasetSpec(tasks=("lift", "place", "rotate"), users=(1000, 1001), masses=(0, 2, 5), seeds=(7, 8),
+                       design="people")
+    scs = spec.scenarios()
+    assert len(scs) == 2 * 3 * 2
+    assert all(sc.grasp == sc.user and sc.view == sc.user for sc in scs)
+    masses = {(sc.user, sc.task, sc.seed): sc.mass for sc in scs}
+    assert masses[1000, "lift", 7] == 0 and masses[1000, "place", 7] == 2 and masses[1000, "rotate", 8] == 0
+    assert masses[1001, "lift", 7] == 2 and masses[1001, "rotate", 7] == 0
+    for task in ("lift", "place", "rotate"):  # every task meets every mass
+        assert {m for (u, t, s), m in masses.items() if t == task} == {0, 2, 5}
+    assert spec.as_dict()["design"] == "people" and "design" not in DatasetSpec().as_dict()
+    with pytest.raises(DatasetError, match="design source must be one of"):
+        DatasetSpec(design="pairs")

@@ -50,7 +50,8 @@ def test_eval_writes_scores_report_junit_and_the_second_run_renders_nothing(tiny
     assert "every gate holds" in report
     # the trivial baselines ran on the same episode: the skill against the best of each metric's stage
     base = first["baselines"]
-    assert set(base) == {"static", "zero-kinematics", "gravity-forces", "no-internal", "grip-line"}
+    # blind (the default protocol): no grip line, which is a person's calibration and nothing else
+    assert set(base) == {"static", "zero-kinematics", "gravity-forces", "no-internal"}
     assert base["static"]["stage"] == "tracker" and base["no-internal"]["stage"] == "internal"
     static_box = base["static"]["aggregate"]["box_pos_err_mm"]["median"]["value"]
     assert static_box > 10 * ep["box_pos_err_mm"]  # no vision
@@ -215,10 +216,14 @@ def test_the_paper_suites_hold_the_paper_protocols_episodes():
            {(u, g, m, s) for u in (0, 4) for g in (0, 1) for m in (1, 4) for s in range(6)}
 
 
-def test_dev_is_the_standard_design_on_seeds_no_reported_suite_uses():
+def test_dev_is_the_standard_design_on_its_own_split_and_seeds_no_reported_suite_uses():
+    from benchmark.suites.splits import split_of
+
     std, dev = SUITES["standard"].scenarios, SUITES["dev"].scenarios
-    design = lambda scs: [(sc.task, sc.user, sc.grasp, sc.duration_s, sc.noise_m, sc.sensor) for sc in scs]
+    design = lambda scs: [(sc.task, sc.duration_s, sc.noise_m, sc.sensor) for sc in scs]
     assert design(dev) == design(std) and len(dev) == 48
+    assert {split_of(sc) for sc in std} == {"test"} and {split_of(sc) for sc in dev} == {"dev"}
+    assert [sc.user for sc in std] == list(range(500, 548)) and [sc.user for sc in dev] == list(range(100, 148))
     assert [sc.seed for sc in dev] == list(range(500, 548))
     reported = {sc.seed for name in ("standard", "smoke", "table1", "table2") for sc in SUITES[name].scenarios}
     assert not reported & {sc.seed for sc in dev}
@@ -234,11 +239,16 @@ def test_the_grip_calibration_recording_uses_seeds_no_suite_and_no_training_grid
 
     seeds = lambda name: set(parse_ints(dict(zip(DATASETS[name][::2], DATASETS[name][1::2]))["--seeds"]))
     used = {sc.seed for suite in SUITES.values() for sc in suite.scenarios}
+    recordings = [name for name in DATASETS if name.startswith("calibration")]
     for name in DATASETS:
-        if name != "calibration":
+        if name not in recordings:
             used |= seeds(name)
     assert seeds("calibration") == {900} and not seeds("calibration") & used
-    assert sorted(read_calibration()) == [0, 1, 2, 3, 4]  # every user of users.yaml
+    for name in recordings:
+        assert seeds(name) <= {900, 901} and not seeds(name) & used
+    # every user of users.yaml, the training people and the people of the dev and standard suites
+    people = {sc.user for name in ("dev", "standard") for sc in SUITES[name].scenarios}
+    assert sorted(read_calibration()) == sorted({0, 1, 2, 3, 4} | set(range(1000, 1040)) | people)
 
 
 def test_a_local_ray_cluster_gives_the_scores_of_the_local_run(tiny, ray_cluster, tmp_path):

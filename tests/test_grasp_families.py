@@ -52,3 +52,22 @@ def test_the_named_grasps_keep_their_spots_and_family():
         spec = grasp_spec(Scenario(grasp=g))
         assert spec["family"] == fam and spec["name"].startswith(f"g{g}-")
 
+
+
+def test_a_drawn_grasp_holds_the_heaviest_box_in_every_trial_and_a_plan_into_the_box_does_not():
+    from dataclasses import replace
+
+    from benchmark.world.grasp_plan import TRIAL_TASKS, holds
+
+    plan = plan_grasp(Scenario(user=123, grasp=9))
+    assert len(TRIAL_TASKS) >= 2 and holds(123, 9, plan)
+    # the same grasp with the palm 3 cm lower, nearer the box's top: the palm hits it while closing
+    sunk = replace(plan, palm_pos=plan.palm_pos + np.array([0.0, 0.0, -0.03]))
+    assert not holds(123, 9, sunk)
+
+
+def test_every_person_of_the_suites_gets_a_grasp_that_holds():
+    # dev person 105 (a small hand) has no candidate within the named cohort's 10 mm plan tolerance;
+    # the trials, not the plan, decide
+    plan = plan_grasp(Scenario(user=105, grasp=105))
+    assert feasible(plan) and plan.tip_error_m > 0.010

@@ -61,8 +61,17 @@ def test_lab_hand_and_box_are_the_measured_ones():
     ratio = np.sqrt(r["hand_length_m"]["given"] / r["hand_length_m"]["true"]
                     * r["hand_breadth_m"]["given"] / r["hand_breadth_m"]["true"])
     assert r["hand_scale"]["given"] == pytest.approx(1.08 * ratio)  # user 2's hand scale is 1.08
-    # every length of the given hand is the template's at the given scale
-    np.testing.assert_allclose(hand.geom_radius, ep.hand_model.geom_radius * r["hand_scale"]["given"] / 1.08, rtol=1e-12)
+    # the given hand is the template (none of user 2's proportions) stretched to the measured length
+    # along the hand and the measured breadth across it: its radii scale with the breadth alone
+    from benchmark.world.anatomy import Anatomy
+    from benchmark.world.hand import hand_model
+
+    template = hand_model(Anatomy.template(1.0))
+    np.testing.assert_allclose(hand.geom_radius, template.geom_radius * r["hand_breadth_m"]["given"] / 0.085, rtol=1e-12)
+    assert not np.allclose(hand.geom_radius, ep.hand_model.geom_radius * r["hand_scale"]["given"] / 1.08, rtol=1e-3)
+    flat = hand_model(Anatomy(length_scale=r["hand_length_m"]["given"] / 0.190,
+                              breadth_scale=r["hand_breadth_m"]["given"] / 0.085))
+    np.testing.assert_array_equal(hand.geom_radius, flat.geom_radius)
     assert obj.mass_kg == r["mass_kg"]["given"] and obj.friction == r["friction"]["given"]
     np.testing.assert_allclose(obj.inertia, obj.solid_box_inertia(obj.size_m, obj.mass_kg))
 

@@ -34,6 +34,15 @@ def test_the_leaderboard_scores_every_variant_and_the_oracles_score_as_truth(tin
     assert s["central"]["acc_err_rms"] > s["reference"]["acc_err_rms"]  # measured 3.3 vs 0.29 m/s^2
     labels = json.loads((out / "oracle-contacts-kinematics" / "scores.json").read_text())["method"]
     assert "contacts: oracle" in labels and "differentiator: oracle" in labels
+    # the two protocols side by side: the same tracking, the calibrated one told user 0's grip line
+    assert s["reference"]["protocol"] == "blind" and s["calibrated"]["protocol"] == "calibrated"
+    assert s["baseline-grip-line"]["protocol"] == "calibrated" and s["baseline-no-internal"]["protocol"] == "blind"
+    assert s["calibrated"]["learned_rel_err_pct"] != s["reference"]["learned_rel_err_pct"]
+    assert s["calibrated"]["net_force_err_n_rms"] == s["reference"]["net_force_err_n_rms"]  # forces before learning
+    assert "protocol: calibrated" in json.loads((out / "calibrated" / "scores.json").read_text())["method"]
+    # the spread over grasp families: the tiny suite's one episode, grasp 0 of the width-four family
+    spread = table.split("Spread of **reference**")[1] if "Spread of" in table else skills.split("Spread of **reference**")[1]
+    assert "| width-four | 1 |" in spread and "the worst person 0" in spread
 
 
 def test_skill_is_measured_against_the_baseline_of_the_metrics_stage():

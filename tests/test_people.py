@@ -13,12 +13,17 @@ from benchmark.world.people import (BASELINE_GRIP_N, FINGER_SHARE_MEAN, SAFETY_M
 from benchmark.world.scenario import Scenario
 
 
-def test_the_named_cohort_is_users_yaml_with_its_template_hand():
+def test_the_named_cohort_is_users_yaml_with_hands_of_their_own_proportions_at_their_size():
     assert named_count() == len(users()) == 5
     for u in range(5):
         p = person(u)
+        a, scale = p["anatomy"], users()[u]["hand_scale"]
         assert not p["drawn"] and p["name"] == users()[u]["name"]
-        assert p["anatomy"] == Anatomy.template(users()[u]["hand_scale"])
+        assert a.hand_length_m == pytest.approx(0.190 * scale, abs=1e-12)
+        assert a.hand_breadth_m == pytest.approx(0.085 * scale, abs=1e-12)
+        assert a != Anatomy.template(scale) and np.ptp(a.digit_radius) > 0.01  # not the template
+    assert person(4)["anatomy"] == person(1)["anatomy"]  # users.yaml: u4 has u1's hand
+    assert person(0)["anatomy"] != person(2)["anatomy"]
 
 
 def test_a_drawn_person_is_the_same_for_every_scenario_and_differs_from_the_next():

@@ -62,7 +62,7 @@ def test_free_joint_conventions_on_a_tumbling_box():
     """A box thrown in the air: recorded omega is world-frame, acc is g, alpha obeys Euler's equations."""
     import mujoco
 
-    from benchmark.world.simulate import _Recorder
+    from benchmark.world.physics import _Recorder
     from benchmark.world.assets import build_world
 
     w = build_world(Scenario(mass=2))
@@ -152,7 +152,7 @@ def test_same_seed_same_bits(tmp_path):
 
 def test_a_dropped_box_or_a_palm_contact_is_an_error():
     from benchmark.errors import SimulationError
-    from benchmark.world.simulate import _check_outcome
+    from benchmark.world.physics import _check_outcome
 
     T = 5
     t = np.arange(T) / 30

@@ -24,3 +24,17 @@ def test_train_refuses_more_folds_than_episodes_before_training(learn_oracle_dat
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--folds 5 needs between 2 and the dataset's 2 episodes" in err
     assert not out.exists()
+
+
+def test_train_refuses_dev_and_test_people_naming_them_and_what_is_accepted():
+    import pytest
+
+    from benchmark.paper.training import check_training_people
+    from fsv.errors import InputError
+
+    check_training_people([0, 4, 1000, 5123])  # the named cohort and the training split
+    with pytest.raises(InputError, match=r"the dataset holds test people \(500\.\.\.\), who never train a model; "
+                                         r"accepted: training people \(1000 and above"):
+        check_training_people([1000, 500, 999])
+    with pytest.raises(InputError, match=r"dev people \(123\)"):
+        check_training_people([123])

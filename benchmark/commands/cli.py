@@ -30,6 +30,7 @@ from benchmark.commands.report import write_json
 from benchmark.commands.stage import Run, complete
 from benchmark.commands.stages import STAGES
 from benchmark.errors import BenchmarkError, ScenarioError
+from benchmark.method.protocol import check_people
 from benchmark.suites.evaluate import add_method_arguments, load_gates, spec_from_args
 from benchmark.world.assets import validate
 from benchmark.world.scenario import Scenario, episode_name
@@ -163,6 +164,7 @@ def main(argv: list | None = None) -> int:
     try:
         scenario = scenario_from_args(args)
         spec = method_spec_from_args(args)
+        check_people((scenario.user,), spec.protocol)
         if args.gates:
             load_gates(args.gates)
         out = args.out or pathlib.Path("runs") / episode_name(scenario)

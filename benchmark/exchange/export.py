@@ -19,15 +19,17 @@ import shutil
 
 from benchmark.atomic import staging_folder, swap_folder
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
+from benchmark.method.protocol import DEFAULT_PROTOCOL
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.options import add_suite_arguments
 
-    from benchmark.suites.evaluate import add_knowledge_argument
+    from benchmark.suites.evaluate import add_knowledge_argument, add_protocol_argument
 
     add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz or .h5)", workers=False)
     add_knowledge_argument(p)
+    add_protocol_argument(p)
     p.add_argument("--format", choices=FORMATS, default="npz",
                    help="the files' container: npz (NumPy) or hdf5 (for C, C++, Julia, MATLAB, R, JS; <episode>.h5)")
 
@@ -37,10 +39,10 @@ FORMATS = {"npz": ".npz", "hdf5": ".h5"}
 
 
 def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True, container: str = "npz",
-                 knowledge: str = DEFAULT_KNOWLEDGE) -> dict:
+                 knowledge: str = DEFAULT_KNOWLEDGE, protocol: str = DEFAULT_PROTOCOL) -> dict:
     """Writes the camera inputs of every episode of ``suite`` into ``out`` (as ``<episode>.npz``, or
-    ``.h5`` with ``container="hdf5"``), the hand, box and camera as ``knowledge`` says; returns
-    ``suite.json``'s content."""
+    ``.h5`` with ``container="hdf5"``), the hand, box and camera as ``knowledge`` says and the
+    person's grip calibration under the ``calibrated`` protocol; returns ``suite.json``'s content."""
     from benchmark.suites.evaluate import cached_episode, default_cache
     from benchmark.world.scenario import episode_name
     from benchmark.exchange import camera_file, estimates_file
@@ -61,17 +63,17 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
         for sc in scenarios:
             episode, _ = cached_episode(suite, sc, cache)
             name = episode_name(sc)
-            inputs, known = camera_input_and_knowledge(episode, knowledge=knowledge)
+            inputs, known = camera_input_and_knowledge(episode, knowledge=knowledge, protocol=protocol)
             camera_file.save_camera_input(inputs, tmp / f"{name}{suffix}", episode=name, suite=suite,
                                           rng_seed=sc.rng_entropy("tracker"), knowledge=known.given_record())
             episodes.append({"episode": name, "file": f"{name}{suffix}", "frames": inputs.num_frames,
                              "task": sc.task})
         index = {"suite": {"name": suite.name, "version": suite.version, "description": suite.description},
-                 "knowledge": knowledge, "episodes": episodes,
+                 "knowledge": knowledge, "protocol": protocol, "episodes": episodes,
                  "formats": {"camera": [camera_file.FORMAT, camera_file.VERSION],
                              "estimates": [estimates_file.FORMAT, estimates_file.VERSION]},
                  "estimates": f"write <episode>{suffix} per episode into one folder; fsv-bench score --suite "
-                              f"{suite.name} --estimates FOLDER --out OUT --knowledge {knowledge}"
+                              f"{suite.name} --estimates FOLDER --out OUT --knowledge {knowledge} --protocol {protocol}"
                               + (" --format hdf5" if suffix == ".h5" else ""),
                  "provenance": provenance()}
         (tmp / "suite.json").write_text(json.dumps(index, indent=1) + "\n")
@@ -86,10 +88,13 @@ def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
     from benchmark.suites import get_suite
 
+    from benchmark.method.protocol import check_people
+
     suite = get_suite(args.suite, args.sensor)
     check_out(args.out)
+    check_people((sc.user for sc in suite.scenarios), args.protocol)
     index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format,
-                         knowledge=args.knowledge)
+                         knowledge=args.knowledge, protocol=args.protocol)
     print(f"fsv-bench export: suite {suite.name} v{suite.version}, {len(index['episodes'])} camera-input files "
           f"in {args.out}/ (format {index['formats']['camera'][0]} v{index['formats']['camera'][1]})")
     return index

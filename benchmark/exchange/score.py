@@ -20,11 +20,12 @@ import time
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.options import add_baseline_argument, add_suite_arguments
 
-    from benchmark.suites.evaluate import add_knowledge_argument
+    from benchmark.suites.evaluate import add_knowledge_argument, add_protocol_argument
 
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
     add_baseline_argument(p)
     add_knowledge_argument(p)
+    add_protocol_argument(p)
     p.add_argument("--estimates", required=True, type=pathlib.Path, help="folder of <episode>.npz estimates files")
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--format", choices=("npz", "hdf5"), default="npz",
@@ -53,21 +54,25 @@ def estimate_paths(suite, folder: pathlib.Path, container: str = "npz") -> dict:
 
 
 def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress: bool = True, observer=None,
-                container: str = "npz", knowledge: str | None = None) -> dict:
+                container: str = "npz", knowledge: str | None = None, protocol: str | None = None) -> dict:
     """Scores the estimates files in ``folder`` on ``suite``: the content of ``scores.json``
     (``observer(episode, estimate, 0)`` sees every estimate, e.g. to draw its pictures).
     ``knowledge`` is what the camera-input files told the method (``fsv-bench export --knowledge``):
-    its camera calibration carries the estimates into the true world frame."""
+    its camera calibration carries the estimates into the true world frame; ``protocol`` what they
+    told it of the person (``--protocol``; recorded with every episode)."""
     from dataclasses import asdict
 
     from benchmark.archive import read_archive
     from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, check_identity, load_estimate
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
+    from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
     from benchmark.fingerprint import world_fingerprint
+    from benchmark.world.grasp_plan import grasp_spec
     from benchmark.scores.episode import score_episode
     from benchmark.suites.evaluate import cached_episode, default_cache, scores_document
     from benchmark.world.scenario import episode_name
 
+    protocol = check_protocol(protocol or DEFAULT_PROTOCOL)
     paths = estimate_paths(suite, folder, container)
     metas = {sc: read_archive(p, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
                               digests_required=False)[0] for sc, p in paths.items()}  # every header before any work
@@ -91,8 +96,9 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
             observer(episode, estimate, 0)
         known = given(episode, knowledge or DEFAULT_KNOWLEDGE)[3]
         rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
+                     "grasp_family": grasp_spec(sc)["family"],
                      **score_episode(episode, estimate, known.world_from_method), "knowledge": known.record(),
-                     "seconds": time.perf_counter() - t1, "rendered": made})
+                     "protocol": protocol, "seconds": time.perf_counter() - t1, "rendered": made})
     first = metas[suite.scenarios[0]]
     return scores_document(suite, rows, suite.gates if gates is None else gates,
                            method=str(first.get("method") or f"estimates from {folder}"),
@@ -100,12 +106,13 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
                            seconds=time.perf_counter() - t0)
 
 
-def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowledge: str | None = None) -> dict:
+def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowledge: str | None = None,
+                   protocol: str | None = None) -> dict:
     """``scores`` with its ``baselines`` entry: every trivial baseline run on the same (cached)
-    episodes, told what ``knowledge`` says."""
+    episodes, told what ``knowledge`` and ``protocol`` say."""
     from benchmark.suites.evaluate import baseline_specs, baselines_block, evaluate_many
 
-    specs = baseline_specs(knowledge)
+    specs = baseline_specs(knowledge, protocol)
     documents = evaluate_many(suite, list(specs.values()), gates=gates, cache=cache, progress=progress)
     return {**scores, "baselines": baselines_block(specs, documents)}
 
@@ -115,9 +122,12 @@ def run(args: argparse.Namespace) -> dict:
     from benchmark.suites.evaluate import load_gates, print_verdict, write_outputs
     from benchmark.suites import get_suite
 
+    from benchmark.method.protocol import check_protocol
+
     suite = get_suite(args.suite, args.sensor)
     gates = load_gates(args.gates) if args.gates else None
     check_out(args.out)
+    check_protocol(args.protocol)
     estimate_paths(suite, args.estimates, args.format)
     if args.pictures:
         import tempfile
@@ -127,17 +137,18 @@ def run(args: argparse.Namespace) -> dict:
         with tempfile.TemporaryDirectory(prefix="fsv-bench-pictures-") as folder:
             writer = EpisodePictures(folder)
             scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
-                                 observer=writer, container=args.format, knowledge=args.knowledge)
+                                 observer=writer, container=args.format, knowledge=args.knowledge,
+                                 protocol=args.protocol)
             if not args.no_baselines:
                 scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet,
-                                        knowledge=args.knowledge)
+                                        knowledge=args.knowledge, protocol=args.protocol)
             write_outputs(scores, suite, args.out, chosen(writer, args.pictures)(scores, gates or suite.gates))
     else:
         scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,
-                             container=args.format, knowledge=args.knowledge)
+                             container=args.format, knowledge=args.knowledge, protocol=args.protocol)
         if not args.no_baselines:
             scores = with_baselines(scores, suite, gates=gates, cache=args.cache, progress=not args.quiet,
-                                        knowledge=args.knowledge)
+                                        knowledge=args.knowledge, protocol=args.protocol)
         write_outputs(scores, suite, args.out)
     print_verdict(scores, args.out, "score")
     return scores

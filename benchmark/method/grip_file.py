@@ -1,7 +1,7 @@
 """The grip-calibration file: each user's grip line, as the method adapter hands it to a method.
 
 The file is JSON: ``{"format": "fsv-bench-grip-calibration", "version": 1, "recording": {the
-dataset's generate spec}, "users": {"<index>": {"baseline_n", "gain", "samples"}}, "provenance"}``.
+dataset's generate spec} (a list of them when several recordings made it), "users": {"<index>": {"baseline_n", "gain", "samples"}}, "provenance"}``.
 It is made by ``fsv-bench calibrate`` (:mod:`benchmark.paper.calibration`).
 """
 
@@ -30,7 +30,7 @@ class CalibrationError(BenchmarkError):
     """A grip-calibration file is missing, damaged or of another format."""
 
 
-def write_calibration(path, calibrations: dict, recording: dict) -> None:
+def write_calibration(path, calibrations: dict, recording) -> None:
     """Writes ``{user: GripCalibration}`` as a grip-calibration file (atomically), with provenance."""
     doc = {"format": FORMAT, "version": VERSION, "recording": recording,
            "users": {str(u): {"baseline_n": c.baseline_n, "gain": c.gain, "samples": c.samples}
@@ -76,3 +76,16 @@ def _read(path: str, text) -> dict[int, GripCalibration]:
 def user_grip(user: int) -> GripCalibration | None:
     """The shipped calibration of a benchmark user, or None if it has none."""
     return dict(_shipped()).get(int(user))
+
+
+def calibrated_users() -> str:
+    """The people of the shipped calibration, in short ranges (e.g. "0-4, 100-147, 500-547")."""
+    users = sorted(dict(_shipped()))
+    runs, start = [], None
+    for i, u in enumerate(users):
+        if start is None:
+            start = u
+        if i + 1 == len(users) or users[i + 1] != u + 1:
+            runs.append(str(start) if start == u else f"{start}-{u}")
+            start = None
+    return ", ".join(runs) or "none"

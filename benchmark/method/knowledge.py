@@ -5,10 +5,10 @@ true mass and friction, the camera's true calibration): a labelled ablation, lik
 ``lab`` hands it what a lab would measure, each quantity with an error drawn from the scenario's
 ``"knowledge"`` stream (the same scenario, the same errors):
 
-- **the hand**: the method's generic hand (today's template, ``sim_assets/hand.yaml``) scaled from
-  the person's hand length and breadth read off a ruler (:data:`RULER_SD_M`); the template's
-  length and breadth are those of ``hand.yaml`` (190 and 85 mm at scale 1); the scale is the
-  geometric mean of the two ratios;
+- **the hand**: the method's generic hand (the template, ``sim_assets/hand.yaml``, with none of the
+  person's proportions) stretched along the hand to the person's hand length and across it to
+  their hand breadth, both read off a ruler (:data:`RULER_SD_M`; the template is 190 mm long and
+  85 mm broad, ``benchmark.world.anatomy``);
 - **the box**: its mass from a kitchen scale (:data:`SCALE_SD_KG`), its finger friction from a
   tilt test, mu = tan(theta) at the angle theta where the box starts to slide on a finger-pad
   material (:data:`TILT_SD_RAD`);
@@ -62,8 +62,9 @@ class Knowledge:
 
     Attributes:
         name: "exact" or "lab".
-        hand_scale_true: The person's hand scale (the simulated hand's).
-        hand_scale_given: The scale of the hand model the method was given.
+        hand_scale_true: The person's hand scale (the simulated hand's; for a drawn person the
+            geometric mean of its length and breadth scales).
+        hand_scale_given: The given hand model's (the geometric mean of its length and breadth scales).
         hand_length_m: True and measured hand length, (2,), [m].
         hand_breadth_m: True and measured hand breadth, (2,), [m].
         mass_kg: True and given box mass, (2,), [kg].
@@ -168,8 +169,9 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
         ``(hand_model, object_model, calib, knowledge)``: the method's models and calibration and
         the :class:`Knowledge` record.
     """
+    from benchmark.world.anatomy import TEMPLATE_HAND_BREADTH_M, TEMPLATE_HAND_LENGTH_M, Anatomy
     from benchmark.world.assets import user_of
-    from benchmark.world.hand import hand_model as hand_at_scale
+    from benchmark.world.hand import hand_model as hand_of
     from fsv import Calibration
 
     check_knowledge(name)
@@ -194,7 +196,9 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
     dc = PRINCIPAL_SD_PX * rng.standard_normal(2) * on["camera"]
     drot = EXTRINSIC_ROT_SD_RAD * rng.standard_normal(3) * on["camera"]
     dpos = EXTRINSIC_POS_SD_M * rng.standard_normal(3) * on["camera"]
-    scale_given = scale * math.sqrt((length_m / length) * (breadth_m / breadth))
+    generic = Anatomy(length_scale=float(length_m / TEMPLATE_HAND_LENGTH_M),
+                      breadth_scale=float(breadth_m / TEMPLATE_HAND_BREADTH_M))
+    scale_given = math.sqrt(generic.length_scale * generic.breadth_scale) if on["hand"] else scale
     friction = math.tan(theta) if on["box"] else om.friction
     K_given = K.copy()
     K_given[0, 0], K_given[1, 1] = K[0, 0] * (1 + df[0]), K[1, 1] * (1 + df[1])
@@ -212,4 +216,4 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
         (focal, (K_given[0, 0], K_given[1, 1])), (principal, (K_given[0, 2], K_given[1, 2])),
         math.degrees(float(np.linalg.norm(drot))), float(np.linalg.norm(dpos)),
         T @ np.linalg.inv(T_given) if on["camera"] else np.eye(4))
-    return (hand_at_scale(scale_given) if on["hand"] else episode.hand_model), om_given, calib_given, knowledge
+    return (hand_of(generic) if on["hand"] else episode.hand_model), om_given, calib_given, knowledge

@@ -5,31 +5,38 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
+from benchmark.method.protocol import DEFAULT_PROTOCOL
 from benchmark.method.spec import MethodSpec
 from fsv.track.tracker import TrackInit
 
 
-def camera_input(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOWLEDGE):
+def camera_input(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOWLEDGE,
+                 protocol: str = DEFAULT_PROTOCOL):
     """What the method is given of a rendered episode: no truth beyond the perturbed first frame,
-    the hand, box and camera as ``knowledge`` says (:mod:`benchmark.method.knowledge`), and the
-    user's grip calibration (:func:`benchmark.method.grip_file.user_grip`), measured in recordings
-    of their own.
+    the hand, box and camera as ``knowledge`` says (:mod:`benchmark.method.knowledge`), and, under
+    the ``calibrated`` protocol, the person's grip calibration measured in a recording of their own
+    (:mod:`benchmark.method.protocol`).
 
     Args:
         episode: A rendered ``benchmark.Episode``.
         init_scale: Scale of the seeded first-frame perturbation (``benchmark.method.init.INIT_PERTURBATION``).
         knowledge: "exact" (the simulation's own values, an ablation) or "lab" (measured, with errors).
+        protocol: "blind" (nothing known of the person) or "calibrated".
 
     Returns:
         An ``fsv.method.CameraInput``.
+
+    Raises:
+        ProtocolError: Under ``calibrated``, if the person has no calibration recording.
     """
-    return camera_input_and_knowledge(episode, init_scale, knowledge)[0]
+    return camera_input_and_knowledge(episode, init_scale, knowledge, protocol)[0]
 
 
-def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOWLEDGE) -> tuple:
+def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOWLEDGE,
+                               protocol: str = DEFAULT_PROTOCOL) -> tuple:
     """:func:`camera_input` and the :class:`benchmark.method.knowledge.Knowledge` record behind it."""
-    from benchmark.method.grip_file import user_grip
     from benchmark.method.init import tracker_init
+    from benchmark.method.protocol import person_grip
     from benchmark.method.knowledge import given
     from fsv.method import CameraInput
 
@@ -41,7 +48,7 @@ def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str 
         init = TrackInit(box_pos=R @ init.box_pos + t, box_rot=R @ init.box_rot, palm_pos=R @ init.palm_pos + t,
                          palm_rot=R @ init.palm_rot, joints=init.joints)
     inputs = CameraInput(depth=episode.depth, calib=calib, object_model=obj, hand_model=hand, init=init,
-                         gravity=episode.truth.gravity, grip=user_grip(episode.scenario.user))
+                         gravity=episode.truth.gravity, grip=person_grip(episode.scenario.user, protocol))
     return inputs, known
 
 
@@ -74,7 +81,7 @@ def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None, progres
         The ``fsv.method.Estimate``; the tracker's searches draw from ``episode.scenario.rng("tracker")``.
     """
     method = spec.build()
-    inputs = camera_input(episode, knowledge=spec.knowledge) if inputs is None else inputs
+    inputs = camera_input(episode, knowledge=spec.knowledge, protocol=spec.protocol) if inputs is None else inputs
     oracle = oracle_inputs(episode, spec.oracle)
     if tracking is not None:
         return method.after_tracking(inputs, tracking, **oracle)
@@ -97,6 +104,8 @@ def method_label(spec: MethodSpec) -> str:
     labels = dict(getattr(method, "labels", None) or {})
     if spec.knowledge != DEFAULT_KNOWLEDGE:
         labels["knowledge"] = spec.knowledge
+    if spec.protocol != DEFAULT_PROTOCOL:
+        labels["protocol"] = spec.protocol
     if spec.method:
         head = f"{spec.method}"
         return head + (f" ({'; '.join(f'{k}: {v}' for k, v in labels.items())})" if labels else "")

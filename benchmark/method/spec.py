@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, check_knowledge
+from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
 
 ORACLE_STAGES = ("contacts", "kinematics")
 """The method's inputs the truth may replace (a labelled *oracle* ablation)."""
@@ -33,6 +34,8 @@ class MethodSpec:
         oracle: Inputs replaced by the truth, a subset of :data:`ORACLE_STAGES`.
         knowledge: What the method is told of the hand, the box and the camera
             (:data:`benchmark.method.knowledge.KNOWLEDGE`: "exact" or "lab").
+        protocol: What it is told of the person (:data:`benchmark.method.protocol.PROTOCOLS`:
+            "blind", nothing, or "calibrated", the person's grip calibration).
     """
 
     method: str | None = None
@@ -43,9 +46,11 @@ class MethodSpec:
     internal_model: str | None = None
     oracle: tuple = field(default_factory=tuple)
     knowledge: str = DEFAULT_KNOWLEDGE
+    protocol: str = DEFAULT_PROTOCOL
 
     def __post_init__(self):
         check_knowledge(self.knowledge)
+        check_protocol(self.protocol)
         object.__setattr__(self, "oracle", tuple(sorted(set(self.oracle))))
         bad = [o for o in self.oracle if o not in ORACLE_STAGES]
         if bad:

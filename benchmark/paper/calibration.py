@@ -42,20 +42,28 @@ def grip_calibrations(df) -> dict[int, GripCalibration]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--data", required=True, help="the calibration recording: a dataset folder made by `fsv-bench generate`")
+    p.add_argument("--data", required=True, action="append",
+                   help="a calibration recording: a dataset folder made by `fsv-bench generate` (repeat for several; "
+                        "no person in two)")
     p.add_argument("--out", required=True, help="grip-calibration file to write (.json)")
 
 
 def run(args: argparse.Namespace) -> dict:
+    from benchmark.errors import DatasetError
     from benchmark.paper.dataset import load_dataset
+    from benchmark.paper.dataset.files import read_header
     from benchmark.scores.samples import MAX_EXCESS_N
 
-    df = load_dataset(args.data, max_excess_n=MAX_EXCESS_N)
-    from benchmark.paper.dataset.files import read_header
-
-    recording = read_header(args.data)["spec"]
-    calibrations = grip_calibrations(df)
-    write_calibration(args.out, calibrations, recording)
+    recordings = [read_header(d)["spec"] for d in args.data]  # every header checked before any work
+    calibrations = {}
+    for folder in args.data:
+        found = grip_calibrations(load_dataset(folder, max_excess_n=MAX_EXCESS_N))
+        twice = sorted(set(found) & set(calibrations))
+        if twice:
+            raise DatasetError(f"--data {folder}: user {twice[0]} is also in an earlier recording; accepted: "
+                               f"recordings of different people")
+        calibrations.update(found)
+    write_calibration(args.out, calibrations, recordings[0] if len(recordings) == 1 else recordings)
     for u, c in sorted(calibrations.items()):
         print(f"user {u}: {c.baseline_n:.2f} N + {c.gain:.3f} N per N of load ({c.samples} samples)")
     print(f"saved {args.out}")

@@ -35,6 +35,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
     p.add_argument("--out", required=True, help="model file to write (.npz)")
     p.add_argument("--seeds", default=None, help="episode seeds to train on (default: all)")
+    p.add_argument("--users", default=None, help="people to train on, e.g. 1000-1019 (default: all)")
     p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
     p.add_argument("--folds", type=int, default=LearnConfig.folds, help="cross-validation folds (0: skip)")
     p.add_argument("--seed", type=int, default=0, help="seed of the initial weights")
@@ -51,8 +52,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"plausibility rule on the samples, [N] (default {MAX_EXCESS_N}; inf: the paper's rule only)")
 
 
+def check_training_people(users) -> None:
+    """Raises InputError if any of ``users`` is a dev or test person (they choose and score, never train)."""
+    from benchmark.suites.splits import SPLITS
+
+    for name in ("dev", "test"):
+        bad = sorted(int(u) for u in users if SPLITS[name].holds(u))
+        if bad:
+            raise InputError(f"the dataset holds {name} people ({bad[0]}{'...' if len(bad) > 1 else ''}), who never "
+                             f"train a model; accepted: training people (1000 and above, `fsv-bench generate --split "
+                             f"train`) and the named cohort; select them with --users")
+
+
 def run(args: argparse.Namespace):
     where = {} if args.seeds is None else dict(seed=list(parse_ints(args.seeds)))
+    if args.users is not None:
+        where["user"] = list(parse_ints(args.users))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     try:
         grips = None if args.grip is None else read_calibration(args.grip)
@@ -60,6 +75,7 @@ def run(args: argparse.Namespace):
         raise InputError(f"--grip: {e}") from e
     df = load_dataset(args.data, max_excess_n=rule, **where)
     header = read_header(args.data)  # before any training: a damaged header is refused at once
+    check_training_people(df["user"].unique())
     data = training_set(df, grips)
     episodes = int(df["episode"].nunique())
     if args.folds and not 2 <= args.folds <= episodes:

@@ -43,6 +43,7 @@ def leaderboard_markdown(suite, entries: list, baseline_stage: dict | None = Non
         cells = " | ".join(_cell(agg[m][s]) for m, s, _ in COLUMNS)
         lines.append(f"| {name} | {cells} | {held}/{len(scores['gates'])} |")
     lines += skill_table(entries, baseline_stage or {})
+    lines += spread_table(entries)
     lines += ["", "Methods:", ""]
     lines += [f"- **{name}**: {scores['method']}" for name, scores in entries]
     return "\n".join(lines) + "\n"
@@ -100,3 +101,48 @@ def skill_table(entries: list, baseline_stage: dict) -> list:
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return lines
 
+
+
+SPREAD = (("learned_rel_err_pct", "learned [%]"), ("contact_err_mm_std", "contact std [mm]"),
+          ("net_force_err_n_rms", "net force [N]"))
+"""The metrics whose spread over people and grasp families the leaderboard shows."""
+
+
+def _span(values) -> str:
+    import numpy as np
+
+    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], dtype=float)
+    if not len(v):
+        return "—"
+    return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
+
+
+def spread_table(entries: list) -> list:
+    """Lines of a Markdown table: the first method's per-episode values per grasp family (each
+    episode's ``grasp_family``), median (min-max), and over people (every episode a person of its
+    own in the split suites: the quartiles of the episodes)."""
+    import numpy as np
+
+    if not entries or not all("grasp_family" in r for r in entries[0][1]["episodes"]):
+        return []
+    name, scores = entries[0]
+    rows = scores["episodes"]
+    people = len({r["scenario"]["user"] for r in rows})
+    lines = ["", f"Spread of **{name}** over grasp families and people ({people} people in {len(rows)} episodes): "
+             "median (min-max) of the episodes' values.", "",
+             "| grasp family | episodes | " + " | ".join(h for _, h in SPREAD) + " |", "|---|---|" + "---|" * len(SPREAD)]
+    for family in sorted({r["grasp_family"] for r in rows}):
+        sub = [r for r in rows if r["grasp_family"] == family]
+        lines.append(f"| {family} | {len(sub)} | " + " | ".join(_span(r.get(m) for r in sub) for m, _ in SPREAD) + " |")
+    lines.append(f"| every family | {len(rows)} | " + " | ".join(_span(r.get(m) for r in rows) for m, _ in SPREAD) + " |")
+    per_person = {}
+    for r in rows:
+        if r.get("learned_rel_err_pct") is not None and np.isfinite(r["learned_rel_err_pct"]):
+            per_person.setdefault(r["scenario"]["user"], []).append(r["learned_rel_err_pct"])
+    if per_person:
+        means = {u: float(np.mean(v)) for u, v in per_person.items()}
+        q1, q2, q3 = np.percentile(list(means.values()), [25, 50, 75])
+        worst = max(means, key=means.get)
+        lines += ["", f"Learned forces per person: quartiles {q1:.3g} / {q2:.3g} / {q3:.3g} %; the worst person "
+                      f"{worst} at {means[worst]:.3g} %."]
+    return lines

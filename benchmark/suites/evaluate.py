@@ -90,17 +90,19 @@ def _episode_rows(job) -> list:
     from benchmark.method import run_method
     from benchmark.method.run import camera_input_and_knowledge
     from benchmark.scores.episode import score_episode
+    from benchmark.world.grasp_plan import grasp_spec
 
     suite, sc, cache, specs, init_scale, observer = job
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
-    given = {}  # knowledge -> (camera inputs, what the method was told)
+    given = {}  # (knowledge, protocol) -> (camera inputs, what the method was told)
     rows, tracked = [], {}
     for spec in specs:
         t1 = time.perf_counter()
-        if spec.knowledge not in given:
-            given[spec.knowledge] = camera_input_and_knowledge(episode, init_scale, spec.knowledge)
-        inputs, known = given[spec.knowledge]
+        if (spec.knowledge, spec.protocol) not in given:
+            given[spec.knowledge, spec.protocol] = camera_input_and_knowledge(episode, init_scale, spec.knowledge,
+                                                                              spec.protocol)
+        inputs, known = given[spec.knowledge, spec.protocol]
         key = spec.tracking_key
         shared = None if key is None else tracked.get(key)
         estimate = run_method(spec, episode, inputs=inputs, tracking=shared)
@@ -110,8 +112,9 @@ def _episode_rows(job) -> list:
         if observer is not None:
             observer(episode, estimate, len(rows))
         seconds = time.perf_counter() - (t0 if not rows else t1)
-        rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc), **metrics,
-                     "knowledge": known.record(), "seconds": seconds, "rendered": made and not rows})
+        rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
+                     "grasp_family": grasp_spec(sc)["family"], **metrics,
+                     "knowledge": known.record(), "protocol": spec.protocol, "seconds": seconds, "rendered": made and not rows})
     return rows
 
 
@@ -175,14 +178,18 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
             for m, spec in enumerate(specs)]
 
 
-def baseline_specs(knowledge: str | None = None) -> dict:
+def baseline_specs(knowledge: str | None = None, protocol: str | None = None) -> dict:
     """``{name: MethodSpec}`` of every stage's trivial baseline (:mod:`fsv.method.baselines`), told
-    what ``knowledge`` says (default: the default)."""
+    what ``knowledge`` and ``protocol`` say (default: the defaults). Under the ``blind`` protocol
+    the grip line, which is a person's calibration and nothing else, is left out."""
     from benchmark.method import MethodSpec
+    from benchmark.method.protocol import DEFAULT_PROTOCOL
     from fsv.method.baselines import BASELINES
 
     extra = {} if knowledge is None else {"knowledge": knowledge}
-    return {name: MethodSpec(method=name, **extra) for name in BASELINES}
+    protocol = DEFAULT_PROTOCOL if protocol is None else protocol
+    return {name: MethodSpec(method=name, protocol=protocol, **extra) for name in BASELINES
+            if not (name == "grip-line" and protocol == "blind")}
 
 
 def baselines_block(names, documents) -> dict:
@@ -339,6 +346,17 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, intern
         g.add_argument("--oracle", default="", metavar="LIST",
                        help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
     add_knowledge_argument(g)
+    add_protocol_argument(g)
+
+
+def add_protocol_argument(p) -> None:
+    """``--protocol blind|calibrated``: what the method is told of the person."""
+    from benchmark.method.protocol import DEFAULT_PROTOCOL, PROTOCOLS
+
+    p.add_argument("--protocol", default=DEFAULT_PROTOCOL, metavar="|".join(PROTOCOLS),
+                   help="what the method is told of the person: blind (nothing, the paper's protocol) or "
+                        "calibrated (the person's grip line from a calibration recording of their own); "
+                        f"default {DEFAULT_PROTOCOL}")
 
 
 def add_knowledge_argument(p) -> None:
@@ -355,11 +373,13 @@ def spec_from_args(args: argparse.Namespace):
     """The :class:`benchmark.method.MethodSpec` of the command line, loaded and checked (raises ValueError)."""
     from benchmark.method import MethodSpec
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
+    from benchmark.method.protocol import DEFAULT_PROTOCOL
 
     spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=args.differentiator,
                       forces=args.forces, internal=args.internal, internal_model=getattr(args, "internal_model", None),
                       oracle=tuple(o for o in getattr(args, "oracle", "").split(",") if o),
-                      knowledge=getattr(args, "knowledge", DEFAULT_KNOWLEDGE))
+                      knowledge=getattr(args, "knowledge", DEFAULT_KNOWLEDGE),
+                      protocol=getattr(args, "protocol", DEFAULT_PROTOCOL))
     spec.check()
     return spec
 
@@ -376,11 +396,14 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)
     spec = spec_from_args(args)
+    from benchmark.method.protocol import check_people
+
+    check_people((sc.user for sc in suite.scenarios), spec.protocol)
     if args.ray_address is not None:
         from benchmark.parallel import check_ray_address
 
         check_ray_address(args.ray_address)
-    extra = {} if args.no_baselines else baseline_specs(spec.knowledge)
+    extra = {} if args.no_baselines else baseline_specs(spec.knowledge, spec.protocol)
     documents = evaluate_many(suite, [spec, *extra.values()], gates=gates, cache=args.cache, progress=not args.quiet,
                               workers=args.workers, ray_address=args.ray_address,
                               observer=None if observer is None else _first_method_only(observer))

@@ -29,9 +29,10 @@ AXES = {
     "init": (None, float, "first-frame perturbation scale"),
     "sensor": ("sensor", str, "depth sensor preset"),
     "knowledge": (None, str, "what the method is told (benchmark.method.knowledge)"),
+    "protocol": (None, str, "what the method is told of the person (benchmark.method.protocol)"),
 }
-"""Axis name -> (Scenario field, or None for what the method is given: its initialisation or its
-knowledge, type, label)."""
+"""Axis name -> (Scenario field, or None for what the method is given: its initialisation, its
+knowledge or its protocol, type, label)."""
 
 PLOTTED = ("box_pos_err_mm", "contact_err_mm_std", "acc_err_rms", "net_force_err_n_rms", "least_violation_frac",
            "learned_rel_err_pct")
@@ -66,12 +67,17 @@ def parse_values(axis: str, text: str) -> list:
 
         for v in values:
             check_knowledge(v)
+    if axis == "protocol":
+        from benchmark.method.protocol import check_protocol
+
+        for v in values:
+            check_protocol(v)
     return values
 
 
 def swept_suite(suite, axis: str, value):
     """The suite with every scenario moved to ``value`` along ``axis`` (itself for the ``init`` and
-    ``knowledge`` axes, which change what the method is given)."""
+    ``knowledge`` and ``protocol`` axes, which change what the method is given)."""
     from benchmark.suites import Suite
     from benchmark.world.assets import validate
 
@@ -132,10 +138,14 @@ def run(args: argparse.Namespace) -> dict:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)
     spec = spec_from_args(args)
+    from benchmark.method.protocol import check_people
+
+    for protocol in (values if args.axis == "protocol" else [spec.protocol]):
+        check_people((sc.user for sc in suite.scenarios), protocol)
     results = []
     for value, s in zip(values, suites):
         scale = value if args.axis == "init" else 1.0
-        told = dataclasses.replace(spec, knowledge=value) if args.axis == "knowledge" else spec
+        told = (dataclasses.replace(spec, **{args.axis: value}) if args.axis in ("knowledge", "protocol") else spec)
         results.append(evaluate(s, spec=told, cache=args.cache, progress=not args.quiet, workers=args.workers,
                                 init_scale=scale))
         print(f"  {args.axis} = {value}: done ({results[-1]['seconds']:.0f} s)")

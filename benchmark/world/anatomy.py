@@ -20,7 +20,9 @@ each digit's girth by its own factor. :func:`draw_anatomy` draws one from a gene
   2018, Int. J. Ind. Ergon. 68, about 5-7 %, less the part explained by hand breadth).
 
 The hand length that results (wrist crease to the middle fingertip) is the drawn one exactly:
-``length_scale`` is solved for it after the middle digit's factors are drawn.
+``length_scale`` is solved for it after the middle digit's factors are drawn (:func:`sized`). The
+named users of ``users.yaml`` have proportions drawn the same way (:func:`draw_proportions`, from
+their ``anatomy_seed``) at the size their ``hand_scale`` gives the template.
 """
 
 from __future__ import annotations
@@ -161,11 +163,22 @@ def draw_anatomy(rng: np.random.Generator, sex: str) -> Anatomy:
     r = LENGTH_BREADTH_CORRELATION
     zb = r * zl + np.sqrt(1.0 - r * r) * zo
     length, breadth = ml + sl * zl, mb + sb * np.clip(zb, -TRUNCATE_SD, TRUNCATE_SD)
+    return sized(draw_proportions(rng), float(length), float(breadth))
+
+
+def draw_proportions(rng: np.random.Generator) -> Anatomy:
+    """Draws a hand's proportions: the per-digit length and girth and per-phalanx length factors of
+    the module's distributions, at the template's size (both scales 1)."""
     digit = 1.0 + DIGIT_LENGTH_SD * _truncated_normal(rng, DIGITS)
     phalanx = 1.0 + PHALANX_LENGTH_SD * _truncated_normal(rng, (DIGITS, PHALANGES))
     girth = 1.0 + DIGIT_RADIUS_SD * _truncated_normal(rng, DIGITS)
-    shape = Anatomy(length_scale=1.0, breadth_scale=float(breadth / TEMPLATE_HAND_BREADTH_M),
-                    digit_length=tuple(float(v) for v in digit),
-                    phalanx_length=tuple(tuple(float(v) for v in row) for row in phalanx),
-                    digit_radius=tuple(float(v) for v in girth))
-    return replace(shape, length_scale=float(length / shape.hand_length_m))  # the hand length is linear in it
+    return Anatomy(length_scale=1.0, breadth_scale=1.0, digit_length=tuple(float(v) for v in digit),
+                   phalanx_length=tuple(tuple(float(v) for v in row) for row in phalanx),
+                   digit_radius=tuple(float(v) for v in girth))
+
+
+def sized(shape: Anatomy, length_m: float, breadth_m: float) -> Anatomy:
+    """``shape``'s proportions at a hand length and breadth, [m] (the length scale solved from
+    :attr:`Anatomy.hand_length_m`, which is linear in it)."""
+    shape = replace(shape, length_scale=1.0, breadth_scale=float(breadth_m / TEMPLATE_HAND_BREADTH_M))
+    return replace(shape, length_scale=float(length_m / shape.hand_length_m))

@@ -17,7 +17,6 @@ import mujoco
 import numpy as np
 
 from benchmark.world.assets import World, user_of
-from benchmark.world.grasp_plan import plan_grasp
 from benchmark.world.living import MOVING_ACC, MOVING_ALPHA, LivingGrip
 from benchmark.world.scenario import Scenario
 from fsv.linalg import dot, inv, mm, mv, rows_mt, vm
@@ -138,8 +137,9 @@ class Human:
     tau = J^T (R f), with R the box's actual orientation.
 
     Args:
-        scenario: The scenario (user, grasp).
+        scenario: The scenario (its user's grip style and its seed).
         world: Its compiled world.
+        plan: The grasp's ``benchmark.world.grasp_plan.GraspPlan`` for this hand.
         motion: The planned box motion (world frame).
         phases: The prehension phases.
         releases: Whether the hand lets go at the end.
@@ -147,10 +147,10 @@ class Human:
         ctrl_every: Control tick every this many steps.
     """
 
-    def __init__(self, scenario: Scenario, world: World, motion, phases, releases: bool, times: np.ndarray,
+    def __init__(self, scenario: Scenario, world: World, plan, motion, phases, releases: bool, times: np.ndarray,
                  ctrl_every: int):
         self.world, self.motion, self.phases, self.releases = world, motion, phases, releases
-        self.plan = plan = plan_grasp(scenario)
+        self.plan = plan
         grip_rng = scenario.rng("grip")
         self.living = living = LivingGrip.draw(grip_rng)
         pol = GripPolicy.for_scenario(scenario, world)  # this trial's: margin and baseline scaled

@@ -28,7 +28,13 @@ import importlib.resources
 import numpy as np
 import yaml
 
-from benchmark.world.anatomy import Anatomy, draw_anatomy
+from benchmark.world.anatomy import (
+    TEMPLATE_HAND_BREADTH_M,
+    TEMPLATE_HAND_LENGTH_M,
+    draw_anatomy,
+    draw_proportions,
+    sized,
+)
 
 SAFETY_MARGIN = (0.40, 0.40, (0.10, 1.00))
 """Median, log-standard deviation and the range it is clipped to of the safety margin (a fraction)."""
@@ -80,7 +86,10 @@ def person(user: int) -> dict:
     named = _named()
     if user < len(named):
         entry = dict(named[user])
-        return {**entry, "drawn": False, "sex": None, "anatomy": Anatomy.template(float(entry["hand_scale"]))}
+        scale = float(entry["hand_scale"])
+        shape = draw_proportions(np.random.default_rng(np.random.SeedSequence([int(entry["anatomy_seed"]), *b"anatomy"])))
+        anatomy = sized(shape, scale * TEMPLATE_HAND_LENGTH_M, scale * TEMPLATE_HAND_BREADTH_M)
+        return {**entry, "drawn": False, "sex": None, "anatomy": anatomy}
     rng = np.random.default_rng(np.random.SeedSequence([user, *b"person"]))
     sex = SEXES[int(rng.integers(2))]
     anatomy = draw_anatomy(rng, sex)

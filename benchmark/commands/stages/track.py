@@ -37,7 +37,8 @@ def run(record: Run, options) -> StageResult:
     """Runs the method on the rendered episode; scores its tracking against the truth."""
     check_options(options)
     ep, scale = record.episode, float(options["init_perturbation"])
-    inputs, known = camera_input_and_knowledge(ep, scale, record.method_spec.knowledge)
+    spec = record.method_spec
+    inputs, known = camera_input_and_knowledge(ep, scale, spec.knowledge, spec.protocol)
     estimate = run_method(record.method_spec, ep, inputs=inputs, progress=not record.quiet)
     tracking = estimate.tracking
     elapsed = estimate.timing_s["track"]
@@ -74,7 +75,13 @@ def run(record: Run, options) -> StageResult:
     picture = Picture("tracking overlay", plot_overlay,
                       (ep.depth, inputs.calib, tracking, inputs.object_model, inputs.hand_model, overlay),
                       {"truth": ep.truth})
-    return StageResult(blocks=(("knowledge", known.record()), ("tracking", block)), lines=(known.line(), line),
+    grip = inputs.grip
+    person = {"protocol": spec.protocol,
+              "grip": None if grip is None else {"baseline_n": grip.baseline_n, "gain": grip.gain, "samples": grip.samples}}
+    told = known.line() + ("; person [blind]: nothing known" if grip is None else
+                           f"; person [calibrated]: grip {grip.baseline_n:.2f} N + {grip.gain:.3f} N per N of load "
+                           f"({grip.samples} samples of a calibration recording)")
+    return StageResult(blocks=(("knowledge", known.record()), ("person", person), ("tracking", block)), lines=(told, line),
                        pictures=(picture,), estimate=estimate, knowledge=known)
 
 

@@ -1,10 +1,16 @@
 """``fsv-bench generate``: training data for the internal-force networks (:mod:`benchmark.paper.dataset`).
 
-    fsv-bench generate --out DIR [--split train] [--tasks ... --users ... --grasps ... --views ... --masses ... --seeds ...]
+    fsv-bench generate --out DIR [--split train|dev|test] [--design grid|people]
+                       [--tasks ... --users ... --grasps ... --views ... --masses ... --seeds ...]
 
-With ``--split train``, ``--users``, ``--grasps`` and ``--views`` are positions in the training
-split (``benchmark.suites.splits``): ``--split train --users 0-79`` is people 1000-1079, none of
-whom any dev or test episode meets.
+With ``--split``, ``--users``, ``--grasps`` and ``--views`` are positions in that split
+(``benchmark.suites.splits``): ``--split train --users 0-79`` is people 1000-1079, none of whom
+any dev or test episode meets. Training data comes from the training split (``fsv-bench train``
+refuses dev and test people); a dev or test person is recorded only for their calibration
+(``fsv-bench calibrate``), never scored. With ``--design people`` each person holds their own
+grasp and view (``benchmark.paper.dataset.spec.DatasetSpec``):
+
+    fsv-bench generate --split train --design people --users 0-39 --tasks lift,place,... --masses 0-5 --seeds 100
 """
 
 from __future__ import annotations
@@ -17,7 +23,7 @@ import pandas as pd
 
 from benchmark.errors import DatasetError
 from benchmark.paper.dataset.build import generate
-from benchmark.paper.dataset.spec import CONTACTS, KINEMATICS, DatasetSpec
+from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, DatasetSpec
 
 
 def parse_ints(text: str) -> tuple:
@@ -40,9 +46,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """The arguments of ``fsv-bench generate``."""
     p.add_argument("--out", required=True, help="dataset folder (created, or resumed if it exists)")
     p.add_argument("--tasks", default="lift", help="comma-separated task names (default: lift)")
-    p.add_argument("--split", default=None,
-                   help="draw people, grasps and views from the training split: --users/--grasps/--views are "
-                        "then positions in it (0 is index 1000)")
+    p.add_argument("--split", default=None, metavar="train|dev|test",
+                   help="draw people, grasps and views from a split: --users/--grasps/--views are then positions "
+                        "in it (train: 0 is index 1000); `fsv-bench train` refuses dev and test people, whose "
+                        "recordings are for calibration only")
+    p.add_argument("--design", default="grid", metavar="|".join(DESIGNS),
+                   help="grid: every combination; people: each user with their own grasp and view through every "
+                        "task and seed, the masses rotating (default: grid)")
     p.add_argument("--users", default="0", help="user indices, e.g. 0,1 or 0-3 (N >= 5: drawn people)")
     p.add_argument("--grasps", default="0", help="grasp indices (N >= 4: drawn grasps)")
     p.add_argument("--views", default="0", help="camera views (0: the paper's set-up; N >= 1 drawn)")
@@ -66,8 +76,8 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
     if args.split is not None:
         from benchmark.suites.splits import SPLITS
 
-        if args.split != "train":
-            raise DatasetError(f"--split {args.split!r}: accepted: train (dev and test people never train a model)")
+        if args.split not in SPLITS or args.split == "cohort":
+            raise DatasetError(f"--split {args.split!r}: accepted: train, dev, test")
         split = SPLITS[args.split]
         try:
             users, grasps, views = (tuple(split.index(p) for p in ps) for ps in (users, grasps, views))
@@ -75,7 +85,8 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
             raise DatasetError(str(e)) from None
     spec = DatasetSpec(
         tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()), users=users,
-        grasps=grasps, masses=parse_ints(args.masses), seeds=parse_ints(args.seeds), views=views, duration_s=args.duration,
+        grasps=grasps, masses=parse_ints(args.masses), seeds=parse_ints(args.seeds), views=views, design=args.design,
+        duration_s=args.duration,
         noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
     )
     from benchmark.atomic import check_out

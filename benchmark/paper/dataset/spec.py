@@ -13,6 +13,7 @@ from fsv._check import positive
 FORMAT = "fsv-bench-dataset"
 VERSION = 2  # version 1 had no digests
 KINEMATICS = ("algebraic", "central", "gaussian", "oracle")
+DESIGNS = ("grid", "people")
 CONTACTS = ("tracker", "error-model", "oracle")
 _AX = "xyz"
 
@@ -27,6 +28,12 @@ class DatasetSpec:
             named ones are drawn, see ``benchmark.world.people`` and ``grasp_families``).
         views: Camera views (0: the paper's set-up; N >= 1 drawn, ``benchmark.camera.views``).
         seeds: Scenario seeds.
+        design: "grid": every combination of tasks, users, grasps, masses, seeds and views;
+            "people": each user holds their own grasp and camera view (the grasp's and the view's
+            index is the user's; ``grasps`` and ``views`` are not used) through every task and
+            seed, and the masses rotate: the user at position u, task at position t and seed at
+            position s hold ``masses[(u + t + s) % len(masses)]`` (every task meets every mass,
+            every person several).
         duration_s: Episode length in [s]; None takes each task's default.
         fps: Frame rate in [Hz].
         noise_m: Depth noise of the scenarios [m]; it sets the tracker-like pose errors that the
@@ -49,6 +56,7 @@ class DatasetSpec:
     masses: tuple = (0,)
     seeds: tuple = (0,)
     views: tuple = (0,)
+    design: str = "grid"
     duration_s: float | None = None
     fps: float = 30.0
     noise_m: float = 0.01
@@ -67,7 +75,7 @@ class DatasetSpec:
             object.__setattr__(self, name, tuple(int(v) for v in vals))
         if not self.tasks:
             raise DatasetError("tasks must name at least one task")
-        for name, accepted in (("kinematics", KINEMATICS), ("contacts", CONTACTS)):
+        for name, accepted in (("kinematics", KINEMATICS), ("contacts", CONTACTS), ("design", DESIGNS)):
             if getattr(self, name) not in accepted:
                 raise DatasetError(f"{name} source must be one of {accepted}, got {getattr(self, name)!r}")
         if not (np.isfinite(self.tactile_noise_n) and self.tactile_noise_n >= 0):
@@ -94,7 +102,13 @@ class DatasetSpec:
             raise DatasetError(str(e)) from None
 
     def scenarios(self) -> list[Scenario]:
-        """Every scenario of the grid, in a fixed order."""
+        """Every scenario of the dataset, in a fixed order."""
+        if self.design == "people":
+            n = len(self.masses)
+            return [Scenario(task=t, user=u, grasp=u, mass=self.masses[(iu + it + js) % n], seed=s, view=u,
+                             noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)
+                    for iu, u in enumerate(self.users) for it, t in enumerate(self.tasks)
+                    for js, s in enumerate(self.seeds)]
         return [
             Scenario(task=t, user=u, grasp=g, mass=m, seed=s, view=v, noise_m=self.noise_m, duration_s=self.duration_s,
                      fps=self.fps)
@@ -103,10 +117,13 @@ class DatasetSpec:
         ]
 
     def as_dict(self) -> dict:
-        """JSON of the spec (``views`` left out while it is the paper's view alone, as before views existed)."""
+        """JSON of the spec (``views`` left out while it is the paper's view alone and ``design`` while
+        it is the grid, as before either existed)."""
         out = {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
         if self.views == (0,):
             del out["views"]
+        if self.design == "grid":
+            del out["design"]
         return out
 
 

@@ -1,0 +1,127 @@
+"""Does more generated training data help? ``python -m benchmark.commands.learning_curve``.
+
+    python -m benchmark.commands.learning_curve --data DIR --people 5,20,40 --suite dev --out DIR
+        [--grip FILE] [--workers N] [--cache DIR]
+
+Trains the reference's internal-force model, as the shipped one is trained (relative amount loss,
+the people's grip calibrations as inputs), on the first N people of a training dataset
+(``fsv-bench generate --split train --design people``) for each N of ``--people``, then scores
+every model on the suite (``dev``: people never trained on, never scored by ``standard``) under
+both protocols, blind and calibrated, beside the no-internal-force baseline. The episodes are
+rendered and tracked once for every model. Writes ``learning_curve.json`` (per N: people,
+episodes, samples, every aggregate of both protocols) and ``learning_curve.md``; the models go to
+``DIR/models/``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import shutil
+
+from benchmark.atomic import staging_folder, swap_folder, write_text
+from fsv.provenance import provenance
+
+COLUMNS = (("learned_rel_err_pct", "learned [%]"), ("learned_mae_n", "MAE [N]"),
+           ("learned_rel_err_pct_paper", "learned, paper's rule [%]"))
+"""The curve's metrics (medians over the suite's episodes, with their intervals)."""
+
+
+def people_of(data) -> list:
+    """The dataset's people, in order (the first N train the N-people model)."""
+    from benchmark.paper.dataset.files import read_header
+
+    return list(read_header(data)["spec"]["users"])
+
+
+def train_model(data, users: list, grip, out: pathlib.Path) -> dict:
+    """Trains one model on ``users``' episodes of ``data`` (no cross-validation); its metadata."""
+    from benchmark.paper import training
+
+    args = argparse.Namespace(data=str(data), out=str(out), seeds=None, users=",".join(str(u) for u in users),
+                              epochs=training.LearnConfig.epochs, folds=0, seed=0, quiet=True,
+                              members=training.TABLE2_MEMBERS, amount_loss="relative", grip=grip,
+                              max_excess=training.MAX_EXCESS_N)
+    return training.run(args).metadata
+
+
+def curve_markdown(suite, rows: list) -> str:
+    """The table of the curve: per number of people and protocol, the medians [95 % intervals]."""
+    lines = [f"# Learning curve: the internal-force model against the number of training people",
+             "", f"Scored on `{suite.name}` v{suite.version} ({len(suite.scenarios)} episodes, people never "
+             "trained on); medians over the episodes [95 % bootstrap interval].", "",
+             "| training people | episodes | samples | protocol | " + " | ".join(h for _, h in COLUMNS) + " |",
+             "|---|---|---|---|" + "---|" * len(COLUMNS)]
+    for r in rows:
+        for protocol, agg in r["aggregate"].items():
+            cells = " | ".join(_cell(agg[m]["median"]) for m, _ in COLUMNS)
+            lines.append(f"| {r['people']} | {r['episodes']} | {r['samples']} | {protocol} | {cells} |")
+    return "\n".join(lines) + "\n"
+
+
+def _cell(agg: dict) -> str:
+    if agg["value"] is None:
+        return "-"
+    return f"{agg['value']:.3g} [{agg['ci_low']:.3g}, {agg['ci_high']:.3g}]"
+
+
+def main(argv=None) -> int:
+    from benchmark.atomic import check_out
+    from benchmark.method import MethodSpec
+    from benchmark.method.protocol import PROTOCOLS
+    from benchmark.paper.dataset.cli import parse_ints
+    from benchmark.suites import get_suite
+    from benchmark.suites.evaluate import evaluate_many, strict
+
+    p = argparse.ArgumentParser(prog="python -m benchmark.commands.learning_curve", description=__doc__.split("\n\n")[0])
+    p.add_argument("--data", required=True, help="a training dataset (fsv-bench generate --split train --design people)")
+    p.add_argument("--people", default="5,20,40", help="numbers of training people (default 5,20,40)")
+    p.add_argument("--suite", default="dev", help="suite to score on (default dev)")
+    p.add_argument("--grip", default=None, help="grip-calibration file of the training people (default: the shipped one)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--cache", default=None)
+    p.add_argument("--quiet", action="store_true")
+    args = p.parse_args(argv)
+    suite = get_suite(args.suite)
+    everyone = people_of(args.data)
+    counts = list(parse_ints(args.people))
+    if any(n > len(everyone) or n < 1 for n in counts):
+        raise SystemExit(f"--people {args.people}: the dataset has {len(everyone)} people; accepted: 1 to {len(everyone)}")
+    grip = args.grip
+    if grip is None:
+        import importlib.resources
+
+        from benchmark.method.grip_file import SHIPPED
+
+        grip = str(importlib.resources.files("sim_assets").joinpath(SHIPPED))
+    out = pathlib.Path(args.out)
+    check_out(out)
+    tmp = staging_folder(out)
+    try:
+        (tmp / "models").mkdir(parents=True)
+        meta = {n: train_model(args.data, everyone[:n], grip, tmp / "models" / f"people-{n}.npz") for n in counts}
+        specs = [MethodSpec(internal_model=str(tmp / "models" / f"people-{n}.npz"), protocol=pr)
+                 for n in counts for pr in PROTOCOLS]
+        docs = evaluate_many(suite, specs + [MethodSpec(method="no-internal")], cache=args.cache,
+                             progress=not args.quiet, workers=args.workers)
+        rows = []
+        for i, n in enumerate(counts):
+            rows.append({"people": n, "users": everyone[:n], "episodes": meta[n]["episodes"], "samples": meta[n]["samples"],
+                         "aggregate": {pr: docs[i * len(PROTOCOLS) + j]["aggregate"] for j, pr in enumerate(PROTOCOLS)}})
+        doc = {"suite": {"name": suite.name, "version": suite.version, "n": len(suite.scenarios)}, "rows": rows,
+               "no_internal": docs[-1]["aggregate"], "provenance": provenance()}
+        write_text(tmp / "learning_curve.json", json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
+        table = curve_markdown(suite, rows)
+        write_text(tmp / "learning_curve.md", table)
+        swap_folder(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    print(table)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
