@@ -341,8 +341,7 @@ def run(args: argparse.Namespace) -> list[str]:
 
     data = pathlib.Path(args.data).resolve()
     data.mkdir(parents=True, exist_ok=True)
-    differences, record = [], recorded()
-    record.setdefault("results", {})
+    differences = []
     with tempfile.TemporaryDirectory(prefix="fsv-reproduce-") as tmp:
         for r in results:
             t0 = time.perf_counter()
@@ -354,7 +353,8 @@ def run(args: argparse.Namespace) -> list[str]:
             status = "unchanged" if not diffs else f"{len(diffs)} values moved"
             if args.write:
                 _replace(new, committed)
-                record["results"][r.name] = {"path": r.path, "commands": [" ".join(c) for c in r.commands],
+                record = recorded()  # read again: another reproduce of other results may have written since
+                record.setdefault("results", {})[r.name] = {"path": r.path, "commands": [" ".join(c) for c in r.commands],
                                              "datasets": {d: DATASETS[d] for d in r.datasets},
                                              "seconds": time.perf_counter() - t0}
                 record["code_fingerprint"] = results_fingerprint()

@@ -48,9 +48,11 @@ def test_each_users_line_is_fitted_to_that_users_samples_and_round_trips(tmp_pat
 
 def test_the_shipped_calibration_covers_every_user_and_the_firm_user_squeezes_most():
     grips = read_calibration()
-    assert sorted(grips) == [0, 1, 2, 3, 4] and all(g.samples > 1000 for g in grips.values())
-    amount_at_5n = {u: g.baseline_n + 5.0 * g.gain for u, g in grips.items()}
-    assert max(amount_at_5n, key=amount_at_5n.get) == 3  # users.yaml: user 3 grips firmest
+    assert set(range(5)) < set(grips) and all(grips[u].samples > 1000 for u in range(5))  # eight 10 s lifts each
+    drawn = [g for u, g in grips.items() if u >= 5]  # two 6 s lifts each
+    assert len(drawn) == 40 + 48 + 48 and all(g.samples > 100 for g in drawn)
+    amount_at_5n = {u: grips[u].baseline_n + 5.0 * grips[u].gain for u in range(5)}
+    assert max(amount_at_5n, key=amount_at_5n.get) == 3  # users.yaml: user 3 grips firmest of the cohort
     assert user_grip(2) == grips[2] and user_grip(99) is None
 
 
@@ -71,3 +73,23 @@ def test_bad_input_exits_2_on_one_line_before_any_work(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "no-data" in err
     assert not (tmp_path / "m.npz").exists() and not (tmp_path / "g.json").exists()
+
+
+def test_calibrate_merges_recordings_of_different_people_and_refuses_a_person_in_two(tmp_path, monkeypatch, capsys):
+    import benchmark.paper.dataset as dataset
+    import benchmark.paper.dataset.files as files
+
+    tables = {"a": _table({0: (6.9, 1.6), 3: (9.6, 2.6)}), "b": _table({500: (2.0, 0.5)}, seed=1),
+              "c": _table({3: (1.0, 1.0)}, seed=2)}
+    monkeypatch.setattr(dataset, "load_dataset", lambda folder, **kw: tables[str(folder)[-1]])
+    monkeypatch.setattr(files, "read_header", lambda folder: {"spec": {"users": sorted(tables[str(folder)[-1]]["user"].unique().tolist())}})
+    out = tmp_path / "g.json"
+    assert main(["calibrate", "--data", str(tmp_path / "a"), "--data", str(tmp_path / "b"), "--out", str(out)]) == 0
+    grips = read_calibration(out)
+    assert sorted(grips) == [0, 3, 500] and abs(grips[500].baseline_n - 2.0) < 1e-9 and abs(grips[3].gain - 2.6) < 1e-9
+    assert json.loads(out.read_text())["recording"] == [{"users": [0, 3]}, {"users": [500]}]
+    capsys.readouterr()
+    assert main(["calibrate", "--data", str(tmp_path / "a"), "--data", str(tmp_path / "c"),
+                 "--out", str(tmp_path / "h.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "user 3 is also in an earlier recording" in err and not (tmp_path / "h.json").exists()

@@ -18,28 +18,30 @@ def tiny(monkeypatch):
     return TINY
 
 
-@pytest.mark.parametrize("knowledge", ["exact", "lab"])
-def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys, knowledge):
+@pytest.mark.parametrize("knowledge, protocol", [("exact", "calibrated"), ("lab", "blind")])
+def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys, knowledge, protocol):
     from benchmark.suites.evaluate import evaluate
     from benchmark.method import MethodSpec, method_label
     from examples.estimates_from_files import write_estimates
 
     cache, inputs, estimates = tmp_path / "cache", tmp_path / "inputs", tmp_path / "estimates"
-    spec = MethodSpec(differentiator="central", knowledge=knowledge)
+    spec = MethodSpec(differentiator="central", knowledge=knowledge, protocol=protocol)
     in_process = evaluate(TINY, spec=spec, cache=cache, progress=False)
     assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(cache), "--quiet",
-                 "--knowledge", knowledge]) == 0
+                 "--knowledge", knowledge, "--protocol", protocol]) == 0
     index = json.loads((inputs / "suite.json").read_text())
     assert [e["episode"] for e in index["episodes"]] == ["lift-u0-g0-m0-s21"]
     with zipfile.ZipFile(inputs / "lift-u0-g0-m0-s21.npz") as z:  # camera inputs only, no truth
         sections = {n.split("/")[0] for n in z.namelist() if n != "meta.json.npy"}
-    assert sections == {"camera", "init", "object", "hand", "grip"}  # grip: measured on other recordings
+    # grip: measured on other recordings, given under the calibrated protocol only
+    assert sections == {"camera", "init", "object", "hand"} | ({"grip"} if protocol == "calibrated" else set())
+    assert index["protocol"] == protocol and f"--protocol {protocol}" in index["estimates"]
     given = load_camera_input(inputs / "lift-u0-g0-m0-s21.npz")[1]["knowledge"]
     assert given["knowledge"] == knowledge and "error" not in json.dumps(given)  # what was given, never the truth
     write_estimates(inputs, estimates, spec.build(), method_label(spec))
     capsys.readouterr()
     code = main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "scores"),
-                 "--cache", str(cache), "--quiet", "--knowledge", knowledge])
+                 "--cache", str(cache), "--quiet", "--knowledge", knowledge, "--protocol", protocol])
     assert code == (1 if in_process["verdict"] == "fail" else 0)  # the same verdict from files
     from_files = json.loads((tmp_path / "scores" / "scores.json").read_text())
     drop = ("seconds", "rendered")
@@ -60,7 +62,7 @@ def test_camera_file_round_trips_the_inputs(tiny, tmp_path):
     from benchmark.method import camera_input
 
     ep, _ = cached_episode(TINY, TINY.scenarios[0], tmp_path / "cache")
-    a = camera_input(ep)
+    a = camera_input(ep, protocol="calibrated")
     path = save_camera_input(a, tmp_path / "x.npz", episode="x", suite=TINY, rng_seed=[1, 2])
     b, meta = load_camera_input(path)
     assert np.array_equal(a.depth.depth_m, b.depth.depth_m) and np.array_equal(a.calib.K, b.calib.K)

@@ -71,3 +71,24 @@ def test_every_person_of_the_suites_gets_a_grasp_that_holds():
     # the trials, not the plan, decide
     plan = plan_grasp(Scenario(user=105, grasp=105))
     assert feasible(plan) and plan.tip_error_m > 0.010
+
+
+def test_every_suites_and_the_training_sets_drawn_grasps_are_stored_and_replay():
+    from benchmark.reproduce import DATASETS
+    from benchmark.suites import SUITES
+    from benchmark.world.grasp_plan import STORED_DRAWN, _drawn, _search, stored_plans
+
+    named = len(__import__("benchmark.world.assets", fromlist=["grasps"]).grasps())
+    needed = {(sc.user, sc.grasp) for s in SUITES.values() for sc in s.scenarios if sc.grasp >= named}
+    train = dict(zip(DATASETS["train"][::2], DATASETS["train"][1::2]))
+    assert train["--users"] == "0-39" and train["--design"] == "people"
+    needed |= {(u, u) for u in range(1000, 1040)}
+    assert needed <= set(STORED_DRAWN)
+    stored = stored_plans()
+    assert all(f"drawn/{u}/{g}" in stored for u, g in STORED_DRAWN)
+    # the stored choice is the one the search makes here; its plan agrees with the solver's to 1e-5
+    # (the solver's last digits depend on the BLAS kernel: that is why the choices are stored)
+    entry = stored["drawn/500/500"]
+    spec, _, _, x = _search(500, 500)
+    assert spec == entry["spec"] and np.max(np.abs(np.array(entry["x"]) - x)) < 1e-5
+    assert _drawn(500, 500)[0] == entry["spec"]

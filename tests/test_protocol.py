@@ -4,7 +4,13 @@ import pytest
 
 from benchmark.method import MethodSpec
 from benchmark.method.grip_file import calibrated_users, read_calibration
-from benchmark.method.protocol import DEFAULT_PROTOCOL, PROTOCOLS, ProtocolError, check_protocol, person_grip
+from benchmark.method.protocol import (
+    DEFAULT_PROTOCOL,
+    PROTOCOLS,
+    ProtocolError,
+    check_protocol,
+    person_grip,
+)
 
 
 def test_blind_is_the_default_and_tells_nothing():

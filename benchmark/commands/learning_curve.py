@@ -48,7 +48,7 @@ def train_model(data, users: list, grip, out: pathlib.Path) -> dict:
 
 def curve_markdown(suite, rows: list) -> str:
     """The table of the curve: per number of people and protocol, the medians [95 % intervals]."""
-    lines = [f"# Learning curve: the internal-force model against the number of training people",
+    lines = ["# Learning curve: the internal-force model against the number of training people",
              "", f"Scored on `{suite.name}` v{suite.version} ({len(suite.scenarios)} episodes, people never "
              "trained on); medians over the episodes [95 % bootstrap interval].", "",
              "| training people | episodes | samples | protocol | " + " | ".join(h for _, h in COLUMNS) + " |",

@@ -1,0 +1,32 @@
+"""The learning curve (benchmark.commands.learning_curve): its table, and its refusals before any work."""
+
+import json
+
+import pytest
+
+from benchmark.commands.learning_curve import COLUMNS, curve_markdown, main, people_of
+from benchmark.suites import SUITES
+
+
+def _agg(value):
+    return {m: {"median": {"value": value, "ci_low": value - 1, "ci_high": value + 1}} for m, _ in COLUMNS}
+
+
+def test_the_table_has_a_row_per_number_of_people_and_protocol():
+    rows = [{"people": 5, "episodes": 60, "samples": 9000, "aggregate": {"blind": _agg(20.0), "calibrated": _agg(15.0)}},
+            {"people": 40, "episodes": 480, "samples": 90000, "aggregate": {"blind": _agg(12.5), "calibrated": _agg(9.0)}}]
+    table = curve_markdown(SUITES["dev"], rows)
+    assert "Scored on `dev` v3 (48 episodes" in table
+    assert "| 5 | 60 | 9000 | blind | 20 [19, 21] |" in table
+    assert "| 40 | 480 | 90000 | calibrated | 9 [8, 10] |" in table
+    assert sum(line.startswith("| 5 |") or line.startswith("| 40 |") for line in table.splitlines()) == 4
+
+
+def test_people_are_the_datasets_in_order_and_too_many_are_refused_before_any_work(tmp_path):
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "dataset.json").write_text(json.dumps({"format": "fsv-bench-dataset", "version": 2,
+                                                             "spec": {"users": [1000, 1001, 1002]}}))
+    assert people_of(tmp_path / "d") == [1000, 1001, 1002]
+    with pytest.raises(SystemExit, match="--people 2,5: the dataset has 3 people; accepted: 1 to 3"):
+        main(["--data", str(tmp_path / "d"), "--people", "2,5", "--out", str(tmp_path / "out")])
+    assert not (tmp_path / "out").exists()
