@@ -281,7 +281,8 @@ def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: 
             code = e.code or 0
         finally:
             sys.argv = saved
-    if code != 0 and not (code == 1 and argv[1:2] in (["eval"], ["leaderboard"])):  # a failed gate is a result
+    main_command = argv[0] == "fsv-bench" and argv[1].startswith("--")  # the main command: its verdict is a result
+    if code != 0 and not (code == 1 and (argv[1:2] in (["eval"], ["leaderboard"]) or main_command)):  # a failed gate too
         raise ReproduceError(f"{' '.join(argv)} exited with status {code}")
 
 

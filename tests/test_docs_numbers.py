@@ -19,7 +19,7 @@ QUOTES = [  # (document, text before the number, metric, statistic, format, text
     ("docs/suites.md", "acceleration RMS ", "acc_err_rms", "median", "{:.3f}", " m/s²"),
     ("docs/suites.md", "net force ", "net_force_err_n_rms", "median", "{:.3f}", " N, mean"),
     ("docs/suites.md", "learned forces ", "learned_rel_err_pct", "median", "{:.1f}", " % (`results/smoke"),
-    ("docs/suites.md", "the reference's 1.21 mm, 0.33 m/s², 0.18 N and ", "learned_rel_err_pct", "median", "{:.1f}", " %)"),
+    ("docs/suites.md", "the reference's 1.18 mm, 0.38 m/s², 0.18 N and ", "learned_rel_err_pct", "median", "{:.1f}", " %)"),
 ]
 
 
@@ -39,10 +39,10 @@ def _standard(metric: str, unit: str = "") -> str:
 
 
 STANDARD_QUOTES = [  # (document, text before, metric, unit, text after)
-    ("README.md", "| **reference** | 0.276 [0.237, 0.321] | 0.114 [0.102, 0.128] | 0.175 [0.142, 0.215] | 0.028 % [0.000, 0.085] | ",
+    ("README.md", "| **reference, blind** | 0.302 [0.256, 0.364] | 0.143 [0.127, 0.173] | 1.48 % [0.09, 4.10] | ",
      "learned_rel_err_pct", "", " | "),
-    ("README.md", "failures): median ", "learned_rel_err_pct", " %", "\n  against the bar"),
-    ("README.md", "chooses frames by the truth, ", "learned_rel_err_pct_paper", " %", " (the paper's\n  Table 2"),
+    ("docs/results.md", "| reference (blind) | 1.28 [1.20, 1.44] | 3.26 [2.81, 4.01] | 0.302 [0.256, 0.364] | 0.143 [0.127, 0.173] | 1.48 % [0.09, 4.10] | ",
+     "learned_rel_err_pct", "", " | "),
     ("docs/results.md", "| learned forces, every contact frame, relative error [%] | ", "learned_rel_err_pct", "", " |"),
     ("docs/results.md", "| learned forces, the paper's sample rule [%] | ", "learned_rel_err_pct_paper", "", " |"),
 ]
