@@ -129,11 +129,11 @@ def test_table2_pair_grips_alike_and_a_careful_user_harder(episode_factory):
 def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
     """Every (user, grasp) has a stored plan whose inputs still match (else the world would fall back
     to a kernel-dependent solve); solving u0/g0 again lands on the stored solution."""
-    from benchmark.world.grasp_plan import _PlanProblem, stored_plans
+    from benchmark.world.grasp_plan import STORED_DRAWN, _PlanProblem, stored_plans
     from benchmark.world.assets import grasps, users
 
     stored = stored_plans()
-    assert len(stored) == len(users()) * len(grasps())
+    assert len(stored) == len(users()) * len(grasps()) + len(STORED_DRAWN)  # the named plans, the drawn choices
     for u in range(len(users())):
         for g in range(len(grasps())):
             problem = _PlanProblem(u, grasps()[g])

@@ -9,18 +9,20 @@ from fsv.learn import default_model, learned_forces
 def test_shipped_model_was_trained_by_the_documented_command():
     model = default_model()
     assert model.finger_names == ("thumb", "index", "middle", "ring", "little")
-    assert model.metadata["command"] == ("fsv-bench train --data data/default --out fsv/data/internal_forces.npz "
+    assert model.metadata["command"] == ("fsv-bench train --data data/train --out fsv/data/internal_forces.npz "
                                          "--folds 3 --amount-loss relative --grip ./sim_assets/calibration/grip_calibration.json")
-    assert model.config.grip_inputs and model.metadata["grip_calibration"]["recording"]["seeds"] == [900]
+    recordings = model.metadata["grip_calibration"]["recording"]  # the named users' and the split people's
+    assert model.config.grip_inputs and [r["seeds"] for r in recordings] == [[900], [900, 901], [900, 901], [900, 901]]
     from benchmark.method.grip_file import read_calibration
 
     users = {int(u): c for u, c in model.metadata["grip_calibration"]["users"].items()}
     assert {u: (c["baseline_n"], c["gain"]) for u, c in users.items()} == \
            {u: (c.baseline_n, c.gain) for u, c in read_calibration().items()}  # trained on the shipped lines
-    assert model.metadata["episodes"] == 480 and model.metadata["samples"] > 100_000
+    assert model.metadata["episodes"] == 477 and model.metadata["samples"] > 100_000  # 3 of 480 stopped (palm)
     assert model.metadata["dataset"]["tasks"] == ["lift", "place", "release", "rotate", "shake", "free", "excite-tx",
                                                    "excite-ty", "excite-tz", "excite-rx", "excite-ry", "excite-rz"]
-    assert model.metadata["dataset"]["users"] == [0, 1, 2, 3, 4] and model.metadata["dataset"]["seeds"] == [100]
+    assert model.metadata["dataset"]["users"] == list(range(1000, 1040)) and model.metadata["dataset"]["seeds"] == [100]
+    assert model.metadata["dataset"]["design"] == "people"  # training people only, each with their own grasp and view
     assert model.metadata["dataset"]["contacts"] == "tracker" and model.metadata["max_excess_n"] == 1.5
     assert model.config.hidden_l2 == (6, 7) and model.config.hidden_decomp == (8, 13) and model.config.members == 5
     assert model.config.amount_loss == "relative" and model.config.relative_floor_n == 1.0
@@ -34,7 +36,9 @@ def test_learning_block_on_a_short_lift(episode_factory):
     paper = block["paper_rule"]
     assert block["scored"] > 100 and paper["solver_failures"] == 0
     assert paper["residual_rel_max"] <= 1e-6  # the learned forces explain the motion
-    assert 0 < paper["rel_err_pct_mean"] < 30  # measured 12.6 % (seeds 1-2: 10.5, 10.6; oracle contacts and kinematics, 3 s lift)
-    assert 0 < block["rel_err_pct_mean"] < 30 and block["scored"] >= paper["scored"]  # every contact frame: MEASURED
+    # blind (no grip given: the shipped networks take their training people's mean line), oracle
+    # contacts and kinematics, 3 s lift: measured 45.8 % (seeds 1-2: 48.8, 47.1); no internal forces ~84
+    assert 0 < paper["rel_err_pct_mean"] < 60
+    assert 0 < block["rel_err_pct_mean"] < 60 and block["scored"] >= paper["scored"]
     held = ep.truth.contact_active.sum(axis=1) >= 2
     assert np.all(pred[held][ep.truth.contact_active[held]] >= 0)  # internal grip, never a pull

@@ -70,4 +70,4 @@ def test_list_names_every_result_and_its_commands(capsys):
     text = capsys.readouterr().out
     for r in reproduce.RESULTS:
         assert f"{r.name}: {r.path}" in text
-    assert "fsv-bench train --data {data}/default" in text
+    assert "fsv-bench train --data {data}/train" in text
