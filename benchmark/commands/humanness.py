@@ -16,6 +16,7 @@ from dataclasses import asdict
 import numpy as np
 
 from benchmark.atomic import write_text
+from benchmark.scores.aggregate import span
 from benchmark.suites import get_suite
 from benchmark.world import living
 from benchmark.world.humanness import suite_humanness
@@ -25,13 +26,6 @@ from benchmark.world.tasks.human import (
     TRANSPORT_PEAK_ACC,
 )
 from fsv.provenance import provenance
-
-
-def _span(values) -> str:
-    v = np.asarray([x for x in values if np.isfinite(x)], float)
-    if not len(v):
-        return "-"
-    return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
 
 
 def report_markdown(suite, rows: list) -> str:
@@ -53,9 +47,9 @@ def report_markdown(suite, rows: list) -> str:
     for task in dict.fromkeys(sc.task for sc, _ in rows):  # in the suite's order
         hs = [h for sc, h in rows if sc.task == task]
         lines.append(
-            f"| {task} | {len(hs)} | {_span(h.peak_acc for h in hs)} | {_span(h.peak_omega for h in hs)} "
-            f"| {_span(100 * h.grip_cv for h in hs)} | {_span(h.grip_load_corr for h in hs)} "
-            f"| {_span(1000 * h.grip_lead_s for h in hs)} | {max(h.newton_euler_n for h in hs):.1e} |")
+            f"| {task} | {len(hs)} | {span(h.peak_acc for h in hs)} | {span(h.peak_omega for h in hs)} "
+            f"| {span(100 * h.grip_cv for h in hs)} | {span(h.grip_load_corr for h in hs)} "
+            f"| {span(1000 * h.grip_lead_s for h in hs)} | {max(h.newton_euler_n for h in hs):.1e} |")
     return "\n".join(lines) + "\n"
 
 

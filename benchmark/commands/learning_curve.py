@@ -19,6 +19,7 @@ import argparse
 import json
 import pathlib
 import shutil
+import sys
 
 from benchmark.atomic import staging_folder, swap_folder, write_text
 from fsv.provenance import provenance
@@ -36,13 +37,14 @@ def people_of(data) -> list:
 
 
 def train_model(data, users: list, grip, out: pathlib.Path) -> dict:
-    """Trains one model on ``users``' episodes of ``data`` (no cross-validation); its metadata."""
+    """Trains one model on ``users``' episodes of ``data`` as ``fsv-bench train`` does with the shipped
+    model's options, but no cross-validation; its metadata."""
     from benchmark.paper import training
 
-    args = argparse.Namespace(data=str(data), out=str(out), seeds=None, users=",".join(str(u) for u in users),
-                              epochs=training.LearnConfig.epochs, folds=0, seed=0, quiet=True,
-                              members=training.TABLE2_MEMBERS, amount_loss="relative", grip=grip,
-                              max_excess=training.MAX_EXCESS_N)
+    parser = argparse.ArgumentParser()
+    training.add_arguments(parser)
+    args = parser.parse_args(["--data", str(data), "--out", str(out), "--users", ",".join(str(u) for u in users),
+                              "--folds", "0", "--amount-loss", "relative", "--grip", str(grip), "--quiet"])
     return training.run(args).metadata
 
 
@@ -88,7 +90,9 @@ def main(argv=None) -> int:
     everyone = people_of(args.data)
     counts = list(parse_ints(args.people))
     if any(n > len(everyone) or n < 1 for n in counts):
-        raise SystemExit(f"--people {args.people}: the dataset has {len(everyone)} people; accepted: 1 to {len(everyone)}")
+        print(f"{p.prog}: error: --people {args.people}: the dataset has {len(everyone)} people; accepted: 1 to "
+              f"{len(everyone)}", file=sys.stderr)
+        return 2
     grip = args.grip
     if grip is None:
         import importlib.resources

@@ -10,6 +10,14 @@ RESAMPLES = 2000
 BOOTSTRAP_SEED = 0  # the intervals are a deterministic function of the scores
 
 
+def span(values, missing: str = "-") -> str:
+    """``median (min-max)`` of the finite values, to three significant digits (``missing`` if none)."""
+    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], dtype=float)
+    if not len(v):
+        return missing
+    return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
+
+
 def aggregate(values, statistic: str) -> dict:
     """A statistic of per-episode values with its percentile-bootstrap confidence interval.
 

@@ -108,20 +108,13 @@ SPREAD = (("learned_rel_err_pct", "learned [%]"), ("contact_err_mm_std", "contac
 """The metrics whose spread over people and grasp families the leaderboard shows."""
 
 
-def _span(values) -> str:
-    import numpy as np
-
-    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], dtype=float)
-    if not len(v):
-        return "—"
-    return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
-
-
 def spread_table(entries: list) -> list:
     """Lines of a Markdown table: the first method's per-episode values per grasp family (each
     episode's ``grasp_family``), median (min-max), and over people (every episode a person of its
     own in the split suites: the quartiles of the episodes)."""
     import numpy as np
+
+    from benchmark.scores.aggregate import span
 
     if not entries or not all("grasp_family" in r for r in entries[0][1]["episodes"]):
         return []
@@ -133,8 +126,8 @@ def spread_table(entries: list) -> list:
              "| grasp family | episodes | " + " | ".join(h for _, h in SPREAD) + " |", "|---|---|" + "---|" * len(SPREAD)]
     for family in sorted({r["grasp_family"] for r in rows}):
         sub = [r for r in rows if r["grasp_family"] == family]
-        lines.append(f"| {family} | {len(sub)} | " + " | ".join(_span(r.get(m) for r in sub) for m, _ in SPREAD) + " |")
-    lines.append(f"| every family | {len(rows)} | " + " | ".join(_span(r.get(m) for r in rows) for m, _ in SPREAD) + " |")
+        lines.append(f"| {family} | {len(sub)} | " + " | ".join(span((r.get(m) for r in sub), "—") for m, _ in SPREAD) + " |")
+    lines.append(f"| every family | {len(rows)} | " + " | ".join(span((r.get(m) for r in rows), "—") for m, _ in SPREAD) + " |")
     per_person = {}
     for r in rows:
         if r.get("learned_rel_err_pct") is not None and np.isfinite(r["learned_rel_err_pct"]):

@@ -95,6 +95,7 @@ def _episode_rows(job) -> list:
     suite, sc, cache, specs, init_scale, observer = job
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
+    family = grasp_spec(sc)["family"]
     given = {}  # (knowledge, protocol) -> (camera inputs, what the method was told)
     rows, tracked = [], {}
     for spec in specs:
@@ -113,7 +114,7 @@ def _episode_rows(job) -> list:
             observer(episode, estimate, len(rows))
         seconds = time.perf_counter() - (t0 if not rows else t1)
         rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
-                     "grasp_family": grasp_spec(sc)["family"], **metrics,
+                     "grasp_family": family, **metrics,
                      "knowledge": known.record(), "protocol": spec.protocol, "seconds": seconds, "rendered": made and not rows})
     return rows
 

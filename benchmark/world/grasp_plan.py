@@ -10,8 +10,9 @@ with a fingerprint of their inputs, so that every machine builds the same world
 
 A drawn grasp (index N >= 4) is the first candidate of its generator
 (``benchmark.world.grasp_families``) that the person's hand can make: its plan puts every pad near
-its spot and every other part clear (:func:`feasible`), and in a short simulated lift of the
-heaviest box the hand neither drops the box nor touches it with the palm (:func:`holds`)."""
+its spot and every other part clear (:func:`feasible`), and in simulated trials with the heaviest
+box the hand neither drops it nor touches it with the palm (:func:`holds`). The suites' and the
+training set's choices are stored beside the named plans (:data:`STORED_DRAWN`)."""
 
 from __future__ import annotations
 
@@ -79,7 +80,6 @@ class GraspPlan:
 
 def _pitch_quat(pitch: float) -> np.ndarray:
     return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
-
 
 
 PLANS_FILE = "grasp_plans.json"  # in sim_assets: the solved plans, so every machine builds the same world
@@ -262,9 +262,8 @@ def _plan(user: int, grasp: int) -> GraspPlan:
     if entry is not None and entry["fingerprint"] == problem.fingerprint:
         x = np.array(entry["x"], dtype=float)
     else:
-        # A drawn person, or a user or grasp edited since the plans were stored: solved here. The
-        # solver's last digits depend on the BLAS kernel; rounded to PLAN_DECIMALS, the plan is the
-        # same on every machine unless a value falls within a rounding step's last bit of a tie.
+        # A drawn person on a named grasp, or a user or grasp edited since the plans were stored:
+        # solved here; the solver's result depends on the BLAS kernel (about 1e-6, STORED_DRAWN).
         x = np.round(problem.solve(), PLAN_DECIMALS)
     return problem.plan(x)
 
