@@ -28,10 +28,38 @@ def test_shipped_model_was_trained_by_the_documented_command():
     assert model.config.amount_loss == "relative" and model.config.relative_floor_n == 1.0
 
 
+def test_the_user_blind_model_was_trained_on_the_same_data_without_grip_inputs():
+    blind, calibrated = default_model(blind=True), default_model()
+    assert blind.metadata["command"] == ("fsv-bench train --data data/train --out fsv/data/internal_forces_blind.npz "
+                                         "--folds 3 --amount-loss relative")
+    assert not blind.config.grip_inputs and blind.grip_mean is None and "grip_calibration" not in blind.metadata
+    assert blind.metadata["dataset"] == calibrated.metadata["dataset"]  # the same people, tasks and seeds
+    assert (blind.metadata["episodes"], blind.metadata["samples"]) == (calibrated.metadata["episodes"],
+                                                                       calibrated.metadata["samples"])
+    assert blind.config == calibrated.config.__class__(**{**calibrated.config.__dict__, "grip_inputs": False})
+
+
+def test_the_reference_stage_takes_the_shipped_model_of_the_protocol(episode_factory):
+    from benchmark.method.grip_file import read_calibration
+    from fsv.method import LearnedInternalForces
+
+    ep = episode_factory(task="lift", duration_s=3.0)
+    kin, con = oracle_kinematics(ep.truth), contacts_from_truth(ep.truth)
+    args = (kin, con, ep.object_model, ep.truth.gravity)
+    grip = read_calibration()[ep.scenario.user]
+    for blind, given in ((True, None), (False, grip)):
+        _, pred = LearnedInternalForces()(*args, grip=given)
+        _, expected = learned_forces(default_model(blind=blind), kin, con, ep.object_model, gravity=ep.truth.gravity,
+                                     grip=given)
+        assert np.array_equal(pred, expected)
+    _, mean_line = learned_forces(default_model(), *args[:3], gravity=ep.truth.gravity)  # not the blind choice
+    assert not np.array_equal(LearnedInternalForces()(*args)[1], mean_line)
+
+
 def test_learning_block_on_a_short_lift(episode_factory):
     ep = episode_factory(task="lift", duration_s=3.0)
     kin, con = oracle_kinematics(ep.truth), contacts_from_truth(ep.truth)
-    sol, pred = learned_forces(default_model(), kin, con, ep.object_model, gravity=ep.truth.gravity)
+    sol, pred = learned_forces(default_model(blind=True), kin, con, ep.object_model, gravity=ep.truth.gravity)
     block = score_episode(ep, sol, kin, con)
     paper = block["paper_rule"]
     assert block["scored"] > 100 and paper["solver_failures"] == 0

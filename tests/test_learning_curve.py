@@ -2,7 +2,7 @@
 
 import json
 
-from benchmark.commands.learning_curve import COLUMNS, curve_markdown, main, people_of
+from benchmark.commands.learning_curve import COLUMNS, curve_markdown, main, model_file, people_of, train_model
 from benchmark.suites import SUITES
 
 
@@ -29,3 +29,16 @@ def test_people_are_the_datasets_in_order_and_too_many_are_refused_before_any_wo
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--people 2,5: the dataset has 3 people; accepted: 1 to 3" in err
     assert not (tmp_path / "out").exists()
+
+
+def test_each_number_of_people_trains_a_user_blind_model_and_one_with_grip_inputs(monkeypatch, tmp_path):
+    from types import SimpleNamespace
+
+    from benchmark.paper import training
+
+    seen = []
+    monkeypatch.setattr(training, "run", lambda args: seen.append(args) or SimpleNamespace(metadata={"grip": args.grip}))
+    assert train_model("d", [1000, 1001], None, tmp_path / model_file(2, "blind")) == {"grip": None}
+    assert train_model("d", [1000, 1001], "g.json", tmp_path / model_file(2, "calibrated")) == {"grip": "g.json"}
+    assert [a.out for a in seen] == [str(tmp_path / "people-2-blind.npz"), str(tmp_path / "people-2.npz")]
+    assert all(a.users == "1000,1001" and a.folds == 0 and a.amount_loss == "relative" for a in seen)

@@ -21,10 +21,10 @@ def test_the_reference_is_composed_of_named_stages():
     m = make_method()
     assert m.labels == {"tracker": "reference tracker",
                         "differentiator": "algebraic differentiation (L=7 frames, kappa=0.5, mu=0.5)",
-                        "forces": "nominal forces (eq. 4-6)", "internal": "learned internal forces (shipped model, amount averaged over 1 s)"}
+                        "forces": "nominal forces (eq. 4-6)", "internal": "learned internal forces (shipped model of the protocol, amount averaged over 1 s)"}
     assert make_method(internal=False).labels["internal"] == "none"
     assert make_method(internal=LearnedInternalForces(smoothing_s=0)).labels["internal"] == (
-        "learned internal forces (shipped model, per frame)")
+        "learned internal forces (shipped model of the protocol, per frame)")
     with pytest.raises(InputError, match=r"smoothing_s must be a finite number of seconds >= 0, got -0.5"):
         LearnedInternalForces(smoothing_s=-0.5)
 

@@ -3,14 +3,15 @@
     python -m benchmark.commands.learning_curve --data DIR --people 5,20,40 --suite dev --out DIR
         [--grip FILE] [--workers N] [--cache DIR]
 
-Trains the reference's internal-force model, as the shipped one is trained (relative amount loss,
-the people's grip calibrations as inputs), on the first N people of a training dataset
-(``fsv-bench generate --split train --design people``) for each N of ``--people``, then scores
-every model on the suite (``dev``: people never trained on, never scored by ``standard``) under
-both protocols, blind and calibrated, beside the no-internal-force baseline. The episodes are
-rendered and tracked once for every model. Writes ``learning_curve.json`` (per N: people,
-episodes, samples, every aggregate of both protocols) and ``learning_curve.md``; the models go to
-``DIR/models/``.
+Trains the reference's two internal-force models, as the shipped ones are trained (relative
+amount loss; one user-blind, one with the people's grip calibrations as inputs), on the first N
+people of a training dataset (``fsv-bench generate --split train --design people``) for each N of
+``--people``, then scores them on the suite (``dev``: people never trained on, never scored by
+``standard``) under their protocols (the user-blind model ``blind``, the other ``calibrated``),
+beside the no-internal-force baseline. The episodes are rendered and tracked once for every model.
+Writes ``learning_curve.json`` (per N: people, episodes, samples, every aggregate of both
+protocols) and ``learning_curve.md``; the models go to ``DIR/models/`` (``people-N.npz`` with grip
+inputs, ``people-N-blind.npz`` user-blind).
 """
 
 from __future__ import annotations
@@ -36,15 +37,22 @@ def people_of(data) -> list:
     return list(read_header(data)["spec"]["users"])
 
 
+def model_file(n: int, protocol: str) -> str:
+    """The name of the N-people model of ``protocol`` in ``DIR/models/``."""
+    return f"people-{n}{'-blind' if protocol == 'blind' else ''}.npz"
+
+
 def train_model(data, users: list, grip, out: pathlib.Path) -> dict:
-    """Trains one model on ``users``' episodes of ``data`` as ``fsv-bench train`` does with the shipped
-    model's options, but no cross-validation; its metadata."""
+    """Trains one model on ``users``' episodes of ``data`` as ``fsv-bench train`` does with a shipped
+    model's options, but no cross-validation: with the grip calibrations of ``grip`` (a file) as
+    inputs, or user-blind if ``grip`` is None; its metadata."""
     from benchmark.paper import training
 
     parser = argparse.ArgumentParser()
     training.add_arguments(parser)
     args = parser.parse_args(["--data", str(data), "--out", str(out), "--users", ",".join(str(u) for u in users),
-                              "--folds", "0", "--amount-loss", "relative", "--grip", str(grip), "--quiet"])
+                              "--folds", "0", "--amount-loss", "relative", "--quiet"]
+                             + ([] if grip is None else ["--grip", str(grip)]))
     return training.run(args).metadata
 
 
@@ -52,7 +60,9 @@ def curve_markdown(suite, rows: list) -> str:
     """The table of the curve: per number of people and protocol, the medians [95 % intervals]."""
     lines = ["# Learning curve: the internal-force model against the number of training people",
              "", f"Scored on `{suite.name}` v{suite.version} ({len(suite.scenarios)} episodes, people never "
-             "trained on); medians over the episodes [95 % bootstrap interval].", "",
+             "trained on); medians over the episodes [95 % bootstrap interval]. Per number of people, two models "
+             "trained on the same samples: `blind`, the user-blind model; `calibrated`, the model with grip inputs, "
+             "fed each person's calibration.", "",
              "| training people | episodes | samples | protocol | " + " | ".join(h for _, h in COLUMNS) + " |",
              "|---|---|---|---|" + "---|" * len(COLUMNS)]
     for r in rows:
@@ -105,14 +115,16 @@ def main(argv=None) -> int:
     tmp = staging_folder(out)
     try:
         (tmp / "models").mkdir(parents=True)
-        meta = {n: train_model(args.data, everyone[:n], grip, tmp / "models" / f"people-{n}.npz") for n in counts}
-        specs = [MethodSpec(internal_model=str(tmp / "models" / f"people-{n}.npz"), protocol=pr)
+        meta = {n: {pr: train_model(args.data, everyone[:n], None if pr == "blind" else grip,
+                                    tmp / "models" / model_file(n, pr)) for pr in PROTOCOLS} for n in counts}
+        specs = [MethodSpec(internal_model=str(tmp / "models" / model_file(n, pr)), protocol=pr)
                  for n in counts for pr in PROTOCOLS]
         docs = evaluate_many(suite, specs + [MethodSpec(method="no-internal")], cache=args.cache,
                              progress=not args.quiet, workers=args.workers)
         rows = []
         for i, n in enumerate(counts):
-            rows.append({"people": n, "users": everyone[:n], "episodes": meta[n]["episodes"], "samples": meta[n]["samples"],
+            first = meta[n][PROTOCOLS[0]]  # both models train on the same samples
+            rows.append({"people": n, "users": everyone[:n], "episodes": first["episodes"], "samples": first["samples"],
                          "aggregate": {pr: docs[i * len(PROTOCOLS) + j]["aggregate"] for j, pr in enumerate(PROTOCOLS)}})
         doc = {"suite": {"name": suite.name, "version": suite.version, "n": len(suite.scenarios)}, "rows": rows,
                "no_internal": docs[-1]["aggregate"], "provenance": provenance()}

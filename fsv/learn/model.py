@@ -254,9 +254,25 @@ def load(path) -> InternalForceModel:
         raise InputError(f"{path!r} has inconsistent internal-force model data: {one_line(e)}") from e
 
 
-def default_model() -> InternalForceModel:
-    """The small model shipped with the package (``fsv/data/internal_forces.npz``); see docs/data.md
-    for the command that trained it and the data it was trained on."""
+SHIPPED_MODELS = {False: "internal_forces.npz", True: "internal_forces_blind.npz"}
+"""The two models shipped in ``fsv/data``, by ``blind``: trained on the same samples of the same
+training people with the same recipe, one with the person's grip calibration among its inputs
+(``LearnConfig.grip_inputs``), one user-blind (the paper's networks)."""
+
+
+def default_model(*, blind: bool = False) -> InternalForceModel:
+    """A model shipped with the package; see docs/data.md for the commands that trained them and
+    the data they were trained on.
+
+    Args:
+        blind: False: the model with grip inputs (``fsv/data/internal_forces.npz``), for a person
+            whose grip calibration is known. True: the user-blind model
+            (``fsv/data/internal_forces_blind.npz``), for a person of whom nothing is known.
+            Fed no calibration, the first assumes its training people's mean line, which errs far
+            more on a new person than a network trained without one (docs/findings.md).
+    """
+    if not isinstance(blind, bool):
+        raise InputError(f"default_model: blind must be True or False, got {blind!r}")
     from importlib.resources import files
 
-    return load(files("fsv").joinpath("data", "internal_forces.npz"))
+    return load(files("fsv").joinpath("data", SHIPPED_MODELS[blind]))

@@ -74,7 +74,9 @@ class LearnedInternalForces:
     """Learned internal forces and the reconstruction of eq. 14 (:func:`fsv.learn.learned_forces`).
 
     Attributes:
-        model: A trained ``fsv.learn.InternalForceModel``; None loads the shipped one on first use.
+        model: A trained ``fsv.learn.InternalForceModel``; None: a shipped one
+            (:func:`fsv.learn.default_model`), the user-blind model for a person without a grip
+            calibration, the model with grip inputs for a person with one.
         settings: Settings of the cone program.
         source: Where the model came from, for the label (e.g. its file).
         smoothing_s: Gaussian window over which the predicted amount of internal force is averaged,
@@ -93,15 +95,16 @@ class LearnedInternalForces:
 
     @property
     def name(self) -> str:
-        model = self.source or ("shipped model" if self.model is None else "user model")
+        model = self.source or ("shipped model of the protocol" if self.model is None else "user model")
         window = f", amount averaged over {self.smoothing_s:g} s" if self.smoothing_s > 0 else ", per frame"
         return f"learned internal forces ({model}{window})"
 
     def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model, gravity, *, grip=None) -> tuple:
-        """The final forces; ``grip`` is the person's :class:`fsv.grip.GripCalibration` (or None),
-        used by a model trained with grip inputs."""
+        """The final forces; ``grip`` is the person's :class:`fsv.grip.GripCalibration` (or None:
+        nothing is known of the person), used by a model trained with grip inputs and choosing the
+        shipped model when :attr:`model` is None."""
         from fsv.learn import default_model, learned_forces  # torch is loaded only when this stage runs
 
-        model = self.model if self.model is not None else default_model()
+        model = self.model if self.model is not None else default_model(blind=grip is None)
         return learned_forces(model, kinematics, contacts, object_model, gravity=gravity, settings=self.settings,
                               smoothing_s=self.smoothing_s, grip=grip)

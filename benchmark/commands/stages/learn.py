@@ -4,17 +4,17 @@ from __future__ import annotations
 
 from benchmark.commands.stage import Run, Stage, StageResult
 from benchmark.commands.stages.forces import estimate_inputs, oracle_tag
-from benchmark.method.grip_file import user_grip
+from benchmark.method.protocol import person_grip
 from benchmark.scores.learned import model_block, score_episode
 from fsv.learn import default_model, load
-
-SHIPPED_MODEL = "fsv/data/internal_forces.npz"
+from fsv.learn.model import SHIPPED_MODELS
 
 
 def add_arguments(parser) -> None:
     """Adds ``--internal-model FILE`` to ``fsv-bench``."""
     parser.add_argument("--internal-model", default=None,
-                        help="internal-force model from `fsv-bench train` (default: the model shipped in fsv/data)")
+                        help="internal-force model from `fsv-bench train` (default: the protocol's model shipped in fsv/data: "
+                             "user-blind under --protocol blind, with grip inputs under --protocol calibrated)")
 
 
 def run(record: Run, options) -> StageResult:
@@ -28,11 +28,12 @@ def run(record: Run, options) -> StageResult:
     path = options["internal_model"]
     model_info = {}
     if est.labels["internal"].startswith("learned internal forces"):
-        model_info = {"internal_model": path or SHIPPED_MODEL,
-                      "model": model_block(default_model() if path is None else load(path))}
+        grip = person_grip(record.episode.scenario.user, record.method_spec.protocol)  # what the method was told
+        blind = grip is None
+        model_info = {"internal_model": path or f"fsv/data/{SHIPPED_MODELS[blind]}",
+                      "model": model_block(default_model(blind=blind) if path is None else load(path))}
         if model_info["model"]["grip_inputs"]:
-            grip = user_grip(record.episode.scenario.user)
-            model_info["grip_calibration"] = None if grip is None else {"baseline_n": grip.baseline_n, "gain": grip.gain}
+            model_info["grip_calibration"] = None if blind else {"baseline_n": grip.baseline_n, "gain": grip.gain}
     block = {**labels, "program": est.labels["internal"], **model_info, **block}
     paper = block["paper_rule"]
     line = (
