@@ -110,5 +110,5 @@ def test_baselines_are_addressable_from_the_command_line(tmp_path, capsys):
     code = main(["eval", "--suite", "smoke", "--method", "static", "--quiet", "--out", str(tmp_path / "o"),
                  "--cache", str(tmp_path / "c")])
     out = capsys.readouterr()
-    assert code == 1 and "FAIL  median box_pos_err_mm <= 2" in out.out
+    assert code == 1 and "FAIL  median box_pos_err_mm <= 8" in out.out
     assert "static box at its first-frame pose" in (tmp_path / "o" / "report.md").read_text()

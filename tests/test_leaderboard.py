@@ -24,10 +24,10 @@ def test_the_leaderboard_scores_every_variant_and_the_oracles_score_as_truth(tin
     assert "| best baseline |" in skills and "| reference |" in skills and "| baseline-static |" not in skills
     s = {name: json.loads((out / name / "scores.json").read_text())["episodes"][0] for name in VARIANTS}
     assert s["reference"]["rendered"] and not s["central"]["rendered"]  # rendered once for all
-    exact = [n for n in VARIANTS if n != "baseline-static" and not n.endswith("-knowledge")]
-    assert len({s[n]["box_pos_err_mm"] for n in exact}) == 1  # one tracking run shared
-    assert s["lab-knowledge"]["box_pos_err_mm"] != s["reference"]["box_pos_err_mm"]  # told the camera with errors
-    assert s["lab-knowledge"]["knowledge"]["knowledge"] == "lab" and s["reference"]["knowledge"]["knowledge"] == "exact"
+    lab = [n for n in VARIANTS if n != "baseline-static" and not n.endswith("-knowledge")]
+    assert len({s[n]["box_pos_err_mm"] for n in lab}) == 1  # one tracking run shared
+    assert s["exact-knowledge"]["box_pos_err_mm"] != s["reference"]["box_pos_err_mm"]  # the camera told without errors
+    assert s["exact-knowledge"]["knowledge"]["knowledge"] == "exact" and s["reference"]["knowledge"]["knowledge"] == "lab"
     assert s["baseline-static"]["box_pos_err_mm"] > 10 * s["reference"]["box_pos_err_mm"]  # no vision at all
     assert s["oracle-kinematics"]["acc_err_rms"] < 1e-9 < 0.05 < s["reference"]["acc_err_rms"]
     assert s["oracle-contacts"]["contact_err_mm_std"] == 0.0 and s["oracle-contacts"]["contact_recall"] == 1.0

@@ -14,7 +14,7 @@ def test_the_table_has_a_row_per_number_of_people_and_protocol():
     rows = [{"people": 5, "episodes": 60, "samples": 9000, "aggregate": {"blind": _agg(20.0), "calibrated": _agg(15.0)}},
             {"people": 40, "episodes": 480, "samples": 90000, "aggregate": {"blind": _agg(12.5), "calibrated": _agg(9.0)}}]
     table = curve_markdown(SUITES["dev"], rows)
-    assert "Scored on `dev` v3 (48 episodes" in table
+    assert "Scored on `dev` v4 (48 episodes" in table
     assert "| 5 | 60 | 9000 | blind | 20 [19, 21] |" in table
     assert "| 40 | 480 | 90000 | calibrated | 9 [8, 10] |" in table
     assert sum(line.startswith("| 5 |") or line.startswith("| 40 |") for line in table.splitlines()) == 4

@@ -1,9 +1,9 @@
 """What the method is told of the hand, the box and the camera: the truth, or what a lab measures.
 
-``exact`` hands the method the simulation's own values (the hand that rendered the depth, the box's
-true mass and friction, the camera's true calibration): a labelled ablation, like the oracles.
-``lab`` hands it what a lab would measure, each quantity with an error drawn from the scenario's
-``"knowledge"`` stream (the same scenario, the same errors):
+``lab`` (the default) hands the method what a lab would measure, each quantity with an error drawn
+from the scenario's ``"knowledge"`` stream (the same scenario, the same errors). ``exact`` hands it
+the simulation's own values (the hand that rendered the depth, the box's true mass and friction,
+the camera's true calibration): a labelled ablation, like the oracles. What ``lab`` gives:
 
 - **the hand**: the method's generic hand (the template, ``sim_assets/hand.yaml``, with none of the
   person's proportions) stretched along the hand to the person's hand length and across it to
@@ -34,8 +34,8 @@ SOURCES = ("hand", "box", "camera")
 KNOWLEDGE = ("exact", "lab") + tuple(f"lab-{s}" for s in SOURCES)
 """The accepted values of ``--knowledge``: "exact", "lab" (every source's errors) or one source's."""
 
-DEFAULT_KNOWLEDGE = "exact"
-"""What the method is told unless the command says otherwise."""
+DEFAULT_KNOWLEDGE = "lab"
+"""What the method is told unless the command says otherwise: what a lab would measure."""
 
 RULER_SD_M = 0.002
 """A hand length or breadth read off a ruler by a person: 2 mm (a choice; the inter-observer error

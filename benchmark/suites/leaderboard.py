@@ -4,9 +4,10 @@
 
 The variants (:data:`VARIANTS`) replace one stage of the reference (another differentiator, or a
 stage's trivial baseline), feed it truth (oracle contacts, oracle kinematics: ablations that show
-what each stage costs) or tell it the other knowledge of the hand, the box and the camera
-(:mod:`benchmark.method.knowledge`); the reference is also run under the ``calibrated`` protocol
-beside the ``blind`` one (:mod:`benchmark.method.protocol`). They share every episode's rendering and tracking. The table gives each
+what each stage costs) or tell it the simulation's own hand, box and camera (``exact-knowledge``,
+an ablation beside the default ``lab`` knowledge, :mod:`benchmark.method.knowledge`); the
+reference is also run under the ``calibrated`` protocol beside the ``blind`` one
+(:mod:`benchmark.method.protocol`). They share every episode's rendering and tracking. The table gives each
 method's skill against the best baseline per metric. ``DIR/<variant>/`` gets the files of ``fsv-bench eval``
 (``scores.json``, ``report.md``, ``junit.xml``); ``DIR/leaderboard.md`` the table with intervals.
 The exit status is 0 when the reference passes the suite's gates, 1 when not.
@@ -38,7 +39,7 @@ VARIANTS = {
     **{f"baseline-{name}": MethodSpec(method=name, protocol="calibrated" if name == "grip-line" else "blind")
        for name in BASELINE_NAMES},
 }
-"""The leaderboard's rows: the reference (algebraic differentiation, the ``blind`` protocol), the
+"""The leaderboard's rows: the reference (algebraic differentiation, lab knowledge, the ``blind`` protocol), the
 same under the ``calibrated`` protocol (:mod:`benchmark.method.protocol`), its variants, and the
 trivial baseline of each stage (``fsv.method.baselines``) every method must beat (the grip line is
 a calibration, so it is run calibrated)."""

@@ -8,7 +8,7 @@ from benchmark.suites.suite import Gate, Suite
 
 SMOKE = Suite(
     name="smoke",
-    version=5,
+    version=6,
     scenarios=(
         Scenario(task="lift", user=0, grasp=0, mass=0, seed=11, duration_s=4.0),
         Scenario(task="place", user=2, grasp=2, mass=1, seed=12, duration_s=4.0),
@@ -16,14 +16,16 @@ SMOKE = Suite(
         Scenario(task="release", user=1, grasp=1, mass=0, seed=14, duration_s=4.0),
     ),
     # A regression gate for CI, measured by the reference method on this machine (the named users'
-    # own hands, the shipped model trained on the training split, the blind protocol), and set so
-    # that the trivial baseline of each stage (fsv.method.baselines) fails its stage's gates: the
-    # static box (no vision) the tracker's, zero kinematics the acceleration gate, gravity-only
-    # forces the net-force gate, no internal forces the learned-force gate. Version 5 moved the
-    # learned-force gate from 30 to 60 %: under the blind protocol a model that never met the
-    # named users errs by 47.9 % on them (29.1 % calibrated); version 4's other gates are kept.
+    # own hands, the shipped models trained on the training split, the blind protocol, lab
+    # knowledge), and set so that the trivial baseline of each stage (fsv.method.baselines) fails
+    # its stage's gates: the static box (no vision) the tracker's, zero kinematics the acceleration
+    # gate, gravity-only forces the net-force gate, no internal forces the learned-force gate.
+    # Version 6 runs under lab knowledge (the default): the camera's calibration moves the box by
+    # its principal-point error (1.5 px at 212 px focal and 0.55 m: 3.9 mm per image axis), so the
+    # box gate moved from 2 to 8 mm; version 5's other gates are kept.
     gates=(
-        Gate("box_pos_err_mm", "<=", 2.0, measured="median 1.18 mm (1.13-1.33); the static box 127 mm"),
+        Gate("box_pos_err_mm", "<=", 8.0, measured="median 4.10 mm (1.68-5.04), lab knowledge (1.18 exact); "
+                                                   "the static box 127 mm"),
         Gate("contact_err_mm_std", "<=", 5.0, measured="median 2.07 mm (1.47-3.32)"),
         Gate("contact_recall", ">=", 0.85, measured="median 0.99 (0.99-1.00); the static box 0"),
         Gate("contact_precision", ">=", 0.85, measured="median 0.98 (0.93-0.995)"),
@@ -37,7 +39,7 @@ SMOKE = Suite(
     description=(
         "For CI: four 4 s episodes of the named cohort, one per task family (lift, place, rotate, release), "
         "each with another user, grasp and mass, seeds 11-14 (never used for tuning). The whole method from "
-        "1 cm depth noise on the ds325 sensor, under the blind protocol; gates on the medians over the four "
+        "1 cm depth noise on the ds325 sensor, under the blind protocol and lab knowledge; gates on the medians over the four "
         "episodes: a regression gate, not a measure."
     ),
 )
@@ -63,7 +65,11 @@ MASS_COUNT = 6  # the masses of sim_assets/masses.yaml the suites draw from
 
 
 STANDARD_GATES = (  # the bar a method should reach away from the default lift (not tuned to pass)
-    Gate("box_pos_err_mm", "<=", 1.5),
+    # version 5 (lab knowledge): version 3's 1.5 mm bar for the tracker plus the median box shift
+    # that the lab's calibration alone predicts at the paper's view (a 1.5 px principal-point error
+    # per axis at 212 px focal length and 0.55 m: 3.9 mm per image axis, median norm 4.6 mm), set
+    # from that error model before standard v5 was measured
+    Gate("box_pos_err_mm", "<=", 6.0),
     Gate("contact_err_mm_std", "<=", 4.0),
     Gate("contact_recall", ">=", 0.9),
     Gate("contact_precision", ">=", 0.9),
@@ -72,11 +78,12 @@ STANDARD_GATES = (  # the bar a method should reach away from the default lift (
     Gate("least_violation_frac", "<=", 0.01, statistic="mean"),
     Gate("learned_rel_err_pct", "<=", 15.0),
 )
-"""The gates of ``standard`` (version 3's, kept for version 4 before measuring it) and ``dev``."""
+"""The gates of ``standard``, ``dev`` and ``cohort``: version 3's, kept for version 4 before measuring
+it; version 5 widened the box's for the lab's calibration (above), before measuring."""
 
 STANDARD = Suite(
     name="standard",
-    version=4,
+    version=5,
     scenarios=split_scenarios("test", STANDARD_TASKS, 4, seed=STANDARD_FIRST_SEED, masses=MASS_COUNT),
     gates=STANDARD_GATES,
     description=(
@@ -84,15 +91,16 @@ STANDARD = Suite(
         "excitations, four each), each with its own person, grasp and camera view from the test split "
         "(people, grasps and views 500-547: never used for training or for choosing anything), masses "
         "drawn at random, seeds 300-347; the whole method from 1 cm depth noise, under the blind protocol "
-        "(the calibrated one beside it on the leaderboard). Its gates are version 3's, the bar a method "
-        "should reach (contact std 4 mm, net force 0.3 N, 1 % least-violation frames, learned forces 15 %), "
-        "kept before measuring, not set to make the reference pass."
+        "(the calibrated one beside it on the leaderboard) and lab knowledge (exact knowledge beside it). "
+        "Its gates are the bar a method should reach (box 6 mm with the lab's calibration, contact std 4 mm, "
+        "net force 0.3 N, 1 % least-violation frames, learned forces 15 %), set before measuring, not to "
+        "make the reference pass."
     ),
 )
 
 COHORT = Suite(
     name="cohort",
-    version=1,
+    version=2,
     scenarios=_grid_scenarios(STANDARD_FIRST_SEED, STANDARD_DRAW_SEED),
     gates=STANDARD_GATES,
     description=(
@@ -105,7 +113,7 @@ COHORT = Suite(
 
 DEV = Suite(
     name="dev",
-    version=3,
+    version=4,
     scenarios=split_scenarios("dev", STANDARD_TASKS, 4, seed=DEV_FIRST_SEED, masses=MASS_COUNT),
     gates=STANDARD_GATES,
     description=(
@@ -121,7 +129,7 @@ TABLE1_SEEDS = (0, 1, 2)
 
 TABLE1 = Suite(
     name="table1",
-    version=1,
+    version=2,
     scenarios=tuple(Scenario(task=t, seed=s) for t in TABLE1_TASKS for s in TABLE1_SEEDS),
     gates=(  # the paper's Table 1, algebraic row (real AHRS, real tracker): standard deviations of the errors
         Gate("acc_err_rms", "<=", 0.904),
@@ -138,7 +146,7 @@ TABLE1 = Suite(
 
 TABLE2 = Suite(
     name="table2",
-    version=2,
+    version=3,
     scenarios=tuple(Scenario(task="lift", user=u, grasp=g, mass=m, seed=s)
                     for u in (0, 4) for g in (0, 1) for m in (1, 4) for s in range(6)),
     gates=(  # the paper's Table 2 with full training: 9.7-10.9 %, under its sample rule
