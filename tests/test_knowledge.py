@@ -119,6 +119,37 @@ def test_one_source_alone_takes_the_same_draws_as_lab_and_leaves_the_others_exac
         assert np.array_equal(known.world_from_method, np.eye(4)) == (source != "camera")
 
 
+def test_a_factor_scales_the_same_draws_and_zero_is_a_perfect_lab():
+    ep = _episode(seed=13, user=1)
+    lab, same, double, zero = (K.given(ep, n) for n in ("lab", "lab:1", "lab:2", "lab:0"))
+    keys = ("hand_length_m", "hand_breadth_m", "mass_kg", "fx_px", "fy_px", "cx_px", "cy_px")
+    assert same[3].record() == {**lab[3].record(), "knowledge": "lab:1"}  # the same bits as plain lab
+    for key in keys:  # exactly twice the errors (a power of two: no rounding)
+        assert double[3].record()[key]["error"] == pytest.approx(2 * lab[3].record()[key]["error"], rel=1e-12, abs=1e-15)
+        assert zero[3].record()[key]["error"] == 0.0
+    assert double[3].camera_rot_err_deg == pytest.approx(2 * lab[3].camera_rot_err_deg, rel=1e-12)
+    assert double[3].given_record()["measurement_sd"]["principal_px"] == 2 * K.PRINCIPAL_SD_PX
+    # a perfect ruler still gives the generic hand (the lab's way), not the simulated one
+    assert zero[0] is not ep.hand_model and zero[3].hand_scale_given == pytest.approx(zero[3].hand_scale_true, rel=0.05)
+    assert zero[3].camera_from_lab and K.given(ep, "lab-box:3")[3].camera_from_lab is False
+    np.testing.assert_allclose(zero[3].world_from_method, np.eye(4), atol=1e-12)  # T @ inv(T), a perfect calibration
+
+
+@pytest.mark.parametrize("name, needle", [
+    ("lab:x", "--knowledge 'lab:x': 'x' is not a number"),
+    ("lab:-1", "--knowledge 'lab:-1': factor -1 is out of range"),
+    ("lab:inf", "--knowledge 'lab:inf': factor inf is out of range"),
+    ("lab-camera:1000", "factor 1000 is out of range"),
+    ("exact:2", "--knowledge 'exact:2': accepted: exact, lab"),
+    ("lab-skin", "--knowledge 'lab-skin': accepted: exact, lab, lab-hand, lab-box, lab-camera, each lab one optionally "
+                 "with :FACTOR scaling its errors (0 to 100, e.g. lab:2)"),
+])
+def test_a_bad_factor_or_name_is_refused_naming_it_and_what_is_accepted(name, needle):
+    with pytest.raises(ValueError) as e:
+        K.check_knowledge(name)
+    assert needle in str(e.value) and "\n" not in str(e.value)
+
+
 def test_an_unknown_knowledge_is_refused_by_name():
     with pytest.raises(ValueError, match=r"--knowledge 'oracle': accepted: exact, lab, lab-hand, lab-box, lab-camera"):
         K.check_knowledge("oracle")

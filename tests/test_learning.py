@@ -64,9 +64,10 @@ def test_learning_block_on_a_short_lift(episode_factory):
     paper = block["paper_rule"]
     assert block["scored"] > 100 and paper["solver_failures"] == 0
     assert paper["residual_rel_max"] <= 1e-6  # the learned forces explain the motion
-    # blind (no grip given: the shipped networks take their training people's mean line), oracle
-    # contacts and kinematics, 3 s lift: measured 45.8 % (seeds 1-2: 48.8, 47.1); no internal forces ~84
-    assert 0 < paper["rel_err_pct_mean"] < 60
-    assert 0 < block["rel_err_pct_mean"] < 60 and block["scored"] >= paper["scored"]
+    # the user-blind model, oracle contacts and kinematics, 3 s lift: measured 17.1 % (seeds 1-2: 22.8,
+    # 20.5); the model with grip inputs fed its training people's mean line 45.8 % (48.8, 47.1); no
+    # internal forces ~84
+    assert 0 < paper["rel_err_pct_mean"] < 35
+    assert 0 < block["rel_err_pct_mean"] < 35 and block["scored"] >= paper["scored"]
     held = ep.truth.contact_active.sum(axis=1) >= 2
     assert np.all(pred[held][ep.truth.contact_active[held]] >= 0)  # internal grip, never a pull

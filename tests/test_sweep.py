@@ -29,15 +29,16 @@ def test_a_sweep_of_the_initialisation_error_moves_the_tracking_error(tiny, tmp_
 
 def test_a_sweep_of_the_knowledge_tells_the_method_exact_then_measured_values(tiny, tmp_path):
     out = tmp_path / "sweep"
-    assert main(["sweep", "--suite", "tiny", "--axis", "knowledge", "--values", "exact,lab-camera", "--out", str(out),
-                 "--cache", str(tmp_path / "c"), "--quiet", "--internal", "none"]) == 0
+    assert main(["sweep", "--suite", "tiny", "--axis", "knowledge", "--values", "exact,lab-camera,lab-camera:3",
+                 "--out", str(out), "--cache", str(tmp_path / "c"), "--quiet", "--internal", "none"]) == 0
     doc = json.loads((out / "sweep.json").read_text())
-    assert doc["values"] == ["exact", "lab-camera"]
+    assert doc["values"] == ["exact", "lab-camera", "lab-camera:3"]
     told = [eps[0]["knowledge"] for eps in doc["episodes"]]
-    assert [t["knowledge"] for t in told] == ["exact", "lab-camera"]
+    assert [t["knowledge"] for t in told] == ["exact", "lab-camera", "lab-camera:3"]
     assert told[0]["cx_px"]["error"] == 0.0 != told[1]["cx_px"]["error"] and told[1]["mass_kg"]["error"] == 0.0
-    exact, lab = (a["box_pos_err_mm"]["median"]["value"] for a in doc["aggregate"])
-    assert lab != exact  # the calibration's error moves the box as the method sees it
+    assert told[2]["cx_px"]["error"] == pytest.approx(3 * told[1]["cx_px"]["error"], rel=1e-9)  # the same draw, thrice
+    exact, lab, worse = (a["box_pos_err_mm"]["median"]["value"] for a in doc["aggregate"])
+    assert exact < lab < worse  # the calibration's error moves the box as the method sees it
 
 
 @pytest.mark.parametrize("argv, needle", [

@@ -86,11 +86,15 @@ def test_scores_of_a_perfect_tracker_are_zero_and_one(lift_episode):
     assert [g.metric for g, r in zip(GATES, report) if not r.passed] == ["contact_err_mm_mean_abs", "contact_err_mm_std"]
 
 
-def test_a_camera_from_a_lab_calibration_widens_only_the_box_gates(lift_episode):
+def test_a_camera_from_a_lab_calibration_widens_only_the_box_gates(lift_episode, rendered_lift_episode):
     from benchmark.scores.tracking import CALIBRATED_GATES, gates_for
 
-    assert gates_for("exact") == gates_for("lab-hand") == gates_for("lab-box") == gates_for(None) == GATES
-    assert gates_for("lab") == gates_for("lab-camera") == CALIBRATED_GATES
+    from benchmark.method.knowledge import given
+
+    told = {name: given(rendered_lift_episode, name)[3].camera_from_lab
+            for name in ("exact", "lab", "lab-hand", "lab-box", "lab-camera", "lab:0.5")}
+    assert told == {"exact": False, "lab": True, "lab-hand": False, "lab-box": False, "lab-camera": True, "lab:0.5": True}
+    assert gates_for(False) == GATES and gates_for(True) == CALIBRATED_GATES
     assert [g.metric for g in CALIBRATED_GATES] == [g.metric for g in GATES] and CALIBRATED_GATES[2:] == GATES[2:]
     tr = lift_episode[0].truth
     T = len(tr.t)
@@ -99,7 +103,7 @@ def test_a_camera_from_a_lab_calibration_widens_only_the_box_gates(lift_episode)
                        box_inliers=np.ones(T), hand_explained=np.ones(T), contacts=contacts_from_truth(tr), timing_s={})
     s = score_tracking(shifted, tr)  # the box 4 mm off, as a principal point 1.5 px off moves it at 0.55 m
     assert abs(s["box_pos_err_mm_median"] - 4.0) < 1e-9
-    assert not gate_report(s)[0].passed and gate_report(s, "lab")[0].passed
+    assert not gate_report(s)[0].passed and gate_report(s, True)[0].passed
 
 
 def test_init_is_the_seeded_perturbation_of_the_first_frame_only(lift_episode):

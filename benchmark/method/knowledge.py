@@ -19,6 +19,8 @@ the camera's true calibration): a labelled ablation, like the oracles. What ``la
 
 The sizes are choices, stated here and in docs/scenarios.md. ``lab-hand``, ``lab-box`` and
 ``lab-camera`` apply one source's errors alone (the same draws as ``lab``), to measure what each costs.
+``NAME:FACTOR`` (e.g. ``lab:2``, ``lab-camera:0.5``) scales every error of ``NAME`` by ``FACTOR``:
+the same draws times the factor (a worse or a better lab), for ``fsv-bench sweep --axis knowledge``.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ SOURCES = ("hand", "box", "camera")
 """The sources of a lab's errors; ``lab-<source>`` applies that source's alone (an ablation)."""
 
 KNOWLEDGE = ("exact", "lab") + tuple(f"lab-{s}" for s in SOURCES)
-"""The accepted values of ``--knowledge``: "exact", "lab" (every source's errors) or one source's."""
+"""The accepted values of ``--knowledge``: "exact", "lab" (every source's errors) or one source's,
+each ``lab`` one optionally with ``:FACTOR`` (:func:`parse_knowledge`)."""
 
 DEFAULT_KNOWLEDGE = "lab"
 """What the method is told unless the command says otherwise: what a lab would measure."""
@@ -61,7 +64,8 @@ class Knowledge:
     """What a method was told, with the error of each given quantity.
 
     Attributes:
-        name: "exact" or "lab".
+        name: A ``--knowledge`` value (:func:`parse_knowledge`): "exact", "lab", "lab-<source>",
+            a lab one optionally with ":FACTOR".
         hand_scale_true: The person's hand scale (the simulated hand's; for a drawn person the
             geometric mean of its length and breadth scales).
         hand_scale_given: The given hand model's (the geometric mean of its length and breadth scales).
@@ -112,7 +116,7 @@ class Knowledge:
         """What the method may read of it (camera-input files): the knowledge, each given quantity
         and the standard deviation of its measurement (0 where it was given exactly); never the
         truth or the error."""
-        on = _sources(self.name)
+        on = _error_scales(self.name)
         sd = {"hand_length_m": RULER_SD_M * on["hand"], "hand_breadth_m": RULER_SD_M * on["hand"],
               "mass_kg": SCALE_SD_KG * on["box"], "tilt_angle_rad": TILT_SD_RAD * on["box"],
               "focal_rel": FOCAL_SD_REL * on["camera"], "principal_px": PRINCIPAL_SD_PX * on["camera"],
@@ -121,6 +125,11 @@ class Knowledge:
                 "hand_breadth_m": float(self.hand_breadth_m[1]), "hand_scale": float(self.hand_scale_given),
                 "mass_kg": float(self.mass_kg[1]), "friction": float(self.friction[1]),
                 "measurement_sd": {k: float(v) for k, v in sd.items()}}
+
+    @property
+    def camera_from_lab(self) -> bool:
+        """Whether the camera's calibration came from a lab (with errors, unless scaled to 0)."""
+        return _sources(self.name)["camera"]
 
     def line(self) -> str:
         """One line: what the method was given and its errors."""
@@ -135,15 +144,54 @@ class Knowledge:
                 f"{r['camera_rot_err_deg']:.2f} deg and {1e3 * r['camera_pos_err_m']:.1f} mm off")
 
 
+MAX_ERROR_FACTOR = 100.0
+"""The largest accepted ``:FACTOR`` (a hundred times a lab's errors is no lab)."""
+
+
+def parse_knowledge(name: str) -> tuple:
+    """``(base, factor)`` of a knowledge name: ``"lab:2"`` is ``("lab", 2.0)``, ``"lab"`` is
+    ``("lab", 1.0)``, ``"exact"`` is ``("exact", 0.0)``.
+
+    Raises:
+        ValueError: Naming the bad value and what is accepted: a base of :data:`KNOWLEDGE`, and for
+            a ``lab`` one a factor that is a finite number in [0, :data:`MAX_ERROR_FACTOR`].
+    """
+    accepted = (f"accepted: {', '.join(KNOWLEDGE)}, each lab one optionally with :FACTOR scaling its errors "
+                f"(0 to {MAX_ERROR_FACTOR:g}, e.g. lab:2)")
+    if not isinstance(name, str):
+        raise ValueError(f"--knowledge {name!r}: {accepted}")
+    base, sep, text = name.partition(":")
+    if base not in KNOWLEDGE or (sep and base == "exact"):
+        raise ValueError(f"--knowledge {name!r}: {accepted}")
+    if base == "exact":
+        return base, 0.0
+    if not sep:
+        return base, 1.0
+    try:
+        factor = float(text)
+    except ValueError:
+        raise ValueError(f"--knowledge {name!r}: {text!r} is not a number; {accepted}") from None
+    if not (math.isfinite(factor) and 0.0 <= factor <= MAX_ERROR_FACTOR):
+        raise ValueError(f"--knowledge {name!r}: factor {text} is out of range; {accepted}")
+    return base, factor
+
+
 def _sources(name: str) -> dict:
-    """Which sources (:data:`SOURCES`) a knowledge ``name`` takes with a lab's errors."""
-    return {src: name in ("lab", f"lab-{src}") for src in SOURCES}
+    """Which sources (:data:`SOURCES`) a knowledge ``name`` takes from a lab (True) or exactly."""
+    base = parse_knowledge(name)[0]
+    return {src: base in ("lab", f"lab-{src}") for src in SOURCES}
+
+
+def _error_scales(name: str) -> dict:
+    """The factor on each source's lab errors under ``name`` (0 for a source given exactly; a lab
+    source with factor 0 is measured perfectly, but still the lab's way: the generic hand)."""
+    factor = parse_knowledge(name)[1]
+    return {src: factor if on else 0.0 for src, on in _sources(name).items()}
 
 
 def check_knowledge(name: str) -> str:
-    """``name`` if it is one of :data:`KNOWLEDGE`; ValueError naming the accepted ones otherwise."""
-    if name not in KNOWLEDGE:
-        raise ValueError(f"--knowledge {name!r}: accepted: {', '.join(KNOWLEDGE)}")
+    """``name`` if :func:`parse_knowledge` accepts it; its ValueError otherwise."""
+    parse_knowledge(name)
     return name
 
 
@@ -163,7 +211,7 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
 
     Args:
         episode: A rendered ``benchmark.Episode``.
-        name: One of :data:`KNOWLEDGE`.
+        name: One of :data:`KNOWLEDGE`, optionally with ``:FACTOR`` (:func:`parse_knowledge`).
 
     Returns:
         ``(hand_model, object_model, calib, knowledge)``: the method's models and calibration and
@@ -181,21 +229,21 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
     length, breadth = anatomy.hand_length_m, anatomy.hand_breadth_m
     K = np.asarray(calib.K, dtype=float)
     focal, principal = (K[0, 0], K[1, 1]), (K[0, 2], K[1, 2])
-    if name == "exact":
+    if parse_knowledge(name)[0] == "exact":
         knowledge = Knowledge(name, scale, scale, (length, length), (breadth, breadth), (om.mass_kg, om.mass_kg),
                               (om.friction, om.friction), (focal, focal), (principal, principal), 0.0, 0.0, np.eye(4))
         return episode.hand_model, om, calib, knowledge
     rng = episode.scenario.rng("knowledge")
     # every draw, in a fixed order (a source left exact still draws: the others' errors stay the same)
-    on = _sources(name)
-    length_m = length + RULER_SD_M * rng.standard_normal() * on["hand"]
-    breadth_m = breadth + RULER_SD_M * rng.standard_normal() * on["hand"]
-    mass = om.mass_kg + SCALE_SD_KG * rng.standard_normal() * on["box"]
-    theta = math.atan(om.friction) + TILT_SD_RAD * rng.standard_normal() * on["box"]
-    df = FOCAL_SD_REL * rng.standard_normal(2) * on["camera"]
-    dc = PRINCIPAL_SD_PX * rng.standard_normal(2) * on["camera"]
-    drot = EXTRINSIC_ROT_SD_RAD * rng.standard_normal(3) * on["camera"]
-    dpos = EXTRINSIC_POS_SD_M * rng.standard_normal(3) * on["camera"]
+    on, scale_of = _sources(name), _error_scales(name)
+    length_m = length + RULER_SD_M * rng.standard_normal() * scale_of["hand"]
+    breadth_m = breadth + RULER_SD_M * rng.standard_normal() * scale_of["hand"]
+    mass = om.mass_kg + SCALE_SD_KG * rng.standard_normal() * scale_of["box"]
+    theta = math.atan(om.friction) + TILT_SD_RAD * rng.standard_normal() * scale_of["box"]
+    df = FOCAL_SD_REL * rng.standard_normal(2) * scale_of["camera"]
+    dc = PRINCIPAL_SD_PX * rng.standard_normal(2) * scale_of["camera"]
+    drot = EXTRINSIC_ROT_SD_RAD * rng.standard_normal(3) * scale_of["camera"]
+    dpos = EXTRINSIC_POS_SD_M * rng.standard_normal(3) * scale_of["camera"]
     generic = Anatomy(length_scale=float(length_m / TEMPLATE_HAND_LENGTH_M),
                       breadth_scale=float(breadth_m / TEMPLATE_HAND_BREADTH_M))
     scale_given = math.sqrt(generic.length_scale * generic.breadth_scale) if on["hand"] else scale

@@ -83,13 +83,16 @@ unequal focal errors shear it (3 degrees, twice the exact bar); the contact gate
 frame and stay."""
 
 
-def gates_for(knowledge: str | None) -> tuple:
-    """The tracker's gates for what the method was told: :data:`CALIBRATED_GATES` when its camera
-    came from a lab's calibration (``lab``, ``lab-camera``), else :data:`GATES`."""
-    return CALIBRATED_GATES if knowledge in ("lab", "lab-camera") else GATES
+def gates_for(camera_from_lab: bool) -> tuple:
+    """The tracker's gates: :data:`CALIBRATED_GATES` when the method's camera came from a lab's
+    calibration (``Knowledge.camera_from_lab``: ``--knowledge lab`` or ``lab-camera``), else
+    :data:`GATES`."""
+    if not isinstance(camera_from_lab, bool):
+        raise TypeError(f"camera_from_lab must be True or False, got {camera_from_lab!r}")
+    return CALIBRATED_GATES if camera_from_lab else GATES
 
 
-def gate_report(scores: dict, knowledge: str | None = None) -> list:
-    """Every gate of :func:`gates_for` ``(knowledge)`` on one episode's tracking scores (NaN fails), as
-    ``GateResult`` s."""
-    return check_values(gates_for(knowledge), dict(scores, contact_err_mm_mean_abs=abs(scores["contact_err_mm_mean"])))
+def gate_report(scores: dict, camera_from_lab: bool = False) -> list:
+    """Every gate of :func:`gates_for` on one episode's tracking scores (NaN fails), as ``GateResult`` s."""
+    return check_values(gates_for(camera_from_lab),
+                        dict(scores, contact_err_mm_mean_abs=abs(scores["contact_err_mm_mean"])))

@@ -361,13 +361,14 @@ def add_protocol_argument(p) -> None:
 
 
 def add_knowledge_argument(p) -> None:
-    """``--knowledge exact|lab``: what the method is told of the hand, the box and the camera."""
+    """``--knowledge lab|exact|...``: what the method is told of the hand, the box and the camera."""
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE
 
     p.add_argument("--knowledge", default=DEFAULT_KNOWLEDGE, metavar="|".join(KNOWLEDGE),
-                   help="what the method is told of the hand, the box and the camera: exact (the simulation's "
-                        "own values, an ablation) or lab (measured with a ruler, a scale, a tilt test and a "
-                        f"camera calibration, with their errors; default {DEFAULT_KNOWLEDGE})")
+                   help="what the method is told of the hand, the box and the camera: lab (measured with a ruler, "
+                        "a scale, a tilt test and a camera calibration, with their errors; lab-hand, lab-box, "
+                        "lab-camera: one source's alone; NAME:FACTOR scales the errors, e.g. lab:2) or exact (the "
+                        f"simulation's own values, an ablation); default {DEFAULT_KNOWLEDGE}")
 
 
 def spec_from_args(args: argparse.Namespace):

@@ -50,7 +50,7 @@ def run(record: Run, options) -> StageResult:
     block = {
         **scores,
         "paper_contact_err_mm": PAPER_CONTACT_ERROR_MM,
-        "gates": gate_rows(gate_report(scores, known.name)),
+        "gates": gate_rows(gate_report(scores, known.camera_from_lab)),
         "frames_per_s": T / elapsed,
         "frames_per_s_after_first": (T - 1) / (elapsed - first) if T > 1 and elapsed > first else float("nan"),
         "first_frame_s": first,
