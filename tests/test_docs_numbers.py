@@ -19,7 +19,7 @@ QUOTES = [  # (document, text before the number, metric, statistic, format, text
     ("docs/suites.md", "acceleration RMS ", "acc_err_rms", "median", "{:.3f}", " m/s²"),
     ("docs/suites.md", "net force ", "net_force_err_n_rms", "median", "{:.3f}", " N, mean"),
     ("docs/suites.md", "learned forces ", "learned_rel_err_pct", "median", "{:.1f}", " % (`results/smoke"),
-    ("docs/suites.md", "the reference's 1.18 mm, 0.38 m/s², 0.18 N and ", "learned_rel_err_pct", "median", "{:.1f}", " %)"),
+    ("docs/suites.md", "the reference's 4.10 mm, 0.39 m/s², 0.23 N and ", "learned_rel_err_pct", "median", "{:.1f}", " %)"),
 ]
 
 
@@ -39,9 +39,9 @@ def _standard(metric: str, unit: str = "") -> str:
 
 
 STANDARD_QUOTES = [  # (document, text before, metric, unit, text after)
-    ("README.md", "| **reference, blind** | 0.302 [0.256, 0.364] | 0.143 [0.127, 0.173] | 1.48 % [0.09, 4.10] | ",
+    ("README.md", "| **reference, blind** | 0.311 [0.264, 0.346] | 0.170 [0.140, 0.227] | 0.43 % [0.18, 0.76] | ",
      "learned_rel_err_pct", "", " | "),
-    ("docs/results.md", "| reference (blind) | 1.28 [1.20, 1.44] | 3.26 [2.81, 4.01] | 0.302 [0.256, 0.364] | 0.143 [0.127, 0.173] | 1.48 % [0.09, 4.10] | ",
+    ("docs/results.md", "| reference (blind) | 4.74 [3.91, 6.20] | 3.38 [2.79, 3.86] | 0.311 [0.264, 0.346] | 0.170 [0.140, 0.227] | 0.43 % [0.18, 0.76] | ",
      "learned_rel_err_pct", "", " | "),
     ("docs/results.md", "| learned forces, every contact frame, relative error [%] | ", "learned_rel_err_pct", "", " |"),
     ("docs/results.md", "| learned forces, the paper's sample rule [%] | ", "learned_rel_err_pct_paper", "", " |"),
