@@ -78,12 +78,12 @@ def test_every_baseline_fails_the_smoke_gates_of_its_stage_and_the_reference_pas
 
 def test_every_baseline_fails_the_standard_gates_of_its_stage_in_the_committed_results():
     """`standard` is too long for the tests: its committed scores (``fsv-bench reproduce``) are
-    checked against the registered gates. Measured (standard v4, the test split): the static box
-    137 mm, zero kinematics 0.592 m/s^2 (gate 0.45), gravity alone 0.353 N (gate 0.3), no internal
-    forces 82.9 % and the grip line alone (calibrated) 37.4 % (gate 15); the reference holds every
-    gate of the tracker and the differentiator and the net force's, and misses the mean
-    least-violation frames' (1.48 % against 1 %: one episode whose hand tracking failed) and the
-    learned forces' (44.2 % [40.9, 47.4] blind, against 15, set before measuring)."""
+    checked against the registered gates. Measured (standard v5, the test split, lab knowledge):
+    the static box 137 mm, zero kinematics 0.581 m/s^2 (gate 0.45), gravity alone 0.485 N (gate
+    0.3), no internal forces 82.6 % and the grip line alone (calibrated) 37.1 % (gate 15); the
+    reference holds every gate but the learned forces' (28.1 % [25.3, 34.8] blind, against 15, set
+    before measuring); its mean least-violation frames are 0.43 % (gate 1 %; 1.48 % with exact
+    knowledge, where one episode's hand tracking failed)."""
     import json
     import pathlib
 
@@ -98,7 +98,8 @@ def test_every_baseline_fails_the_standard_gates_of_its_stage_in_the_committed_r
         assert scores["suite"]["version"] == suite.version and scores["n"] == len(suite.scenarios)
         return [r.name for r in check_gates(suite.gates, scores["aggregate"]) if not r.passed]
 
-    assert set(failed("reference")) == {"median learned_rel_err_pct <= 15", "mean least_violation_frac <= 0.01"}
+    assert set(failed("reference")) == {"median learned_rel_err_pct <= 15"}
+    assert set(failed("exact-knowledge")) == {"median learned_rel_err_pct <= 15", "mean least_violation_frac <= 0.01"}
     for name, stage in BASELINE_STAGE.items():
         fails = failed(f"baseline-{name}")
         assert any(metric in g for g in fails for metric in STAGE_GATES[stage]), (name, fails)
