@@ -30,6 +30,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from fsv.linalg import mm, mv, norm
+
 SOURCES = ("hand", "box", "camera")
 """The sources of a lab's errors; ``lab-<source>`` applies that source's alone (an ablation)."""
 
@@ -198,12 +200,22 @@ def check_knowledge(name: str) -> str:
 def _rotation(rotvec) -> np.ndarray:
     """Rotation matrix of a rotation vector (Rodrigues), (3, 3)."""
     v = np.asarray(rotvec, dtype=float)
-    angle = float(np.linalg.norm(v))
+    angle = norm(v)
     if angle == 0.0:
         return np.eye(3)
     k = v / angle
     K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
+    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * mm(K, K)
+
+
+def rigid_inverse(T: np.ndarray) -> np.ndarray:
+    """The inverse of a rigid transform (4, 4): ``[R^T, -R^T t]``, in a fixed order of operations
+    (no BLAS or LAPACK: the same bits under every kernel, ``fsv.linalg``)."""
+    T = np.asarray(T, dtype=float)
+    out = np.eye(4)
+    out[:3, :3] = T[:3, :3].T
+    out[:3, 3] = -mv(out[:3, :3], T[:3, 3])
+    return out
 
 
 def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
@@ -253,7 +265,7 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
     K_given[0, 2], K_given[1, 2] = K[0, 2] + dc[0], K[1, 2] + dc[1]
     T = np.asarray(calib.T_world_cam, dtype=float)
     T_given = T.copy()
-    T_given[:3, :3] = _rotation(drot) @ T[:3, :3]
+    T_given[:3, :3] = mm(_rotation(drot), T[:3, :3])
     T_given[:3, 3] = T[:3, 3] + dpos
     calib_given = (Calibration(K=K_given, T_world_cam=T_given, width=calib.width, height=calib.height)
                    if on["camera"] else calib)
@@ -262,6 +274,6 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
     knowledge = Knowledge(
         name, scale, scale_given, (length, length_m), (breadth, breadth_m), (om.mass_kg, mass), (om.friction, friction),
         (focal, (K_given[0, 0], K_given[1, 1])), (principal, (K_given[0, 2], K_given[1, 2])),
-        math.degrees(float(np.linalg.norm(drot))), float(np.linalg.norm(dpos)),
-        T @ np.linalg.inv(T_given) if on["camera"] else np.eye(4))
+        math.degrees(norm(drot)), norm(dpos),
+        mm(T, rigid_inverse(T_given)) if on["camera"] else np.eye(4))
     return (hand_of(generic) if on["hand"] else episode.hand_model), om_given, calib_given, knowledge

@@ -37,16 +37,17 @@ def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str 
     """:func:`camera_input` and the :class:`benchmark.method.knowledge.Knowledge` record behind it."""
     from benchmark.method.init import tracker_init
     from benchmark.method.protocol import person_grip
-    from benchmark.method.knowledge import given
+    from benchmark.method.knowledge import given, rigid_inverse
+    from fsv.linalg import mm, mv
     from fsv.method import CameraInput
 
     hand, obj, calib, known = given(episode, knowledge)
     init = tracker_init(episode.truth, episode.scenario, hand, init_scale)
     if known.name != "exact":  # the first frame in the method's world (its calibration's)
-        M = np.linalg.inv(known.world_from_method)
+        M = rigid_inverse(known.world_from_method)  # no BLAS: the same bits under every kernel
         R, t = M[:3, :3], M[:3, 3]
-        init = TrackInit(box_pos=R @ init.box_pos + t, box_rot=R @ init.box_rot, palm_pos=R @ init.palm_pos + t,
-                         palm_rot=R @ init.palm_rot, joints=init.joints)
+        init = TrackInit(box_pos=mv(R, init.box_pos) + t, box_rot=mm(R, init.box_rot),
+                         palm_pos=mv(R, init.palm_pos) + t, palm_rot=mm(R, init.palm_rot), joints=init.joints)
     inputs = CameraInput(depth=episode.depth, calib=calib, object_model=obj, hand_model=hand, init=init,
                          gravity=episode.truth.gravity, grip=person_grip(episode.scenario.user, protocol))
     return inputs, known

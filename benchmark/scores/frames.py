@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsv.linalg import rows_mt
 from fsv.types import Poses
 
 
@@ -46,10 +47,10 @@ def tracking_in_true_world(tracking, world_from_method):
     M = np.asarray(world_from_method, dtype=float)
     R, t = M[:3, :3], M[:3, 3]
     box = tracking.box
-    mapped = Poses(t=box.t, pos=box.pos @ R.T + t, rot=np.einsum("ij,tjk->tik", R, box.rot))
+    mapped = Poses(t=box.t, pos=rows_mt(box.pos, R) + t, rot=np.einsum("ij,tjk->tik", R, box.rot))
     tips = getattr(tracking, "fingertips", None)
     return TrackingInWorld(box=mapped, contacts=tracking.contacts,
-                           fingertips=None if tips is None else np.asarray(tips) @ R.T + t)
+                           fingertips=None if tips is None else np.einsum("ij,tkj->tki", R, np.asarray(tips)) + t)
 
 
 def rot_in_true_world(rot, world_from_method) -> np.ndarray:
