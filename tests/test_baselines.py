@@ -79,10 +79,10 @@ def test_every_baseline_fails_the_smoke_gates_of_its_stage_and_the_reference_pas
 def test_every_baseline_fails_the_standard_gates_of_its_stage_in_the_committed_results():
     """`standard` is too long for the tests: its committed scores (``fsv-bench reproduce``) are
     checked against the registered gates. Measured (standard v5, the test split, lab knowledge):
-    the static box 137 mm, zero kinematics 0.581 m/s^2 (gate 0.45), gravity alone 0.485 N (gate
-    0.3), no internal forces 82.6 % and the grip line alone (calibrated) 37.1 % (gate 15); the
-    reference holds every gate but the learned forces' (28.1 % [25.3, 34.8] blind, against 15, set
-    before measuring); its mean least-violation frames are 0.43 % (gate 1 %; 1.48 % with exact
+    the static box 137 mm, zero kinematics 0.579 m/s^2 (gate 0.45), gravity alone 0.497 N (gate
+    0.3), no internal forces 82.8 % and the grip line alone (calibrated) 39.4 % (gate 15); the
+    reference holds every gate but the learned forces' (29.9 % [25.6, 34.8] blind, against 15, set
+    before measuring); its mean least-violation frames are 0.63 % (gate 1 %; 1.48 % with exact
     knowledge, where one episode's hand tracking failed)."""
     import json
     import pathlib
