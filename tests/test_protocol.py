@@ -46,3 +46,23 @@ def test_camera_input_follows_the_protocol(rendered_lift_episode):
 
     assert camera_input(rendered_lift_episode).grip is None
     assert camera_input(rendered_lift_episode, protocol="calibrated").grip == read_calibration()[0]
+
+
+def test_the_main_command_records_the_protocols_model_and_only_the_line_it_told(tmp_path):
+    import json
+
+    from benchmark.commands.cli import main
+    from benchmark.method.grip_file import read_calibration
+
+    learned = {}
+    for protocol in PROTOCOLS:
+        out = tmp_path / protocol
+        assert main(["--task", "lift", "--duration", "2", "--quiet", "--no-gif", "--protocol", protocol,
+                     "--out", str(out)]) in (0, 1)
+        learned[protocol] = json.loads((out / "summary.json").read_text())["learning"]
+    blind, calibrated = learned["blind"], learned["calibrated"]
+    assert blind["internal_model"] == "fsv/data/internal_forces_blind.npz" and not blind["model"]["grip_inputs"]
+    assert "grip_calibration" not in blind  # nothing was told of the person
+    line = read_calibration()[0]
+    assert calibrated["internal_model"] == "fsv/data/internal_forces.npz" and calibrated["model"]["grip_inputs"]
+    assert calibrated["grip_calibration"] == {"baseline_n": line.baseline_n, "gain": line.gain}

@@ -51,6 +51,8 @@ class Run:
         estimate: The method's ``fsv.method.Estimate`` on the episode, once the track stage ran it.
         knowledge: What the method was told (``benchmark.method.knowledge.Knowledge``), from the
             track stage on.
+        inputs: What the method was handed (``fsv.method.CameraInput``: calibration, models, the
+            person's grip calibration or None), from the track stage on.
     """
 
     scenario: Scenario
@@ -60,6 +62,7 @@ class Run:
     episode: Episode | None = None
     estimate: Any = None
     knowledge: Any = None
+    inputs: Any = None
 
 
 @dataclass(frozen=True)
@@ -74,6 +77,7 @@ class StageResult:
         episode: The stage's new episode (the rendered one), or None to keep the run's.
         estimate: The method's estimate, if this stage ran the method, else None.
         knowledge: What the method was told, if this stage ran it, else None.
+        inputs: What the method was handed, if this stage ran it, else None.
     """
 
     blocks: tuple = ()
@@ -83,6 +87,7 @@ class StageResult:
     episode: Episode | None = None
     estimate: Any = None
     knowledge: Any = None
+    inputs: Any = None
 
     def __post_init__(self):
         for name in ("blocks", "lines", "files", "pictures"):
@@ -91,8 +96,8 @@ class StageResult:
 
     def updates(self) -> dict:
         """The fields of :class:`Run` this result replaces."""
-        return {k: v for k, v in (("episode", self.episode), ("estimate", self.estimate), ("knowledge", self.knowledge))
-                if v is not None}
+        return {k: v for k, v in (("episode", self.episode), ("estimate", self.estimate), ("knowledge", self.knowledge),
+                                  ("inputs", self.inputs)) if v is not None}
 
 
 def _no_arguments(parser) -> None:

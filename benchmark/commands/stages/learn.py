@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from benchmark.commands.stage import Run, Stage, StageResult
 from benchmark.commands.stages.forces import estimate_inputs, oracle_tag
-from benchmark.method.protocol import person_grip
 from benchmark.scores.learned import model_block, score_episode
 from fsv.learn import default_model, load
 from fsv.learn.model import SHIPPED_MODELS
@@ -28,7 +27,7 @@ def run(record: Run, options) -> StageResult:
     path = options["internal_model"]
     model_info = {}
     if est.labels["internal"].startswith("learned internal forces"):
-        grip = person_grip(record.episode.scenario.user, record.method_spec.protocol)  # what the method was told
+        grip = record.inputs.grip  # what the track stage handed the method of the person (None: blind)
         blind = grip is None
         model_info = {"internal_model": path or f"fsv/data/{SHIPPED_MODELS[blind]}",
                       "model": model_block(default_model(blind=blind) if path is None else load(path))}

@@ -82,7 +82,7 @@ def run(record: Run, options) -> StageResult:
                            f"; person [calibrated]: grip {grip.baseline_n:.2f} N + {grip.gain:.3f} N per N of load "
                            f"({grip.samples} samples of a calibration recording)")
     return StageResult(blocks=(("knowledge", known.record()), ("person", person), ("tracking", block)), lines=(told, line),
-                       pictures=(picture,), estimate=estimate, knowledge=known)
+                       pictures=(picture,), estimate=estimate, knowledge=known, inputs=inputs)
 
 
 STAGE = Stage(name="track", run=run, options=("init_perturbation",), add_arguments=add_arguments)
