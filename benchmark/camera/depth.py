@@ -11,9 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from dataclasses import dataclass
+
 from benchmark.camera.camera import Camera
-from benchmark.camera.scene import body_pose0, geom_trimesh
+from benchmark.camera.scene import LABEL_PALM, body_pose0, geom_trimesh
 from benchmark.errors import BenchmarkError
+from benchmark.world.skin import PULP_EXPONENT_PER_MM, PULP_REACH, PULP_STIFFNESS_N_PER_MM, Skin
 
 RASTERISER = "fsv-bench cpu raster v1"
 """The name of the rasteriser, recorded with every rendered episode (its bits are pinned by
@@ -68,6 +71,40 @@ def _geometry(model, labels: np.ndarray) -> tuple:
     return triangles, capsules
 
 
+@dataclass(frozen=True)
+class HandSkin:
+    """A skin to draw instead of the hand's primitives, and what it needs from the model.
+
+    Attributes:
+        skin: The person's :class:`benchmark.world.skin.Skin`.
+        segment_body: Body of each hand segment in the model, (B,) int64.
+        box_body: Body of the box (the skin is flattened on its faces).
+        box_half: The box's half extents, (3,) [m]; its geom sits at its body's origin, unrotated.
+    """
+
+    skin: Skin
+    segment_body: np.ndarray
+    box_body: int
+    box_half: np.ndarray
+
+
+def pulp_presses(truth) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame and finger, the world-frame centre of pressure and the pulp's push (its compression
+    along the contact normal, :func:`benchmark.world.skin.pulp_indentation_m`), each (T, K, 3) [m]."""
+    from benchmark.camera import skin_kernels as sk
+
+    T, K = truth.contact_point.shape[:2]
+    centre, push = np.empty((T, K, 3)), np.empty((T, K, 3))
+    sk.pulp_presses(np.ascontiguousarray(truth.box_pos, dtype=np.float64),
+                    np.ascontiguousarray(truth.box_quat, dtype=np.float64),
+                    np.ascontiguousarray(truth.contact_point, dtype=np.float64),
+                    np.ascontiguousarray(truth.contact_normal, dtype=np.float64),
+                    np.ascontiguousarray(truth.contact_force, dtype=np.float64),
+                    np.ascontiguousarray(truth.contact_active, dtype=np.bool_),
+                    float(PULP_STIFFNESS_N_PER_MM), float(PULP_EXPONENT_PER_MM), centre, push)
+    return centre, push
+
+
 class DepthRenderer:
     """Exact depth and label images of a MuJoCo model's geoms from one camera, on the CPU.
 
@@ -80,6 +117,10 @@ class DepthRenderer:
     - capsules and spheres (the hand) exactly: each pixel's ray is intersected with the true
       capsule (no tessellation).
 
+    - with a ``skin``, the hand as its skin instead of its primitives: skinned on the bodies'
+      poses, each pressed pulp pushed into the face it presses, every vertex that would enter the
+      box moved onto its nearest face, then drawn as triangles (:mod:`benchmark.camera.skin_kernels`).
+
     Pixels are sampled at their centres (no anti-aliasing); the nearest surface wins, the first
     drawn on an exact tie.
 
@@ -88,14 +129,35 @@ class DepthRenderer:
         camera: The camera.
         labels: Label per geom, shape (ngeom,), uint8; geoms with label 0 are not drawn
             (see :func:`benchmark.camera.scene.world_labels`).
+        skin: Draw the hand as this skin (its primitives, labels 9 and up, are then not drawn);
+            None draws the primitives.
     """
 
-    def __init__(self, model, camera: Camera, labels: np.ndarray):
+    def __init__(self, model, camera: Camera, labels: np.ndarray, skin: HandSkin | None = None):
         labels = np.asarray(labels)
         if labels.shape != (model.ngeom,):
             raise BenchmarkError(f"labels must have shape ({model.ngeom},), one per geom, got {labels.shape}")
         self.camera = camera
-        self._tri, self._cap = _geometry(model, labels.astype(np.uint8))
+        labels = labels.astype(np.uint8)
+        if skin is not None:
+            labels = np.where(labels >= LABEL_PALM, 0, labels).astype(np.uint8)
+        self._tri, self._cap = _geometry(model, labels)
+        self._skin = skin
+        if skin is not None:
+            s = skin.skin
+            if not (np.allclose(model.geom_pos[model.body_geomadr[skin.box_body]], 0)
+                    and np.allclose(model.geom_quat[model.body_geomadr[skin.box_body]], [1, 0, 0, 0])):
+                raise BenchmarkError("the skin is flattened on a box geom at its body's origin, unrotated")
+            seg_body = np.asarray(skin.segment_body, dtype=np.int64)
+            self._skin_body = np.ascontiguousarray(seg_body[s.segment])
+            self._skin_parent_body = np.ascontiguousarray(seg_body[s.parent])
+            self._skin_verts = np.empty_like(s.local)
+            self._reach = np.ascontiguousarray(PULP_REACH * s.pad_radius)
+            self._box_half = np.ascontiguousarray(skin.box_half, dtype=np.float64)
+            self._world_body = np.zeros(len(s.pad_radius), dtype=np.int64)
+            self._centre_cam = np.empty((len(s.pad_radius), 3))
+            self._push_cam = np.empty((len(s.pad_radius), 3))
+            self._no_trans = np.zeros((1, 3))
         self.triangles = len(self._tri["faces"])
         self.capsules = len(self._cap["radius"])
         cam_from_world = np.linalg.inv(camera.T_world_cam)
@@ -112,12 +174,16 @@ class DepthRenderer:
         self._rot = np.empty((model.nbody, 3, 3))
         self._trans = np.empty((model.nbody, 3))
 
-    def render(self, xpos: np.ndarray, xmat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def render(self, xpos: np.ndarray, xmat: np.ndarray, pulp_centre: np.ndarray | None = None,
+               pulp_push: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Renders one frame.
 
         Args:
             xpos: World positions of all bodies, shape (nbody, 3), [m] (``data.xpos``).
             xmat: World orientations of all bodies, shape (nbody, 9) or (nbody, 3, 3) (``data.xmat``).
+            pulp_centre: With a skin, each finger's centre of pressure, world frame, (K, 3) [m].
+            pulp_push: With a skin, each pulp's push into its face, world frame, (K, 3) [m]
+                (zero where the finger does not press; :func:`pulp_presses`). None: no pulp pressed.
 
         Returns:
             ``(depth, labels)``: exact depth along the optical axis, shape (H, W), float32 metres
@@ -140,6 +206,8 @@ class DepthRenderer:
         rk.transform_points(self._tri["vertices"], self._tri["vertex_body"], self._rot, self._trans, self._verts)
         rk.draw_triangles(self._verts, self._tri["faces"], self._tri["face_label"], fx, fy, cx, cy, cam.znear,
                           cam.zfar, self._zbuf, self._lbuf)
+        if self._skin is not None:
+            self._draw_skin(pulp_centre, pulp_push, fx, fy, cx, cy)
         ends = self._cap["ends"]
         rk.transform_points(ends.reshape(-1, 3), self._end_body, self._rot, self._trans,
                             self._ends.reshape(-1, 3))
@@ -149,3 +217,43 @@ class DepthRenderer:
         labels = np.empty((cam.height, cam.width), dtype=np.uint8)
         rk.finish(self._zbuf, self._lbuf, depth, labels)
         return depth, labels
+
+    def skin_vertices(self, xpos: np.ndarray, xmat: np.ndarray, pulp_centre=None, pulp_push=None) -> np.ndarray:
+        """The skin's camera-frame vertices of one frame, pressed and flattened as drawn, (V, 3) [m]."""
+        from benchmark.camera import raster_kernels as rk
+
+        if self._skin is None:
+            raise BenchmarkError("this renderer draws the hand's primitives, not a skin")
+        xpos = np.ascontiguousarray(xpos, dtype=np.float64)
+        xmat = np.ascontiguousarray(xmat, dtype=np.float64).reshape(-1, 3, 3)
+        rk.camera_from_bodies(self._R_cw, self._t_cw, xpos, xmat, self._rot, self._trans)
+        self._pose_skin(pulp_centre, pulp_push)
+        return self._skin_verts.copy()
+
+    def _pose_skin(self, pulp_centre, pulp_push) -> None:
+        from benchmark.camera import raster_kernels as rk
+        from benchmark.camera import skin_kernels as sk
+
+        s = self._skin.skin
+        sk.skin_points(s.local, self._skin_body, s.parent_local, self._skin_parent_body, s.parent_weight,
+                       self._rot, self._trans, self._skin_verts)
+        if pulp_push is not None:
+            K = len(self._reach)
+            centre = np.ascontiguousarray(pulp_centre, dtype=np.float64)
+            push = np.ascontiguousarray(pulp_push, dtype=np.float64)
+            if centre.shape != (K, 3) or push.shape != (K, 3):
+                raise BenchmarkError(f"pulp_centre and pulp_push must have shape ({K}, 3), got {centre.shape}, {push.shape}")
+            rk.transform_points(centre, self._world_body, self._rot, self._trans, self._centre_cam)
+            rk.transform_points(push, self._world_body, self._rot, self._no_trans, self._push_cam)
+            sk.press_pulps(self._skin_verts, s.finger, s.pulp, self._centre_cam, self._push_cam, self._reach)
+        b = self._skin.box_body
+        sk.flatten_on_box(self._skin_verts, self._rot[b], self._trans[b], self._box_half)
+
+    def _draw_skin(self, pulp_centre, pulp_push, fx, fy, cx, cy) -> None:
+        from benchmark.camera import raster_kernels as rk
+
+        self._pose_skin(pulp_centre, pulp_push)
+        s = self._skin.skin
+        cam = self.camera
+        rk.draw_triangles(self._skin_verts, s.faces, s.face_label, fx, fy, cx, cy, cam.znear, cam.zfar,
+                          self._zbuf, self._lbuf)

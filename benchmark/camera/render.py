@@ -22,7 +22,7 @@ import numpy as np
 
 from benchmark.camera.camera import Camera
 from benchmark.camera.views import camera_of
-from benchmark.camera.depth import DepthRenderer
+from benchmark.camera.depth import DepthRenderer, HandSkin, pulp_presses
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from benchmark.errors import BenchmarkError
@@ -30,7 +30,8 @@ from benchmark.world.episode import Episode
 from fsv import DepthVideo
 
 
-def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: np.ndarray, sensor, rng):
+def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: np.ndarray, sensor, rng,
+                 skin: HandSkin | None = None, pulps: tuple | None = None):
     """Renders and measures a depth video of a MuJoCo model.
 
     Args:
@@ -42,6 +43,9 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
         labels: Label per geom, (ngeom,) uint8 (see :func:`world_labels`).
         sensor: A :class:`benchmark.camera.sensor.SensorModel`.
         rng: Generator of the sensor noise (the scenario's "depth" stream).
+        skin: Draw the hand as this skin instead of its primitives (None: the primitives).
+        pulps: With a skin, ``(centre, push)`` per frame and finger, each (T, K, 3), world frame
+            (:func:`benchmark.camera.depth.pulp_presses`); None presses no pulp.
 
     Returns:
         ``(depth, label_images)``: measured depth (T, H, W) float32 metres (0 = no measurement)
@@ -55,12 +59,21 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
     shape = (int(num_frames), camera.height, camera.width)
     depth = np.empty(shape, dtype=np.float32)
     label_images = np.empty(shape, dtype=np.uint8)
-    renderer = DepthRenderer(model, camera, labels)
+    renderer = DepthRenderer(model, camera, labels, skin=skin)
     for k in range(shape[0]):
         set_frame(data, k)
-        exact, label_images[k] = renderer.render(data.xpos, data.xmat)
+        centre, push = (None, None) if pulps is None else (pulps[0][k], pulps[1][k])
+        exact, label_images[k] = renderer.render(data.xpos, data.xmat, centre, push)
         depth[k] = sensor.measure(exact, camera.K, rng)
     return depth, label_images
+
+
+def hand_skin(world) -> HandSkin:
+    """The skin of a :class:`benchmark.world.assets.World`'s hand, as the renderer draws it."""
+    from benchmark.world.skin import skin_of
+
+    return HandSkin(skin=skin_of(world.hand), segment_body=np.asarray(world.segment_body, dtype=np.int64),
+                    box_body=int(world.box_body), box_half=np.asarray(world.obj.half_extents, dtype=np.float64))
 
 
 def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camera | None = None) -> Episode:
@@ -78,6 +91,8 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
         The episode with ``depth`` (T frames at the scenario's fps, T = len(truth.t)),
         ``calib`` and the truth-side ``labels`` (T, H, W) uint8 (never handed to `fsv`).
         The noise comes from the scenario's "depth" random stream: same scenario, same bits.
+        The hand is drawn as the scenario's ``hand_surface`` says: its collision primitives
+        ("capsules") or the person's skin ("skin", :mod:`benchmark.world.skin`).
     """
     from benchmark.world.assets import build_world, set_frame
 
@@ -95,7 +110,11 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
     def set_k(data, k):
         set_frame(world, data, truth.box_pos[k], truth.box_quat[k], truth.hand_qpos[k])
 
+    skin, pulps = None, None
+    if sc.hand_surface == "skin":
+        skin, pulps = hand_skin(world), pulp_presses(truth)
     depth, labels = render_video(
-        world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth")
+        world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth"),
+        skin=skin, pulps=pulps,
     )
     return episode.with_depth(DepthVideo(depth_m=depth, fps=sc.fps), camera.calibration(), labels)

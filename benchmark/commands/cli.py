@@ -100,6 +100,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
     p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres, 0 to 0.1")
     p.add_argument("--sensor", default="ds325", help="depth sensor preset: ds325 (the paper's camera), kinect-v1, ideal")
+    p.add_argument("--hand-surface", default="capsules",
+                   help="what the camera sees of the hand: capsules (the collision primitives) or skin (the person's "
+                        "skin, with pulps that flatten on the box)")
     p.add_argument("--user", type=int, default=0, help="the person: 0-4 the named cohort (sim_assets/users.yaml), N >= 5 drawn with seed N (anatomy and grip style)")
     p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
@@ -119,7 +122,8 @@ def build_parser() -> argparse.ArgumentParser:
 def scenario_from_args(args: argparse.Namespace) -> Scenario:
     """The scenario of the command line, fully validated (raises ScenarioError)."""
     sc = Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
-                  seed=args.seed, duration_s=args.duration, sensor=args.sensor, view=args.view)
+                  seed=args.seed, duration_s=args.duration, sensor=args.sensor, view=args.view,
+                  hand_surface=args.hand_surface)
     validate(sc)
     return sc
 
@@ -197,7 +201,7 @@ def main(argv: list | None = None) -> int:
     hand = person["anatomy"]
     print(f"fsv-bench: task {sc.task}, user {sc.user} ({person['name']}, hand {1e3 * hand['hand_length_m']:.0f} x "
           f"{1e3 * hand['hand_breadth_m']:.0f} mm), grasp {sc.grasp} ({grasp['name']}), mass {sc.mass}, seed {sc.seed}, "
-          f"view {sc.view}, sensor {sc.sensor}, noise {sc.noise_m} m, {len(record.episode.truth.t)} frames")
+          f"view {sc.view}, sensor {sc.sensor}, hand seen as {sc.hand_surface}, noise {sc.noise_m} m, {len(record.episode.truth.t)} frames")
     for line in lines:
         print(line.replace(str(tmp), str(out)))
     print(f"episode: {out / 'episode.npz'}\nsummary: {out / 'summary.json'} ({timing['total']:.1f} s)")

@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> dict:
 
     from benchmark.method.protocol import check_people
 
-    suite = get_suite(args.suite, args.sensor)
+    suite = get_suite(args.suite, args.sensor, args.hand_surface)
     check_out(args.out)
     check_people((sc.user for sc in suite.scenarios), args.protocol)
     index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format,

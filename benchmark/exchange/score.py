@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> dict:
 
     from benchmark.method.protocol import check_protocol
 
-    suite = get_suite(args.suite, args.sensor)
+    suite = get_suite(args.suite, args.sensor, args.hand_surface)
     gates = load_gates(args.gates) if args.gates else None
     check_out(args.out)
     check_protocol(args.protocol)

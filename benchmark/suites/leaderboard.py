@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> list:
     from benchmark.scores.leaderboard import leaderboard_markdown
     from benchmark.suites import get_suite
 
-    suite = get_suite(args.suite, args.sensor)
+    suite = get_suite(args.suite, args.sensor, args.hand_surface)
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)

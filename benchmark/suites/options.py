@@ -1,4 +1,5 @@
-"""The command-line options every suite command shares, declared once: ``--suite --sensor --out --cache --workers --quiet``
+"""The command-line options every suite command shares, declared once: ``--suite --sensor --hand-surface --out
+--cache --workers --quiet``
 (and ``--no-baselines`` for the commands that score one method)."""
 
 from __future__ import annotations
@@ -11,10 +12,13 @@ from benchmark.suites.registry import SUITES
 
 def add_suite_arguments(p: argparse.ArgumentParser, *, out_help: str, sensor: bool = True, workers: bool = True) -> None:
     """Adds ``--suite``, ``--out`` (described by ``out_help``), ``--cache``, ``--quiet`` and, unless
-    turned off, ``--sensor`` and ``--workers``."""
+    turned off, ``--sensor``, ``--hand-surface`` and ``--workers``."""
     p.add_argument("--suite", required=True, help=f"suite name ({', '.join(SUITES)})")
     if sensor:
         p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
+        p.add_argument("--hand-surface", default=None,
+                       help="what the camera sees of the hand, replacing the suite's: capsules (the collision "
+                            "primitives) or skin (the person's skin, benchmark.world.skin)")
     p.add_argument("--out", required=True, type=pathlib.Path, help=out_help)
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
     if workers:

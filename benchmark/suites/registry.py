@@ -166,28 +166,38 @@ SUITES = {s.name: s for s in (SMOKE, STANDARD, DEV, COHORT, TABLE1, TABLE2)}
 """Every registered suite by name."""
 
 
-def get_suite(name: str, sensor: str | None = None) -> Suite:
-    """The suite registered as ``name``, seen by the depth sensor ``sensor`` if given.
+def get_suite(name: str, sensor: str | None = None, hand_surface: str | None = None) -> Suite:
+    """The suite registered as ``name``, seen by the depth sensor ``sensor`` and with the hand drawn
+    as ``hand_surface``, if given.
 
     Args:
         name: A key of :data:`SUITES`.
         sensor: A preset of ``benchmark.camera.sensor.SENSORS`` replacing every scenario's
             sensor; the suite is then named ``<name>-<sensor>`` (its own cache and scores).
+        hand_surface: One of ``benchmark.world.scenario.HAND_SURFACES`` replacing every
+            scenario's; the suite is then named ``<name>-<hand_surface>`` (after the sensor).
 
     Raises:
-        ValueError: Naming the accepted suites or sensors.
+        ValueError: Naming the accepted suites, sensors or hand surfaces.
     """
     if name not in SUITES:
         raise ValueError(f"--suite {name!r}: no such suite; accepted: {', '.join(SUITES)}")
-    suite = SUITES[name]
-    if sensor is None or all(sc.sensor == sensor for sc in suite.scenarios):
-        return suite
     from dataclasses import replace
 
     from benchmark.camera.sensor import SENSORS
+    from benchmark.world.scenario import HAND_SURFACES
 
-    if sensor not in SENSORS:
+    if sensor is not None and sensor not in SENSORS:
         raise ValueError(f"--sensor {sensor!r}: no such sensor; accepted: {', '.join(SENSORS)}")
-    return Suite(name=f"{suite.name}-{sensor}", version=suite.version,
-                 scenarios=tuple(replace(sc, sensor=sensor) for sc in suite.scenarios), gates=suite.gates,
-                 description=f"{suite.description} Seen by the {sensor} sensor preset.")
+    if hand_surface is not None and hand_surface not in HAND_SURFACES:
+        raise ValueError(f"--hand-surface {hand_surface!r}: accepted: {', '.join(HAND_SURFACES)}")
+    suite = SUITES[name]
+    if sensor is not None and not all(sc.sensor == sensor for sc in suite.scenarios):
+        suite = Suite(name=f"{suite.name}-{sensor}", version=suite.version,
+                      scenarios=tuple(replace(sc, sensor=sensor) for sc in suite.scenarios), gates=suite.gates,
+                      description=f"{suite.description} Seen by the {sensor} sensor preset.")
+    if hand_surface is not None and not all(sc.hand_surface == hand_surface for sc in suite.scenarios):
+        suite = Suite(name=f"{suite.name}-{hand_surface}", version=suite.version,
+                      scenarios=tuple(replace(sc, hand_surface=hand_surface) for sc in suite.scenarios),
+                      gates=suite.gates, description=f"{suite.description} The hand drawn as its {hand_surface}.")
+    return suite

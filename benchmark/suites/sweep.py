@@ -6,7 +6,9 @@
 Axes (:data:`AXES`): ``noise`` (depth noise standard deviation, m), ``mass`` (index into
 sim_assets/masses.yaml), ``fps`` (camera frame rate, Hz), ``init`` (scale of the seeded first-frame
 perturbation handed to the method, ``benchmark.method.init.INIT_PERTURBATION``), ``sensor`` (depth
-sensor preset: ``ds325``, ``kinect-v1``, ``ideal``). Every scenario of the
+sensor preset: ``ds325``, ``kinect-v1``, ``ideal``), ``hand_surface`` (``capsules``, the collision
+primitives, or ``skin``, ``benchmark.world.skin``), ``knowledge`` and ``protocol`` (what the method
+is told). Every scenario of the
 suite is run at every value (the rest of the scenario unchanged). ``DIR`` receives ``sweep.json``
 (aggregates with 95 % intervals per value, provenance), ``sweep.md`` and ``sweep.png`` (median and
 interval of each metric against the axis). The world has no friction axis.
@@ -28,6 +30,7 @@ AXES = {
     "fps": ("fps", float, "frame rate [Hz]"),
     "init": (None, float, "first-frame perturbation scale"),
     "sensor": ("sensor", str, "depth sensor preset"),
+    "hand_surface": ("hand_surface", str, "what the camera sees of the hand"),
     "knowledge": (None, str, "what the method is told (benchmark.method.knowledge)"),
     "protocol": (None, str, "what the method is told of the person (benchmark.method.protocol)"),
 }
@@ -62,6 +65,13 @@ def parse_values(axis: str, text: str) -> list:
             raise ValueError(f"--values {text!r}: {item!r} is not a{'n integer' if kind is int else ' number'}") from None
     if len(set(values)) != len(values) or len(values) < 2:
         raise ValueError(f"--values {text!r}: need at least two distinct values")
+    if axis in ("sensor", "hand_surface"):
+        from benchmark.world.scenario import HAND_SURFACES, SENSORS
+
+        accepted = SENSORS if axis == "sensor" else HAND_SURFACES
+        for v in values:
+            if v not in accepted:
+                raise ValueError(f"--values {text!r}: {v!r} is not a {AXES[axis][2]}; accepted: {', '.join(accepted)}")
     if axis == "knowledge":
         from benchmark.method.knowledge import check_knowledge
 

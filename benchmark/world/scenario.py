@@ -15,6 +15,9 @@ MAX_DURATION_S = 120.0
 """Upper bound of an episode's length [s] (the truth and the depth of 120 s at 30 fps fit in memory)."""
 MAX_FPS = 240.0
 """Upper bound of the camera frame rate [Hz]."""
+HAND_SURFACES = ("capsules", "skin")
+"""How the depth camera sees the hand: its collision primitives, or the person's skin
+(``benchmark.world.skin``)."""
 SENSORS = ("ds325", "kinect-v1", "ideal")
 """The depth-sensor presets a scenario may name (their models: ``benchmark.camera.sensor.PRESETS``)."""
 
@@ -37,6 +40,9 @@ class Scenario:
             paper's camera, "kinect-v1" or "ideal"); ``noise_m`` is white noise added to its own.
         view: The camera's pose: 0 is ``sim_assets/camera.yaml``'s (the paper's set-up); N >= 1
             is drawn around it with seed N (``benchmark.camera.views``), the same for every scenario.
+        hand_surface: What the depth camera sees of the hand (:data:`HAND_SURFACES`): "capsules",
+            the simulation's collision primitives, or "skin", the person's smooth skin with pulps
+            that flatten on the box (the simulation is the same).
     """
 
     task: str = "lift"
@@ -49,6 +55,7 @@ class Scenario:
     fps: float = 30.0
     sensor: str = "ds325"
     view: int = 0
+    hand_surface: str = "capsules"
 
     def __post_init__(self):
         for name in ("user", "grasp", "mass", "seed", "view"):
@@ -63,6 +70,8 @@ class Scenario:
             raise ScenarioError(f"fps must be > 0 and <= {MAX_FPS:g}, got {self.fps!r}")
         if self.sensor not in SENSORS:
             raise ScenarioError(f"sensor must be one of {', '.join(SENSORS)}, got {self.sensor!r}")
+        if self.hand_surface not in HAND_SURFACES:
+            raise ScenarioError(f"hand surface must be one of {', '.join(HAND_SURFACES)}, got {self.hand_surface!r}")
 
     def rng(self, stream: str) -> np.random.Generator:
         """An independent generator for one named use (e.g. "tracker-init", "depth-noise").
@@ -78,7 +87,8 @@ class Scenario:
 
 
 def episode_name(scenario: Scenario) -> str:
-    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0): how
+    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0, ``-skin`` for the skin): how
     runs, cached episodes, score rows and dataset files name a scenario."""
     name = f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
-    return name + (f"-v{scenario.view}" if scenario.view else "")
+    return (name + (f"-v{scenario.view}" if scenario.view else "")
+            + ("-skin" if scenario.hand_surface == "skin" else ""))

@@ -85,7 +85,8 @@ def _expected_stem(meta: dict) -> str | None:
     if not isinstance(sc, dict):
         return None
     stem = f"{sc.get('task')}-u{sc.get('user')}-g{sc.get('grasp')}-m{sc.get('mass')}-s{sc.get('seed')}"
-    return stem + (f"-v{sc['view']}" if sc.get("view") else "")
+    return (stem + (f"-v{sc['view']}" if sc.get("view") else "")
+            + ("-skin" if sc.get("hand_surface") == "skin" else ""))
 
 
 def read_episode_file(path: str, sha256: str | None = None, data: bytes | None = None) -> tuple[pa.Table, dict, str]:
