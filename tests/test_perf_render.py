@@ -9,6 +9,8 @@ def test_perf_render_runs_and_both_renderers_agree(capsys):
     assert "ratio ours / MuJoCo" in out and "ray-cast capsules per frame" in out
     assert all(rates[k] > 0 for k in ("depth_labels_fps", "depth_labels_sensor_ds325_fps",
                                        "depth_labels_sensor_kinect-v1_fps", "depth_labels_sensor_ideal_fps",
+                                       "skin_depth_labels_fps", "skin_depth_labels_sensor_ds325_fps",
                                        "mujoco_depth_fps"))
+    assert "ratio skin / primitives" in out
     assert rates["agreement_median_m"] < 1e-5
     assert rates["agreement_within_0.1mm"] > 0.9

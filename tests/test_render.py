@@ -394,7 +394,9 @@ for f in dataclasses.fields(ep.truth):
     v = getattr(ep.truth, f.name)
     if isinstance(v, np.ndarray):
         h.update(f.name.encode()); h.update(np.ascontiguousarray(v).tobytes())
-print(h.hexdigest(), hashlib.sha256(ep.depth.depth_m.tobytes()).hexdigest())
+skin = render(simulate(Scenario(task="lift", seed=0, duration_s=3.0, hand_surface="skin")))
+print(h.hexdigest(), hashlib.sha256(ep.depth.depth_m.tobytes()).hexdigest(),
+      hashlib.sha256(skin.depth.depth_m.tobytes()).hexdigest())
 """
 
 
@@ -417,16 +419,20 @@ _PINNED = """
 import hashlib, sys
 from benchmark import Scenario, render, simulate
 ep = render(simulate(Scenario(task="lift", seed=0, duration_s=2.0)))
+skin = render(simulate(Scenario(task="lift", seed=0, duration_s=2.0, hand_surface="skin")))
 maps = open("/proc/self/maps").read()
 gl = sorted({lib for lib in ("libEGL", "libGL", "libGLX", "libnvidia", "libOSMesa", "llvmpipe", "swrast")
              if lib in maps} | ({"OpenGL"} & set(sys.modules)))
-print(hashlib.sha256(ep.depth.depth_m.tobytes()).hexdigest(), float(ep.depth.depth_m.astype("float64").sum()), gl)
+print(hashlib.sha256(ep.depth.depth_m.tobytes()).hexdigest(), float(ep.depth.depth_m.astype("float64").sum()),
+      hashlib.sha256(skin.depth.depth_m.tobytes()).hexdigest(), gl)
 """
 
 PINNED_DEPTH_SHA256 = "3899189f02b05d4799f34c3769ae547a244617862ef074743e99999c05d94b14"
 """The depth of ``Scenario(task="lift", seed=0, duration_s=2.0)`` (ds325 sensor, 1 cm noise) as this
 project's rasteriser and sensor make it: the same on every machine, with or without a GPU
 (measured on a 2-core AMD EPYC without a GPU and on a 16-core Intel Xeon with an NVIDIA H200)."""
+PINNED_SKIN_DEPTH_SHA256 = "e45a56717d349d6ff1a7995a9372fb766863d9d061a1e34140098b42f760f1a9"
+"""The same scenario's depth with the hand drawn as its skin (``hand_surface="skin"``)."""
 
 
 def test_the_depth_is_the_pinned_rasterisers_and_no_gl_library_takes_part():
@@ -440,3 +446,4 @@ def test_the_depth_is_the_pinned_rasterisers_and_no_gl_library_takes_part():
                          check=True).stdout.split()
     assert out[-1] == "[]", out
     assert out[0] == PINNED_DEPTH_SHA256, out
+    assert out[2] == PINNED_SKIN_DEPTH_SHA256, out

@@ -143,6 +143,7 @@ class DepthRenderer:
             labels = np.where(labels >= LABEL_PALM, 0, labels).astype(np.uint8)
         self._tri, self._cap = _geometry(model, labels)
         self._skin = skin
+        self.skin = None if skin is None else skin.skin
         if skin is not None:
             s = skin.skin
             if not (np.allclose(model.geom_pos[model.body_geomadr[skin.box_body]], 0)

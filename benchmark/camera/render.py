@@ -92,7 +92,8 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
         ``calib`` and the truth-side ``labels`` (T, H, W) uint8 (never handed to `fsv`).
         The noise comes from the scenario's "depth" random stream: same scenario, same bits.
         The hand is drawn as the scenario's ``hand_surface`` says: its collision primitives
-        ("capsules") or the person's skin ("skin", :mod:`benchmark.world.skin`).
+        ("capsules"), the person's skin ("skin", :mod:`benchmark.world.skin`) or that skin with
+        rigid pulps ("skin-rigid").
     """
     from benchmark.world.assets import build_world, set_frame
 
@@ -111,8 +112,9 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
         set_frame(world, data, truth.box_pos[k], truth.box_quat[k], truth.hand_qpos[k])
 
     skin, pulps = None, None
-    if sc.hand_surface == "skin":
-        skin, pulps = hand_skin(world), pulp_presses(truth)
+    if sc.hand_surface != "capsules":
+        skin = hand_skin(world)
+        pulps = pulp_presses(truth) if sc.hand_surface == "skin" else None
     depth, labels = render_video(
         world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth"),
         skin=skin, pulps=pulps,

@@ -101,8 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres, 0 to 0.1")
     p.add_argument("--sensor", default="ds325", help="depth sensor preset: ds325 (the paper's camera), kinect-v1, ideal")
     p.add_argument("--hand-surface", default="capsules",
-                   help="what the camera sees of the hand: capsules (the collision primitives) or skin (the person's "
-                        "skin, with pulps that flatten on the box)")
+                   help="what the camera sees of the hand: capsules (the collision primitives), skin (the person's "
+                        "skin, with pulps that compress and flatten on the box) or skin-rigid (its pulps rigid)")
     p.add_argument("--user", type=int, default=0, help="the person: 0-4 the named cohort (sim_assets/users.yaml), N >= 5 drawn with seed N (anatomy and grip style)")
     p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")

@@ -6,6 +6,8 @@ default scenario, then renders its frames at 320 x 240 three ways in this proces
 - this benchmark's renderer (:class:`benchmark.camera.depth.DepthRenderer`, the CPU rasteriser on
   one core): exact depth + label image per frame;
 - the same + the sensor model (what ``render()`` does per frame);
+- the same with the hand drawn as its skin (:mod:`benchmark.world.skin`, pulps pressed), without
+  and with the ``ds325`` sensor model;
 - MuJoCo's ``mujoco.Renderer`` with depth rendering (EGL) from an identical camera (same
   pose and intrinsics, added to the model as a MuJoCo camera).
 
@@ -77,7 +79,7 @@ def scene_frames(num: int):
     """The default scenario's world and the first `num` frames of its simulated lift.
 
     Returns:
-        ``(world, set_frame)`` with ``set_frame(data, k)`` posing frame k.
+        ``(world, set_frame, truth)`` with ``set_frame(data, k)`` posing frame k.
     """
     from benchmark.world.scenario import Scenario
     from benchmark.world.simulate import simulate
@@ -91,7 +93,7 @@ def scene_frames(num: int):
     def pose(data, k):
         set_frame(world, data, truth.box_pos[k], truth.box_quat[k], truth.hand_qpos[k])
 
-    return world, pose
+    return world, pose, truth
 
 
 def main(argv=None) -> dict:
@@ -109,10 +111,15 @@ def main(argv=None) -> dict:
         parser.error(f"--repeats must be >= 1, got {args.repeats}")
 
     camera = load_camera()
-    world, pose = scene_frames(args.frames)
+    from benchmark.camera.depth import pulp_presses
+    from benchmark.camera.render import hand_skin
+
+    world, pose, truth = scene_frames(args.frames)
     model = world.model
     data = mujoco.MjData(model)
     ours = DepthRenderer(model, camera, world_labels(world))
+    skinned = DepthRenderer(model, camera, world_labels(world), skin=hand_skin(world))
+    centre, push = pulp_presses(truth)
     sensors = {name: sensor_preset(name, 0.01) for name in SENSORS}
     rng = np.random.default_rng(0)
 
@@ -133,6 +140,14 @@ def main(argv=None) -> dict:
 
         return run
 
+    def skin_only(k):
+        d = posed(k)
+        skinned.render(d.xpos, d.xmat, centre[k], push[k])
+
+    def skin_and_sense(k):
+        d = posed(k)
+        sensors["ds325"].measure(skinned.render(d.xpos, d.xmat, centre[k], push[k])[0], camera.K, rng)
+
     def mujoco_depth(k):
         d = posed(k)
         peer_data.qpos[:] = d.qpos
@@ -146,6 +161,7 @@ def main(argv=None) -> dict:
     timed = _rates(
         {"depth_labels": render_only,
          **{f"depth_labels_sensor_{name}": render_and_sense(name) for name in SENSORS},
+         "skin_depth_labels": skin_only, "skin_depth_labels_sensor_ds325": skin_and_sense,
          "mujoco_depth": mujoco_depth},
         args.frames,
         args.repeats,
@@ -165,7 +181,9 @@ def main(argv=None) -> dict:
     rates["agreement_median_m"] = float(np.median(diff))
     rates["agreement_within_0.1mm"] = float(np.mean(diff < 1e-4))
     _print_rates(rates, f"scene: {model.ngeom} geoms, {ours.triangles} triangles and {ours.capsules} "
-                        f"ray-cast capsules per frame; {camera.width}x{camera.height}; {args.frames} frames per pass, {args.repeats} rounds")
+                        f"ray-cast capsules per frame (with the skin: {skinned.triangles} + {len(skinned.skin.faces)} "
+                        f"triangles, {skinned.capsules} capsules); {camera.width}x{camera.height}; {args.frames} frames "
+                        f"per pass, {args.repeats} rounds")
     peer.close()
     return rates
 
@@ -189,6 +207,8 @@ def _print_rates(rates: dict, scene: str) -> None:
     for name, text in (
         ("depth_labels", "depth + labels                 "),
         *((f"depth_labels_sensor_{n}", f"depth + labels + {n:<14s}") for n in SENSORS),
+        ("skin_depth_labels", "skin: depth + labels           "),
+        ("skin_depth_labels_sensor_ds325", "skin: depth + labels + ds325   "),
         ("mujoco_depth", "MuJoCo Renderer depth (peer)   "),
     ):
         print(f"{text}: {rates[name + '_fps']:8.1f}  {rates[name + '_fps_median']:10.1f}  {rates[name + '_cpu_ms']:8.2f}")
@@ -198,6 +218,8 @@ def _print_rates(rates: dict, scene: str) -> None:
         "(with a sensor preset: " + ", ".join(
             f"{n} {rates[f'depth_labels_sensor_{n}_fps'] / peer_fps:.2f}" for n in SENSORS) + ")"
     )
+    print(f"ratio skin / primitives (best fps): {rates['skin_depth_labels_fps'] / rates['depth_labels_fps']:7.2f} "
+          f"(with ds325 {rates['skin_depth_labels_sensor_ds325_fps'] / rates['depth_labels_sensor_ds325_fps']:.2f})")
     print(
         f"depth agreement with MuJoCo      : median {rates['agreement_median_m'] * 1e6:.2f} um, "
         f"{100 * rates['agreement_within_0.1mm']:.1f} % of pixels within 0.1 mm"

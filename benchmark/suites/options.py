@@ -18,7 +18,7 @@ def add_suite_arguments(p: argparse.ArgumentParser, *, out_help: str, sensor: bo
         p.add_argument("--sensor", default=None, help="depth sensor preset replacing the suite's (ds325, kinect-v1, ideal)")
         p.add_argument("--hand-surface", default=None,
                        help="what the camera sees of the hand, replacing the suite's: capsules (the collision "
-                            "primitives) or skin (the person's skin, benchmark.world.skin)")
+                            "primitives), skin (the person's skin, benchmark.world.skin) or skin-rigid (its pulps rigid)")
     p.add_argument("--out", required=True, type=pathlib.Path, help=out_help)
     p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
     if workers:

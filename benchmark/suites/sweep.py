@@ -7,7 +7,7 @@ Axes (:data:`AXES`): ``noise`` (depth noise standard deviation, m), ``mass`` (in
 sim_assets/masses.yaml), ``fps`` (camera frame rate, Hz), ``init`` (scale of the seeded first-frame
 perturbation handed to the method, ``benchmark.method.init.INIT_PERTURBATION``), ``sensor`` (depth
 sensor preset: ``ds325``, ``kinect-v1``, ``ideal``), ``hand_surface`` (``capsules``, the collision
-primitives, or ``skin``, ``benchmark.world.skin``), ``knowledge`` and ``protocol`` (what the method
+primitives, ``skin``, ``benchmark.world.skin``, or ``skin-rigid``), ``knowledge`` and ``protocol`` (what the method
 is told). Every scenario of the
 suite is run at every value (the rest of the scenario unchanged). ``DIR`` receives ``sweep.json``
 (aggregates with 95 % intervals per value, provenance), ``sweep.md`` and ``sweep.png`` (median and
@@ -65,13 +65,12 @@ def parse_values(axis: str, text: str) -> list:
             raise ValueError(f"--values {text!r}: {item!r} is not a{'n integer' if kind is int else ' number'}") from None
     if len(set(values)) != len(values) or len(values) < 2:
         raise ValueError(f"--values {text!r}: need at least two distinct values")
-    if axis in ("sensor", "hand_surface"):
-        from benchmark.world.scenario import HAND_SURFACES, SENSORS
+    if axis == "hand_surface":
+        from benchmark.world.scenario import HAND_SURFACES
 
-        accepted = SENSORS if axis == "sensor" else HAND_SURFACES
         for v in values:
-            if v not in accepted:
-                raise ValueError(f"--values {text!r}: {v!r} is not a {AXES[axis][2]}; accepted: {', '.join(accepted)}")
+            if v not in HAND_SURFACES:
+                raise ValueError(f"--values {text!r}: {v!r} is not a hand surface; accepted: {', '.join(HAND_SURFACES)}")
     if axis == "knowledge":
         from benchmark.method.knowledge import check_knowledge
 

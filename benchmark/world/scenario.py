@@ -15,9 +15,10 @@ MAX_DURATION_S = 120.0
 """Upper bound of an episode's length [s] (the truth and the depth of 120 s at 30 fps fit in memory)."""
 MAX_FPS = 240.0
 """Upper bound of the camera frame rate [Hz]."""
-HAND_SURFACES = ("capsules", "skin")
-"""How the depth camera sees the hand: its collision primitives, or the person's skin
-(``benchmark.world.skin``)."""
+HAND_SURFACES = ("capsules", "skin", "skin-rigid")
+"""How the depth camera sees the hand: its collision primitives, the person's skin
+(``benchmark.world.skin``) with pulps that compress under force, or that skin with rigid pulps (an
+ablation: only what would pass into the box is flattened onto it)."""
 SENSORS = ("ds325", "kinect-v1", "ideal")
 """The depth-sensor presets a scenario may name (their models: ``benchmark.camera.sensor.PRESETS``)."""
 
@@ -41,8 +42,9 @@ class Scenario:
         view: The camera's pose: 0 is ``sim_assets/camera.yaml``'s (the paper's set-up); N >= 1
             is drawn around it with seed N (``benchmark.camera.views``), the same for every scenario.
         hand_surface: What the depth camera sees of the hand (:data:`HAND_SURFACES`): "capsules",
-            the simulation's collision primitives, or "skin", the person's smooth skin with pulps
-            that flatten on the box (the simulation is the same).
+            the simulation's collision primitives, "skin", the person's smooth skin with pulps
+            that compress and flatten on the box, or "skin-rigid", that skin with rigid pulps
+            (the simulation is the same).
     """
 
     task: str = "lift"
@@ -87,8 +89,8 @@ class Scenario:
 
 
 def episode_name(scenario: Scenario) -> str:
-    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0, ``-skin`` for the skin): how
+    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0, ``-skin`` or ``-skin-rigid`` for a skin): how
     runs, cached episodes, score rows and dataset files name a scenario."""
     name = f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
     return (name + (f"-v{scenario.view}" if scenario.view else "")
-            + ("-skin" if scenario.hand_surface == "skin" else ""))
+            + ("" if scenario.hand_surface == "capsules" else f"-{scenario.hand_surface}"))

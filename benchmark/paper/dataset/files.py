@@ -86,7 +86,7 @@ def _expected_stem(meta: dict) -> str | None:
         return None
     stem = f"{sc.get('task')}-u{sc.get('user')}-g{sc.get('grasp')}-m{sc.get('mass')}-s{sc.get('seed')}"
     return (stem + (f"-v{sc['view']}" if sc.get("view") else "")
-            + ("-skin" if sc.get("hand_surface") == "skin" else ""))
+            + (f"-{sc['hand_surface']}" if sc.get("hand_surface", "capsules") != "capsules" else ""))
 
 
 def read_episode_file(path: str, sha256: str | None = None, data: bytes | None = None) -> tuple[pa.Table, dict, str]:
