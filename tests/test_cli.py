@@ -199,3 +199,24 @@ def test_subcommands_exit_130_on_ctrl_c_and_1_on_failure(monkeypatch, capsys, ex
     monkeypatch.setattr(dataset, "run", run)
     assert main(["generate", "--out", "unused"]) == code
     assert needle in capsys.readouterr().err
+
+
+def test_the_console_script_ends_the_main_command_after_its_output_is_complete(tmp_path):
+    """The main command skips the interpreter's teardown once it has returned (``entry.main_command_done``):
+    its output folder is complete and its last lines reach the console."""
+    import os
+    import subprocess
+    import sys
+
+    from benchmark.commands.entry import main_command_done
+
+    assert main_command_done(["--task", "lift"]) and main_command_done([])
+    assert not main_command_done(["eval", "--suite", "smoke"])
+    out = tmp_path / "run"
+    proc = subprocess.run([sys.executable, "-m", "benchmark.commands.entry", "--task", "lift", "--duration", "1.5",
+                           "--quiet", "--no-gif", "--out", str(out)], capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    summary = json.loads((out / "summary.json").read_text())
+    assert proc.returncode == (0 if summary["verdict"]["verdict"] == "pass" else 1), proc.stderr
+    assert proc.stdout.rstrip().splitlines()[-1].startswith(f"summary: {out / 'summary.json'} (")  # flushed
+    assert (out / "episode.npz").exists() and not [p for p in tmp_path.iterdir() if p.name != "run"]
