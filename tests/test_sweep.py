@@ -39,6 +39,9 @@ def test_a_sweep_of_the_knowledge_tells_the_method_exact_then_measured_values(ti
     assert told[2]["cx_px"]["error"] == pytest.approx(3 * told[1]["cx_px"]["error"], rel=1e-9)  # the same draw, thrice
     exact, lab, worse = (a["box_pos_err_mm"]["median"]["value"] for a in doc["aggregate"])
     assert exact < lab < worse  # the calibration's error moves the box as the method sees it
+    # the header names the suite and the method swept, not the first value's
+    assert doc["suite"]["name"] == "tiny" and "knowledge" not in doc["method"] and "internal" in doc["method"]
+    assert (out / "sweep.md").read_text().startswith("# Sweep of tiny along what the method is told")
 
 
 @pytest.mark.parametrize("argv, needle", [

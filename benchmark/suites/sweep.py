@@ -137,6 +137,8 @@ def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
     from benchmark.suites.evaluate import evaluate, spec_from_args, strict
+    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
+    from benchmark.method.protocol import DEFAULT_PROTOCOL
     from benchmark.suites import get_suite
     from fsv.provenance import provenance
 
@@ -158,8 +160,15 @@ def run(args: argparse.Namespace) -> dict:
         results.append(evaluate(s, spec=told, cache=args.cache, progress=not args.quiet, workers=args.workers,
                                 init_scale=scale))
         print(f"  {args.axis} = {value}: done ({results[-1]['seconds']:.0f} s)")
-    doc = {"suite": results[0]["suite"], "axis": args.axis, "label": AXES[args.axis][2], "values": values,
-           "method": results[0]["method"], "stages": results[0]["stages"],
+    from benchmark.method.run import method_label
+
+    # the suite and the method swept (not the first value's: "dev", not "dev-noise-0.005"; the method
+    # without the knowledge or protocol the sweep sets per value)
+    base = dataclasses.replace(spec, knowledge=DEFAULT_KNOWLEDGE, protocol=DEFAULT_PROTOCOL) \
+        if args.axis in ("knowledge", "protocol") else spec
+    doc = {"suite": {"name": suite.name, "version": suite.version, "description": suite.description},
+           "axis": args.axis, "label": AXES[args.axis][2], "values": values,
+           "method": method_label(base), "stages": results[0]["stages"],
            "aggregate": [r["aggregate"] for r in results], "episodes": [r["episodes"] for r in results],
            "provenance": provenance()}
     out = pathlib.Path(args.out)
