@@ -9,9 +9,9 @@ interpolated depth and in silhouette pixels, and each driver version may differ 
 
 from __future__ import annotations
 
-import numpy as np
-
 from dataclasses import dataclass
+
+import numpy as np
 
 from benchmark.camera.camera import Camera
 from benchmark.camera.scene import LABEL_PALM, body_pose0, geom_trimesh
@@ -143,7 +143,6 @@ class DepthRenderer:
             labels = np.where(labels >= LABEL_PALM, 0, labels).astype(np.uint8)
         self._tri, self._cap = _geometry(model, labels)
         self._skin = skin
-        self.skin = None if skin is None else skin.skin
         if skin is not None:
             s = skin.skin
             if not (np.allclose(model.geom_pos[model.body_geomadr[skin.box_body]], 0)
@@ -219,17 +218,10 @@ class DepthRenderer:
         rk.finish(self._zbuf, self._lbuf, depth, labels)
         return depth, labels
 
-    def skin_vertices(self, xpos: np.ndarray, xmat: np.ndarray, pulp_centre=None, pulp_push=None) -> np.ndarray:
-        """The skin's camera-frame vertices of one frame, pressed and flattened as drawn, (V, 3) [m]."""
-        from benchmark.camera import raster_kernels as rk
-
-        if self._skin is None:
-            raise BenchmarkError("this renderer draws the hand's primitives, not a skin")
-        xpos = np.ascontiguousarray(xpos, dtype=np.float64)
-        xmat = np.ascontiguousarray(xmat, dtype=np.float64).reshape(-1, 3, 3)
-        rk.camera_from_bodies(self._R_cw, self._t_cw, xpos, xmat, self._rot, self._trans)
-        self._pose_skin(pulp_centre, pulp_push)
-        return self._skin_verts.copy()
+    @property
+    def skin(self) -> Skin | None:
+        """The skin drawn for the hand, or None when the hand is drawn as its primitives."""
+        return None if self._skin is None else self._skin.skin
 
     def _pose_skin(self, pulp_centre, pulp_push) -> None:
         from benchmark.camera import raster_kernels as rk

@@ -232,8 +232,8 @@ def _superellipse(c, s, a, b, n):
     return a * np.sign(c) * np.abs(c) ** (2 / n), b * np.sign(s) * np.abs(s) ** (2 / n)
 
 
-def _digit_piece(length: float, radius: float, *, distal: bool, pad_centre: float, child_radius: float | None):
-    """The skin of one phalanx in its segment frame."""
+def _digit_piece(length: float, radius: float, *, distal: bool, pad_centre: float, knuckle: bool):
+    """The skin of one phalanx in its segment frame (``knuckle``: a joint's head at its distal end)."""
     r = radius
     y1 = pad_centre if distal else length
 
@@ -253,7 +253,7 @@ def _digit_piece(length: float, radius: float, *, distal: bool, pad_centre: floa
             palmar = taper
             dorsal = DORSAL * taper
             exponent = 2.0
-            if child_radius is not None:  # the knuckle over the joint's head
+            if knuckle:  # the knuckle over the joint's head
                 dorsal = dorsal + KNUCKLE * np.exp(-0.5 * ((y - length) / (0.45 * r)) ** 2)
         x = rho * lateral * c
         z_palmar = rho * palmar * s
@@ -327,7 +327,7 @@ def skin_of(hand: HandModel) -> Skin:
         while s > 0:
             finger_of_seg[s] = k
             s = int(hand.parent[s])
-    children = {int(p): b for b, p in enumerate(hand.parent) if b > 0}
+    parents = {int(p) for b, p in enumerate(hand.parent) if b > 0}
     geom_seg = np.asarray(hand.geom_segment)
     locs, segs, faces, labels, count = [], [], [], [], 0
 
@@ -354,9 +354,7 @@ def skin_of(hand: HandModel) -> Skin:
         else:
             pad_centre = 0.0
             length = float(np.max(fromto[:, [1, 4]]))
-        child = children.get(b)
-        child_r = None if child is None else float(np.max(np.asarray(hand.geom_radius)[geom_seg == child]))
-        v, f = _digit_piece(length, radius, distal=distal, pad_centre=pad_centre, child_radius=child_r)
+        v, f = _digit_piece(length, radius, distal=distal, pad_centre=pad_centre, knuckle=b in parents)
         add(v, f, b)
     local = np.concatenate(locs)
     segment = np.concatenate(segs)
