@@ -19,6 +19,8 @@ HAND_SURFACES = ("capsules", "skin", "skin-rigid")
 """How the depth camera sees the hand: its collision primitives, the person's skin
 (``benchmark.world.skin``) with pulps that compress under force, or that skin with rigid pulps (an
 ablation: only what would pass into the box is flattened onto it)."""
+DEFAULT_HAND_SURFACE = "capsules"
+"""The hand surface of a scenario that names none (episodes with another are named ``...-<surface>``)."""
 SENSORS = ("ds325", "kinect-v1", "ideal")
 """The depth-sensor presets a scenario may name (their models: ``benchmark.camera.sensor.PRESETS``)."""
 
@@ -57,7 +59,7 @@ class Scenario:
     fps: float = 30.0
     sensor: str = "ds325"
     view: int = 0
-    hand_surface: str = "capsules"
+    hand_surface: str = DEFAULT_HAND_SURFACE
 
     def __post_init__(self):
         for name in ("user", "grasp", "mass", "seed", "view"):
@@ -89,8 +91,9 @@ class Scenario:
 
 
 def episode_name(scenario: Scenario) -> str:
-    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0, ``-skin`` or ``-skin-rigid`` for a skin): how
+    """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0,
+    ``-<surface>`` for a hand surface other than :data:`DEFAULT_HAND_SURFACE`): how
     runs, cached episodes, score rows and dataset files name a scenario."""
     name = f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
     return (name + (f"-v{scenario.view}" if scenario.view else "")
-            + ("" if scenario.hand_surface == "capsules" else f"-{scenario.hand_surface}"))
+            + ("" if scenario.hand_surface == DEFAULT_HAND_SURFACE else f"-{scenario.hand_surface}"))
