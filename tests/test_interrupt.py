@@ -131,9 +131,12 @@ def child():  # a background picture, slow to notice Ctrl-C: it writes into the 
     stage.mkdir(parents=True, exist_ok=True)
     (stage / "late.png").write_text("x")
 multiprocessing.get_context("fork").Process(target=child, daemon=True).start()
-print("ready", flush=True)
+ready = False
 while True:
-    try:
+    try:  # "ready" is printed inside the try: a Ctrl-C sent on reading it cannot land outside it
+        if not ready:
+            print("ready", flush=True)
+            ready = True
         time.sleep(10)
     except KeyboardInterrupt:  # a library that swallows it: the watchdog must end the process
         pass
