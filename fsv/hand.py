@@ -57,6 +57,17 @@ class HandPose:
         return self.pos[..., segment, :] + np.einsum("...pij,pj->...pi", R, np.asarray(points, dtype=float))
 
 
+def finger_of_segment(model: HandModel) -> np.ndarray:
+    """The finger each segment belongs to (its index in ``finger_names``, thumb first), -1 for the palm, (B,)."""
+    finger = np.full(len(model.segment_names), -1, dtype=np.int64)
+    for k, tip in enumerate(model.fingertip_segment):
+        b = int(tip)
+        while b > 0:
+            finger[b] = k
+            b = int(model.parent[b])
+    return finger
+
+
 def split_qpos(model: HandModel, hand_qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Splits hand configurations into palm position, palm rotation and joint angles.
 

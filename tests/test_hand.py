@@ -13,7 +13,7 @@ from benchmark.world.hand import geom_name, hand_model
 from benchmark.world.scenario import Scenario
 from benchmark.world.assets import build_world
 from fsv import InputError
-from fsv.hand import capsule_endpoints, fingertip_centres, forward_kinematics_qpos
+from fsv.hand import capsule_endpoints, finger_of_segment, fingertip_centres, forward_kinematics_qpos
 from fsv.rotation import axis_angle_to_rot, quat_to_rot
 
 
@@ -94,3 +94,12 @@ def test_bad_inputs():
         hand_model(-1.0)
     with pytest.raises(InputError, match="27"):
         forward_kinematics_qpos(hand_model(1.0), np.zeros(10))
+
+
+def test_each_segment_belongs_to_the_finger_of_its_tip():
+    hand = hand_model(1.0)
+    finger = finger_of_segment(hand)
+    assert finger[0] == -1 and finger.dtype == np.int64
+    for k, name in enumerate(hand.finger_names):  # three segments per digit, named after it
+        assert [hand.segment_names[b] for b in np.flatnonzero(finger == k)] == [
+            s for s in hand.segment_names if s.startswith(f"{name}_")]

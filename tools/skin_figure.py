@@ -43,7 +43,7 @@ def _model_render(skin_episode, hand_model):
     from benchmark.camera.scene import LABEL_FINGER0, LABEL_PALM, world_labels
     from benchmark.camera.views import camera_of
     from benchmark.world.assets import build_world, set_frame
-    from fsv.hand import capsule_endpoints, forward_kinematics_qpos
+    from fsv.hand import capsule_endpoints, finger_of_segment, forward_kinematics_qpos
 
     sc, tr = skin_episode.scenario, skin_episode.truth
     world = build_world(sc)
@@ -54,12 +54,7 @@ def _model_render(skin_episode, hand_model):
     data = mujoco.MjData(world.model)
     cam_from_world = np.linalg.inv(camera.T_world_cam)
     K = camera.K
-    finger_of = np.full(len(hand_model.segment_names), -1)
-    for k, tip in enumerate(hand_model.fingertip_segment):
-        s_ = int(tip)
-        while s_ > 0:
-            finger_of[s_] = k
-            s_ = int(hand_model.parent[s_])
+    finger_of = finger_of_segment(hand_model)
     seg = np.asarray(hand_model.geom_segment)
     cap_label = np.where(finger_of[seg] >= 0, LABEL_FINGER0 + finger_of[seg], LABEL_PALM).astype(np.uint8)
     radius = np.ascontiguousarray(hand_model.geom_radius, dtype=np.float64)

@@ -28,6 +28,7 @@ from benchmark.world.hand import hand_model as _hand_model_of
 from benchmark.world.people import person, users  # noqa: F401 (users: re-exported)
 from benchmark.world.scenario import Scenario
 from fsv import HandModel, ObjectModel
+from fsv.hand import finger_of_segment
 
 # Collision bits (see sim_assets/world.xml): the hand touches the box only, and only with its
 # fingertip pads and its palm. The phalanx shafts are kinematic and visual only: every finger then
@@ -217,12 +218,7 @@ def build_world(scenario: Scenario) -> World:
     da = m.jnt_dofadr[palm_j]
     seg_body = np.array([bid(f"hand_{s}") for s in hand.segment_names])
     body_seg = {b: i for i, b in enumerate(seg_body)}
-    finger_of_seg = -np.ones(len(hand.segment_names), dtype=np.int64)
-    for k, tip in enumerate(hand.fingertip_segment):
-        s = int(tip)
-        while s > 0:
-            finger_of_seg[s] = k
-            s = int(hand.parent[s])
+    finger_of_seg = finger_of_segment(hand)
     geom_segment = np.array([body_seg.get(int(b), -1) for b in m.geom_bodyid], dtype=np.int64)
     geom_finger = np.where(geom_segment >= 0, finger_of_seg[np.maximum(geom_segment, 0)], -1)
     finger_dofs = tuple(

@@ -41,6 +41,7 @@ import numpy as np
 
 from benchmark.world.anatomy import hand_spec
 from fsv import HandModel
+from fsv.hand import finger_of_segment, forward_kinematics
 
 LATERAL = 1.12
 """Half-width of a digit's cross-section over its capsule's radius (finger breadth / depth about
@@ -153,18 +154,9 @@ def _smoothstep(x):
 
 
 def _bind_frames(hand: HandModel) -> tuple[np.ndarray, np.ndarray]:
-    """Each segment's rotation and origin in the palm's frame at zero joint angles."""
-    from fsv.rotation import quat_to_rot
-
-    n = len(hand.segment_names)
-    R, t = np.zeros((n, 3, 3)), np.zeros((n, 3))
-    R[0] = np.eye(3)
-    for b in range(1, n):
-        p = int(hand.parent[b])
-        Rb = quat_to_rot(np.asarray(hand.offset_quat[b], dtype=float))
-        R[b] = R[p] @ Rb
-        t[b] = R[p] @ np.asarray(hand.offset_pos[b], dtype=float) + t[p]
-    return R, t
+    """Each segment's rotation (B, 3, 3) and origin (B, 3) in the palm's frame at zero joint angles."""
+    pose = forward_kinematics(hand, np.zeros(3), np.eye(3), np.zeros(hand.num_joints))
+    return pose.rot, pose.pos
 
 
 def _grid_faces(rings: int, around: int, first: int) -> list:
@@ -321,12 +313,7 @@ def skin_of(hand: HandModel) -> Skin:
         Its :class:`Skin`.
     """
     R, t = _bind_frames(hand)
-    finger_of_seg = -np.ones(len(hand.segment_names), dtype=np.int64)
-    for k, tip in enumerate(hand.fingertip_segment):
-        s = int(tip)
-        while s > 0:
-            finger_of_seg[s] = k
-            s = int(hand.parent[s])
+    finger_of_seg = finger_of_segment(hand)
     parents = {int(p) for b, p in enumerate(hand.parent) if b > 0}
     geom_seg = np.asarray(hand.geom_segment)
     locs, segs, faces, labels, count = [], [], [], [], 0
@@ -381,17 +368,15 @@ def collision_gap(hand: HandModel, skin: Skin | None = None) -> dict:
         ``{"pulp_mm": (median |gap|, max |gap|), "palm_mm": (median |gap|, max |gap|), "skin_mm":
         (median, 90th percentile) of every vertex's distance to the nearest primitive of its segment}``.
     """
+    from fsv.track.capsules import closest_on_capsules
+
     skin = skin_of(hand) if skin is None else skin
     geom_seg = np.asarray(hand.geom_segment)
     fromto = np.asarray(hand.geom_fromto)
     radius = np.asarray(hand.geom_radius)
 
-    def distance(p, g):
-        a, b = fromto[g, :3], fromto[g, 3:]
-        ab = b - a
-        den = float(ab @ ab)
-        s = np.zeros(len(p)) if den == 0 else np.clip((p - a) @ ab / den, 0, 1)
-        return np.linalg.norm(p - (a + s[:, None] * ab), axis=1) - radius[g]
+    def distance(points, geoms):  # signed distance to the nearest of these primitives' surfaces
+        return closest_on_capsules(points, fromto[geoms, :3], fromto[geoms, 3:], radius[geoms])[1]
 
     pulp_gap = []
     for k, seg in enumerate(hand.fingertip_segment):
@@ -402,13 +387,13 @@ def collision_gap(hand: HandModel, skin: Skin | None = None) -> dict:
     pulp_gap = np.abs(np.concatenate(pulp_gap))
     palm_v = skin.local[(skin.segment == 0)]
     palm_g = np.flatnonzero(geom_seg == 0)
-    d = np.min([distance(palm_v, g) for g in palm_g], axis=0)
+    d = distance(palm_v, palm_g)
     meta_line = palm_v[:, 2] < -0.8 * radius[palm_g].min()
     palm_gap = np.abs(d[meta_line])
     every = np.empty(skin.vertices)
     for s in range(len(hand.segment_names)):
         sel = skin.segment == s
-        every[sel] = np.min([distance(skin.local[sel], g) for g in np.flatnonzero(geom_seg == s)], axis=0)
+        every[sel] = distance(skin.local[sel], np.flatnonzero(geom_seg == s))
     mm = lambda x, q: float(np.percentile(x, q) * 1e3)  # noqa: E731
     return {"pulp_mm": (mm(pulp_gap, 50), mm(pulp_gap, 100)), "palm_mm": (mm(palm_gap, 50), mm(palm_gap, 100)),
             "skin_mm": (mm(every, 50), mm(every, 90))}

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from fsv.errors import InputError
+from fsv.hand import finger_of_segment
 from fsv.linalg import mm
 from fsv.models import HandModel
 from fsv.rotation import cross, quat_to_rot, rot_from_skew, skew_stack
@@ -34,12 +35,7 @@ class HandKinematics:
                 moves[b] = moves[p]
             moves[b, self.joints_of[b]] = True
         self.moves = moves
-        self.finger_of_segment = np.full(B, -1)
-        for k, tip in enumerate(model.fingertip_segment):
-            b = int(tip)
-            while b > 0:
-                self.finger_of_segment[b] = k
-                b = int(model.parent[b])
+        self.finger_of_segment = finger_of_segment(model)
         # Constants of :meth:`pose`: every hinge's cross-product matrix K and K @ K (Rodrigues'
         # formula, the same arrays as ``axis_angle_to_rot`` builds on every call).
         K = skew_stack(model.joint_axis)
