@@ -35,11 +35,7 @@ def test_every_piece_is_closed_outward_and_labelled_by_its_digit(hand, skin):
     assert np.array_equal(skin.face_label, np.where(finger < 0, 9, 10 + finger))
 
 
-def test_the_pulp_is_the_pad_sphere_below_its_centre_and_the_skin_departs_elsewhere(hand, skin):
-    gap = S.collision_gap(hand, skin)
-    assert gap["pulp_mm"][0] < 0.15 and gap["pulp_mm"][1] < 0.8  # measured 0.07 and 0.48 mm
-    assert gap["palm_mm"][0] < 1.5  # measured 0.77 mm (the hypothenar eminence bulges to 6.9 mm)
-    assert 0.25 < gap["skin_mm"][0] < 0.8 and 1.8 < gap["skin_mm"][1] < 3.5  # measured 0.45 and 2.65 mm
+def test_the_pulp_reaches_the_pad_sphere_below_its_centre(hand, skin):
     for k, seg in enumerate(hand.fingertip_segment):  # the lowest skin point under the pad's centre
         v = skin.local[skin.segment == seg]
         centre, r = np.asarray(hand.fingertip_offset[k]), hand.fingertip_radius[k]

@@ -95,11 +95,10 @@ def main() -> None:
     from benchmark.camera.pulp_patch import patch_area_m2
     from benchmark.camera.render import hand_skin
     from benchmark.camera.scene import world_labels
-    from benchmark.camera.skin_stats import hand_depth_difference
+    from benchmark.camera.skin_stats import collision_gap, hand_depth_difference
     from benchmark.method.knowledge import given
     from benchmark.world.assets import build_world, hand_model, set_frame
     from benchmark.world.scenario import Scenario
-    from benchmark.world.skin import collision_gap
 
     exact = dict(noise_m=0.0, sensor="ideal")
     scenarios = [Scenario(task="lift", seed=0, duration_s=3.0, **exact),

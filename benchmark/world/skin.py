@@ -17,7 +17,8 @@ hand is not a chain of capsules. :func:`skin_of` builds, per person (from the sa
 built so that its palmar side *is* that collision geometry where contacts happen: each fingertip
 pulp reaches exactly the pad sphere's surface below the pad's centre and the palm's palmar face
 lies on the metacarpal capsules' palmar line. Elsewhere the skin departs from the primitives (wider,
-shallower, tapered, nails, knuckles, eminences); :func:`collision_gap` measures by how much.
+shallower, tapered, nails, knuckles, eminences); :func:`benchmark.camera.skin_stats.collision_gap`
+measures by how much.
 
 **Skinning.** Each vertex belongs to one segment (its *body*), with the child's vertices near a joint
 blended with the parent's pose (linear blend skinning, weight up to :data:`BLEND_AT_JOINT` at the
@@ -356,44 +357,3 @@ def skin_of(hand: HandModel) -> Skin:
     return Skin(local=np.ascontiguousarray(local), segment=segment, parent_local=np.ascontiguousarray(parent_local),
                 parent=parent, parent_weight=weight, faces=np.concatenate(faces), face_label=np.concatenate(labels),
                 finger=finger, pulp=pulp, pad_radius=np.asarray(hand.fingertip_radius, dtype=float))
-
-
-def collision_gap(hand: HandModel, skin: Skin | None = None) -> dict:
-    """How far the skin lies from the hand's colliding primitives, in the bind pose.
-
-    For each skin vertex of a pulp's palmar half below the pad's centre, and of the palm's palmar
-    face, the signed distance to the nearest colliding primitive's surface (positive outside).
-
-    Returns:
-        ``{"pulp_mm": (median |gap|, max |gap|), "palm_mm": (median |gap|, max |gap|), "skin_mm":
-        (median, 90th percentile) of every vertex's distance to the nearest primitive of its segment}``.
-    """
-    from fsv.track.capsules import closest_on_capsules
-
-    skin = skin_of(hand) if skin is None else skin
-    geom_seg = np.asarray(hand.geom_segment)
-    fromto = np.asarray(hand.geom_fromto)
-    radius = np.asarray(hand.geom_radius)
-
-    def distance(points, geoms):  # signed distance to the nearest of these primitives' surfaces
-        return closest_on_capsules(points, fromto[geoms, :3], fromto[geoms, 3:], radius[geoms])[1]
-
-    pulp_gap = []
-    for k, seg in enumerate(hand.fingertip_segment):
-        v = skin.local[skin.segment == seg]
-        centre = np.asarray(hand.fingertip_offset[k], dtype=float)
-        below = (v[:, 2] < -0.5 * radius.max()) & (np.abs(v[:, 1] - centre[1]) < 0.35 * hand.fingertip_radius[k])
-        pulp_gap.append(np.linalg.norm(v[below] - centre, axis=1) - hand.fingertip_radius[k])
-    pulp_gap = np.abs(np.concatenate(pulp_gap))
-    palm_v = skin.local[(skin.segment == 0)]
-    palm_g = np.flatnonzero(geom_seg == 0)
-    d = distance(palm_v, palm_g)
-    meta_line = palm_v[:, 2] < -0.8 * radius[palm_g].min()
-    palm_gap = np.abs(d[meta_line])
-    every = np.empty(skin.vertices)
-    for s in range(len(hand.segment_names)):
-        sel = skin.segment == s
-        every[sel] = distance(skin.local[sel], np.flatnonzero(geom_seg == s))
-    mm = lambda x, q: float(np.percentile(x, q) * 1e3)  # noqa: E731
-    return {"pulp_mm": (mm(pulp_gap, 50), mm(pulp_gap, 100)), "palm_mm": (mm(palm_gap, 50), mm(palm_gap, 100)),
-            "skin_mm": (mm(every, 50), mm(every, 90))}
