@@ -201,6 +201,24 @@ def test_a_suite_seen_by_another_sensor_is_its_own_suite(tmp_path, capsys):
     assert not (tmp_path / "c").exists() and not (tmp_path / "o").exists()
 
 
+def test_a_suite_with_another_grip_control_is_its_own_suite_named_after_it(tmp_path, capsys):
+    from benchmark.commands.cli import main
+    from benchmark.suites import get_suite
+    from benchmark.world.scenario import episode_name
+
+    smoke = get_suite("smoke")
+    assert get_suite("smoke", grip_control="whole-hand") is smoke  # the suite's own control
+    digits = get_suite("smoke", "kinect-v1", "skin", "per-digit")
+    assert digits.name == "smoke-kinect-v1-skin-per-digit" and digits.gates == smoke.gates
+    assert {(sc.sensor, sc.hand_surface, sc.grip_control) for sc in digits.scenarios} == {("kinect-v1", "skin", "per-digit")}
+    assert episode_name(digits.scenarios[0]) == episode_name(smoke.scenarios[0]) + "-skin-per-digit"
+    assert main(["eval", "--suite", "smoke", "--grip-control", "fist", "--out", str(tmp_path / "o"),
+                 "--cache", str(tmp_path / "c")]) == 2
+    err = capsys.readouterr().err
+    assert "--grip-control 'fist': accepted: whole-hand, per-digit" in err and err.count("\n") == 1
+    assert not (tmp_path / "c").exists() and not (tmp_path / "o").exists()
+
+
 def test_the_paper_suites_hold_the_paper_protocols_episodes():
     """table1 and table2 are the episodes of the table1 and table2 commands' protocols (one source each)."""
     from benchmark.reproduce import DATASETS, RESULTS

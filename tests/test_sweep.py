@@ -45,7 +45,7 @@ def test_a_sweep_of_the_knowledge_tells_the_method_exact_then_measured_values(ti
 
 
 @pytest.mark.parametrize("argv, needle", [
-    (["--axis", "friction", "--values", "0.5,1"], "--axis 'friction': accepted: noise, mass, fps, init, sensor, hand_surface, knowledge"),
+    (["--axis", "friction", "--values", "0.5,1"], "--axis 'friction': accepted: noise, mass, fps, init, sensor, hand_surface, grip_control, knowledge"),
     (["--axis", "hand_surface", "--values", "capsules,mesh"], "'mesh' is not a hand surface; accepted: capsules, skin"),
     (["--axis", "knowledge", "--values", "exact,psychic"], "--knowledge 'psychic': accepted: exact, lab"),
     (["--axis", "mass", "--values", "0,x"], "--values '0,x': 'x' is not an integer"),

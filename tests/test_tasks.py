@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from benchmark.commands.report import max_slip_m
+from benchmark.world.scenario import GRIP_CONTROLS
 from benchmark.world.tasks import TASKS
 
 SHORT_S = 2.4
@@ -38,12 +39,15 @@ def _check_contract(ep):
     assert tr.box_pos[:, 2].min() > z0 - 0.002
 
 
+@pytest.mark.parametrize("control", GRIP_CONTROLS)
 @pytest.mark.parametrize("user", [0, 1, 2, 3])
 @pytest.mark.parametrize("grasp", [0, 1, 2, 3])
-def test_lift_contract_for_every_user_and_grasp(episode_factory, user, grasp):
-    _check_contract(episode_factory(task="lift", user=user, grasp=grasp, mass=2, duration_s=SHORT_S))
+def test_lift_contract_for_every_user_and_grasp(episode_factory, user, grasp, control):
+    _check_contract(episode_factory(task="lift", user=user, grasp=grasp, mass=2, duration_s=SHORT_S, grip_control=control))
 
 
+@pytest.mark.parametrize("control", GRIP_CONTROLS)
 @pytest.mark.parametrize("task", sorted(TASKS))
-def test_every_task_keeps_the_contract(episode_factory, task):
-    _check_contract(episode_factory(task=task, user=1, grasp=2, mass=5, duration_s=TASKS[task].default_duration_s / 3))
+def test_every_task_keeps_the_contract(episode_factory, task, control):
+    _check_contract(episode_factory(task=task, user=1, grasp=2, mass=5, duration_s=TASKS[task].default_duration_s / 3,
+                                    grip_control=control))

@@ -103,6 +103,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--hand-surface", default="capsules",
                    help="what the camera sees of the hand: capsules (the collision primitives), skin (the person's "
                         "skin, with pulps that compress and flatten on the box) or skin-rigid (its pulps rigid)")
+    p.add_argument("--grip-control", default="whole-hand",
+                   help="how the simulated person controls the grip: whole-hand (the grasp's squeeze scaled as one "
+                        "pattern) or per-digit (each digit pressed for its own load, with tactile feedback)")
     p.add_argument("--user", type=int, default=0, help="the person: 0-4 the named cohort (sim_assets/users.yaml), N >= 5 drawn with seed N (anatomy and grip style)")
     p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
@@ -123,7 +126,7 @@ def scenario_from_args(args: argparse.Namespace) -> Scenario:
     """The scenario of the command line, fully validated (raises ScenarioError)."""
     sc = Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
                   seed=args.seed, duration_s=args.duration, sensor=args.sensor, view=args.view,
-                  hand_surface=args.hand_surface)
+                  hand_surface=args.hand_surface, grip_control=args.grip_control)
     validate(sc)
     return sc
 
@@ -201,7 +204,7 @@ def main(argv: list | None = None) -> int:
     hand = person["anatomy"]
     print(f"fsv-bench: task {sc.task}, user {sc.user} ({person['name']}, hand {1e3 * hand['hand_length_m']:.0f} x "
           f"{1e3 * hand['hand_breadth_m']:.0f} mm), grasp {sc.grasp} ({grasp['name']}), mass {sc.mass}, seed {sc.seed}, "
-          f"view {sc.view}, sensor {sc.sensor}, hand seen as {sc.hand_surface}, noise {sc.noise_m} m, {len(record.episode.truth.t)} frames")
+          f"view {sc.view}, sensor {sc.sensor}, hand seen as {sc.hand_surface}, grip {sc.grip_control}, noise {sc.noise_m} m, {len(record.episode.truth.t)} frames")
     for line in lines:
         print(line.replace(str(tmp), str(out)))
     print(f"episode: {out / 'episode.npz'}\nsummary: {out / 'summary.json'} ({timing['total']:.1f} s)")

@@ -33,7 +33,11 @@ def report_markdown(suite, rows: list) -> str:
     lines = [
         f"# How human the world is: suite {suite.name} v{suite.version} ({len(rows)} episodes, truth only)",
         "",
-        "Peaks while the box is lifted (held, no table contact); median (min-max) over the task's episodes.",
+        f"The people's grip control: {', '.join(sorted({sc.grip_control for sc in suite.scenarios}))} "
+        "(benchmark.world.grip). Peaks while the box is lifted (held, no table contact); median (min-max) over "
+        "the task's episodes. The grip-load correlation is measured from 1 s after lift-off (the thumb's normal "
+        "force against |m (a - g)|, benchmark.world.humanness); the effective margin is 1 - L / (mu sum N) "
+        "over lifted frames (the digits' summed tangential and normal forces).",
         f"Planned ranges (benchmark/world/tasks/human.py): transports peak at {TRANSPORT_PEAK_ACC.lo:g}-"
         f"{TRANSPORT_PEAK_ACC.hi:g} m/s^2, turns at {ROTATION_PEAK_ALPHA.lo:g}-{ROTATION_PEAK_ALPHA.hi:g} rad/s^2, "
         f"shake at {SHAKE_PEAK_ACC.lo:g}-{SHAKE_PEAK_ACC.hi:g} m/s^2; grip fluctuations drawn for a total "
@@ -41,15 +45,20 @@ def report_markdown(suite, rows: list) -> str:
         f"{100 * np.hypot(living.DRIFT_CV[1], living.TREMOR_CV[1]):.1f} % (benchmark/world/living.py).",
         "",
         "| task | episodes | peak acc [m/s^2] | peak angular velocity [rad/s] | thumb grip CV in holds [%] "
-        "| grip-load correlation | grip lead [ms] | Newton-Euler residual [N] |",
-        "|---|---|---|---|---|---|---|---|",
+        "| grip-load correlation | grip lead [ms] | effective margin | thumb / weight | Newton-Euler residual [N] |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for task in dict.fromkeys(sc.task for sc, _ in rows):  # in the suite's order
         hs = [h for sc, h in rows if sc.task == task]
         lines.append(
             f"| {task} | {len(hs)} | {span(h.peak_acc for h in hs)} | {span(h.peak_omega for h in hs)} "
             f"| {span(100 * h.grip_cv for h in hs)} | {span(h.grip_load_corr for h in hs)} "
-            f"| {span(1000 * h.grip_lead_s for h in hs)} | {max(h.newton_euler_n for h in hs):.1e} |")
+            f"| {span(1000 * h.grip_lead_s for h in hs)} | {span(h.effective_margin for h in hs)} "
+            f"| {span(h.thumb_per_weight for h in hs)} | {max(h.newton_euler_n for h in hs):.1e} |")
+    every = [h for _, h in rows]
+    lines += ["", f"Over every episode: effective margin {span(h.effective_margin for h in every)}, thumb / weight "
+                  f"{span(h.thumb_per_weight for h in every)} (the people's drawn margins: sim_assets/users.yaml, "
+                  "benchmark.world.people)."]
     return "\n".join(lines) + "\n"
 
 
@@ -58,10 +67,12 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmark.commands.humanness", description=__doc__.splitlines()[0])
     p.add_argument("--suite", default="standard", help="suite whose episodes are simulated (default standard)")
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results/world"), help="output folder")
+    p.add_argument("--grip-control", default=None, help="the people's grip control, replacing the suite's: "
+                                                          "whole-hand or per-digit (benchmark.world.grip)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     try:
-        suite = get_suite(args.suite)
+        suite = get_suite(args.suite, grip_control=args.grip_control)
     except ValueError as e:
         p.exit(2, f"{p.prog}: error: {e}\n")
     rows = suite_humanness(suite, progress=not args.quiet)

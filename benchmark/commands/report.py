@@ -20,12 +20,12 @@ from benchmark.world.episode import Episode
 
 
 def scenario_block(episode: Episode) -> dict:
-    """The ``scenario`` block: task, user, grasp, mass, sensor, hand_surface, noise_m, seed, frames, fps, and the
+    """The ``scenario`` block: task, user, grasp, mass, sensor, hand_surface, grip_control, noise_m, seed, frames, fps, and the
     ``person`` (``benchmark.world.people.person_record``: name, anatomy, grip style) and the
     ``grasp_spec`` (family and spots, ``benchmark.world.grasp_plan.grasp_spec``)."""
     sc = episode.scenario
     return {"task": sc.task, "user": sc.user, "grasp": sc.grasp, "mass": sc.mass, "sensor": sc.sensor,
-            "hand_surface": sc.hand_surface, "noise_m": sc.noise_m, "seed": sc.seed, "frames": int(len(episode.truth.t)), "fps": sc.fps,
+            "hand_surface": sc.hand_surface, "grip_control": sc.grip_control, "noise_m": sc.noise_m, "seed": sc.seed, "frames": int(len(episode.truth.t)), "fps": sc.fps,
             "person": person_record(sc.user), "grasp_spec": grasp_spec(sc)}
 
 

@@ -86,11 +86,11 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
 
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
-    from benchmark.suites import get_suite
+    from benchmark.suites.options import suite_of
 
     from benchmark.method.protocol import check_people
 
-    suite = get_suite(args.suite, args.sensor, args.hand_surface)
+    suite = suite_of(args)
     check_out(args.out)
     check_people((sc.user for sc in suite.scenarios), args.protocol)
     index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format,

@@ -120,11 +120,11 @@ def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowled
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
     from benchmark.suites.evaluate import load_gates, print_verdict, write_outputs
-    from benchmark.suites import get_suite
+    from benchmark.suites.options import suite_of
 
     from benchmark.method.protocol import check_protocol
 
-    suite = get_suite(args.suite, args.sensor, args.hand_surface)
+    suite = suite_of(args)
     gates = load_gates(args.gates) if args.gates else None
     check_out(args.out)
     check_protocol(args.protocol)

@@ -392,7 +392,9 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
     ``observer`` sees every estimate (:func:`evaluate_many`); ``pictures(scores, gates)`` returns
     files to write into ``DIR/pictures/`` (the commands' ``--pictures``).
     """
-    suite = get_suite(args.suite, args.sensor, args.hand_surface)
+    from benchmark.suites.options import suite_of
+
+    suite = suite_of(args)
     gates = load_gates(args.gates) if args.gates else None
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")

@@ -55,9 +55,9 @@ def run(args: argparse.Namespace) -> list:
     from benchmark.atomic import check_out
     from benchmark.suites.evaluate import GateFailure, baselines_block, evaluate_many, write_outputs
     from benchmark.scores.leaderboard import leaderboard_markdown
-    from benchmark.suites import get_suite
+    from benchmark.suites.options import suite_of
 
-    suite = get_suite(args.suite, args.sensor, args.hand_surface)
+    suite = suite_of(args)
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)

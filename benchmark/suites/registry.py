@@ -166,9 +166,10 @@ SUITES = {s.name: s for s in (SMOKE, STANDARD, DEV, COHORT, TABLE1, TABLE2)}
 """Every registered suite by name."""
 
 
-def get_suite(name: str, sensor: str | None = None, hand_surface: str | None = None) -> Suite:
-    """The suite registered as ``name``, seen by the depth sensor ``sensor`` and with the hand drawn
-    as ``hand_surface``, if given.
+def get_suite(name: str, sensor: str | None = None, hand_surface: str | None = None,
+              grip_control: str | None = None) -> Suite:
+    """The suite registered as ``name``, seen by the depth sensor ``sensor``, with the hand drawn as
+    ``hand_surface`` and the grip controlled by ``grip_control``, where given.
 
     Args:
         name: A key of :data:`SUITES`.
@@ -176,28 +177,30 @@ def get_suite(name: str, sensor: str | None = None, hand_surface: str | None = N
             sensor; the suite is then named ``<name>-<sensor>`` (its own cache and scores).
         hand_surface: One of ``benchmark.world.scenario.HAND_SURFACES`` replacing every
             scenario's; the suite is then named ``<name>-<hand_surface>`` (after the sensor).
+        grip_control: One of ``benchmark.world.scenario.GRIP_CONTROLS`` replacing every
+            scenario's; the suite is then named ``<name>-<grip_control>`` (after the above).
 
     Raises:
-        ValueError: Naming the accepted suites, sensors or hand surfaces.
+        ValueError: Naming the accepted suites, sensors, hand surfaces or grip controls.
     """
     if name not in SUITES:
         raise ValueError(f"--suite {name!r}: no such suite; accepted: {', '.join(SUITES)}")
     from dataclasses import replace
 
     from benchmark.camera.sensor import SENSORS
-    from benchmark.world.scenario import HAND_SURFACES
+    from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES
 
-    if sensor is not None and sensor not in SENSORS:
-        raise ValueError(f"--sensor {sensor!r}: no such sensor; accepted: {', '.join(SENSORS)}")
-    if hand_surface is not None and hand_surface not in HAND_SURFACES:
-        raise ValueError(f"--hand-surface {hand_surface!r}: accepted: {', '.join(HAND_SURFACES)}")
+    overrides = (("sensor", "--sensor", sensor, SENSORS, "Seen by the {} sensor preset."),
+                 ("hand_surface", "--hand-surface", hand_surface, HAND_SURFACES, "The hand drawn as its {}."),
+                 ("grip_control", "--grip-control", grip_control, GRIP_CONTROLS, "The grip controlled {}."))
+    for _, flag, value, accepted, _ in overrides:
+        if value is not None and value not in accepted:
+            what = "no such sensor; " if flag == "--sensor" else ""
+            raise ValueError(f"{flag} {value!r}: {what}accepted: {', '.join(accepted)}")
     suite = SUITES[name]
-    if sensor is not None and not all(sc.sensor == sensor for sc in suite.scenarios):
-        suite = Suite(name=f"{suite.name}-{sensor}", version=suite.version,
-                      scenarios=tuple(replace(sc, sensor=sensor) for sc in suite.scenarios), gates=suite.gates,
-                      description=f"{suite.description} Seen by the {sensor} sensor preset.")
-    if hand_surface is not None and not all(sc.hand_surface == hand_surface for sc in suite.scenarios):
-        suite = Suite(name=f"{suite.name}-{hand_surface}", version=suite.version,
-                      scenarios=tuple(replace(sc, hand_surface=hand_surface) for sc in suite.scenarios),
-                      gates=suite.gates, description=f"{suite.description} The hand drawn as its {hand_surface}.")
+    for field, _, value, _, sentence in overrides:
+        if value is not None and not all(getattr(sc, field) == value for sc in suite.scenarios):
+            suite = Suite(name=f"{suite.name}-{value}", version=suite.version,
+                          scenarios=tuple(replace(sc, **{field: value}) for sc in suite.scenarios), gates=suite.gates,
+                          description=f"{suite.description} {sentence.format(value)}")
     return suite

@@ -7,7 +7,8 @@ Axes (:data:`AXES`): ``noise`` (depth noise standard deviation, m), ``mass`` (in
 sim_assets/masses.yaml), ``fps`` (camera frame rate, Hz), ``init`` (scale of the seeded first-frame
 perturbation handed to the method, ``benchmark.method.init.INIT_PERTURBATION``), ``sensor`` (depth
 sensor preset: ``ds325``, ``kinect-v1``, ``ideal``), ``hand_surface`` (``capsules``, the collision
-primitives, ``skin``, ``benchmark.world.skin``, or ``skin-rigid``), ``knowledge`` and ``protocol`` (what the method
+primitives, ``skin``, ``benchmark.world.skin``, or ``skin-rigid``), ``grip_control`` (``whole-hand``
+or ``per-digit``, ``benchmark.world.grip``), ``knowledge`` and ``protocol`` (what the method
 is told). Every scenario of the
 suite is run at every value (the rest of the scenario unchanged). ``DIR`` receives ``sweep.json``
 (aggregates with 95 % intervals per value, provenance), ``sweep.md`` and ``sweep.png`` (median and
@@ -31,6 +32,7 @@ AXES = {
     "init": (None, float, "first-frame perturbation scale"),
     "sensor": ("sensor", str, "depth sensor preset"),
     "hand_surface": ("hand_surface", str, "what the camera sees of the hand"),
+    "grip_control": ("grip_control", str, "how the people control the grip"),
     "knowledge": (None, str, "what the method is told (benchmark.method.knowledge)"),
     "protocol": (None, str, "what the method is told of the person (benchmark.method.protocol)"),
 }
@@ -65,12 +67,13 @@ def parse_values(axis: str, text: str) -> list:
             raise ValueError(f"--values {text!r}: {item!r} is not a{'n integer' if kind is int else ' number'}") from None
     if len(set(values)) != len(values) or len(values) < 2:
         raise ValueError(f"--values {text!r}: need at least two distinct values")
-    if axis == "hand_surface":
-        from benchmark.world.scenario import HAND_SURFACES
+    if axis in ("hand_surface", "grip_control"):
+        from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES
 
+        accepted, what = (HAND_SURFACES, "a hand surface") if axis == "hand_surface" else (GRIP_CONTROLS, "a grip control")
         for v in values:
-            if v not in HAND_SURFACES:
-                raise ValueError(f"--values {text!r}: {v!r} is not a hand surface; accepted: {', '.join(HAND_SURFACES)}")
+            if v not in accepted:
+                raise ValueError(f"--values {text!r}: {v!r} is not {what}; accepted: {', '.join(accepted)}")
     if axis == "knowledge":
         from benchmark.method.knowledge import check_knowledge
 

@@ -54,9 +54,9 @@ class GripPolicy:
                           baseline_grip_n=float(user["baseline_grip_n"]), anticipation_s=float(user["anticipation_s"]),
                           response_s=float(user["response_s"]), share=share)
 
-    def distribute(self, wrench: np.ndarray, points: np.ndarray, normals_in: np.ndarray,
-                   active: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Nominal forces, the internal force pattern, and the grip needed to keep every pad from slipping.
+    def nominal_and_compressions(self, wrench: np.ndarray, points: np.ndarray, normals_in: np.ndarray,
+                                 active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The nominal forces of a wrench, and the internal forces that press each digit.
 
         All vectors in one frame (world or object), about the centre of mass.
 
@@ -67,12 +67,13 @@ class GripPolicy:
             active: Digits in contact, (K,) bool.
 
         Returns:
-            ``(f_nom, f_int (K, 3), grip_slip)``: the forces producing the wrench with the least
-            norm weighted by the inverse grip shares (a digit carries load in proportion to its
-            grip), (K, 3) or (N, K, 3); the internal (workless) forces per newton of grip (thumb
-            normal component 1); and the smallest grip that keeps every active pad inside its
-            friction cone shrunk by the safety margin and every digit at or above
-            ``min_finger_force_n``, a float or (N,), [N].
+            ``(f_nom, press)``: the forces producing the wrench with the least norm weighted by
+            the inverse grip shares (a digit carries load in proportion to its grip), (K, 3) or
+            (N, K, 3); and per digit j the internal (workless) forces that press it with a unit
+            normal force, (K, K, 3): ``press[0]`` is the squeeze of the grasp as a whole (the thumb
+            against the fingers in their shares), ``press[j]`` for a finger the internal forces
+            nearest to finger j pressing alone (the thumb and the others react), zero rows for
+            digits not in contact.
         """
         wrench = np.asarray(wrench, dtype=float)
         single = wrench.ndim == 1
@@ -91,13 +92,88 @@ class GripPolicy:
         Gp = mm(W[:, None] * G.T, inv(mm(G * W, G.T)))
         f_nom = np.zeros((len(wrench), K, 3))
         f_nom[:, idx] = rows_mt(wrench, Gp).reshape(len(wrench), -1, 3)
-        d = (share[:, None] * normals_in[idx]).ravel()
-        d_int = (d - mv(Gp, mv(G, d))).reshape(-1, 3)
-        d_int /= dot(d_int[0], normals_in[idx[0]])
-        f_int = np.zeros((K, 3))
-        f_int[idx] = d_int
+        press = np.zeros((K, K, 3))
+        for i, k in enumerate(idx):
+            d = np.zeros((len(idx), 3))
+            if i == 0:
+                d[:] = share[:, None] * normals_in[idx]
+            else:
+                d[i] = normals_in[k]
+            d = d.ravel()
+            d_int = (d - mv(Gp, mv(G, d))).reshape(-1, 3)
+            press[k, idx] = d_int / dot(d_int[i], normals_in[k])
+        return (f_nom[0] if single else f_nom), press
+
+    def hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
+             baseline_n, margin=None) -> np.ndarray:
+        """How hard each digit presses: the baseline squeeze, then each digit pressed until it works
+        inside its friction cone shrunk by the safety margin and with at least ``min_finger_force_n``.
+
+        A person controls the grip digit by digit (Burstedt, Flanagan & Johansson 1999): a digit that
+        carries more of the load presses harder, and the others react, instead of the whole hand
+        squeezing harder. Each pass adds to each digit short of its requirement the press that
+        brings its own normal force to it, one digit after the other, the fingers first and then the
+        thumb (whose normal force is mostly their reaction: it presses for its own load only where
+        their reactions fall short); the
+        passes repeat (:data:`HOLD_PASSES`) because a press also moves the digits' tangential forces.
+
+        Args:
+            f_nom: Nominal forces, (N, K, 3) [N].
+            press: Unit presses per digit, (K, K, 3) (:meth:`nominal_and_compressions`).
+            normals_in: Unit normals into the box, (K, 3).
+            active: Digits in contact, (K,) bool.
+            baseline_n: The squeeze kept without load, scalar or (N,) [N].
+            margin: The safety margin per tick, (N,); None: the policy's.
+
+        Returns:
+            The press of each digit, (N, K) [N]: the forces are ``f_nom + sum_j c[:, j] press[j]``.
+        """
+        N, K = f_nom.shape[:2]
+        c = np.zeros((N, K))
+        c[:, 0] = baseline_n
+        f = f_nom + np.einsum("nj,jkd->nkd", c, press)
+        margin = np.full(N, self.safety_margin) if margin is None else np.asarray(margin, dtype=float)
+        slope = (1.0 + margin) / self.friction
+        for _ in range(HOLD_PASSES):
+            added = 0.0
+            order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else np.flatnonzero(active)
+            for j in order:  # one digit at a time, the fingers before the thumb that opposes them
+                n = np.einsum("nd,d->n", f[:, j], normals_in[j])
+                t = norm_rows(f[:, j] - n[:, None] * normals_in[j])
+                deficit = np.maximum(slope * t + self.min_finger_force_n - n, 0.0)
+                c[:, j] += deficit
+                f = f + deficit[:, None, None] * press[j]
+                added = max(added, float(np.max(deficit)))
+            if added <= HOLD_TOLERANCE_N:
+                break
+        return c
+
+
+    def whole_hand(self, f_nom: np.ndarray, squeeze: np.ndarray, normals_in: np.ndarray,
+                   active: np.ndarray) -> tuple[np.ndarray, float]:
+        """The whole-hand grip (``grip_control="whole-hand"``): how far the grasp's squeeze must be
+        scaled for every pad to work inside its friction cone shrunk by the safety margin, and for
+        every digit to press with ``min_finger_force_n`` without load.
+
+        The squeeze scales as one pattern, so the digit closest to slipping sets every digit's
+        force (docs/findings.md, "How hard the simulated people squeeze").
+
+        Args:
+            f_nom: Nominal forces, (N, K, 3) [N].
+            squeeze: The internal forces of the grasp per newton of the thumb's normal force,
+                (K, 3): ``press[0]`` of :meth:`nominal_and_compressions`.
+            normals_in: Unit normals into the box, (K, 3).
+            active: Digits in contact, (K,) bool.
+
+        Returns:
+            ``(grip_slip (N,), grip_floor)``: the thumb-side grip that keeps every pad from
+            slipping, and the one at which every digit presses with ``min_finger_force_n`` with
+            no load, [N].
+        """
+        idx = np.flatnonzero(active)
         mu = self.friction / (1.0 + self.safety_margin)
         nrm = normals_in[idx]
+        d_int = squeeze[idx]
         n0 = np.einsum("nkj,kj->nk", f_nom[:, idx], nrm)
         n1 = np.einsum("kj,kj->k", d_int, nrm)
         t0 = f_nom[:, idx] - n0[..., None] * nrm
@@ -108,15 +184,36 @@ class GripPolicy:
         ok = (c >= 0) & (n0 >= 0)
         root = (-b + np.sqrt(np.maximum(b * b - 4 * a * c, 0.0))) / (2 * np.maximum(a, 1e-9))
         grip = np.max(np.where(ok, 0.0, np.maximum(root, -n0 / np.maximum(n1, 1e-9))), axis=1)
-        # every digit keeps pressing with at least min_finger_force_n
-        grip = np.maximum(grip, np.max((self.min_finger_force_n - n0) / np.maximum(n1, 1e-9), axis=1))
+        grip = np.maximum(grip, np.max(-n0 / np.maximum(n1, 1e-9), axis=1))
         grip = np.maximum(grip, 0.0)
-        if single:
-            return f_nom[0], f_int, float(grip[0])
-        return f_nom, f_int, grip
+        floor = float(np.max(self.min_finger_force_n / np.maximum(n1, 1e-9)))
+        return grip, floor
 
+HOLD_PASSES = 30
+"""Passes of :meth:`GripPolicy.hold` at most (each digit's press moves the others' forces a little)."""
+HOLD_TOLERANCE_N = 1e-6
+"""A digit within this of its requirement needs no further press, [N]."""
 
 MAX_FINGER_FORCE_N = 35.0  # commanded fingertip forces are capped here (human range of such grips: < 40 N)
+REFLEX_LATENCY_S = 0.07
+"""Delay from a digit's load to its grip correction: the grip responses to load and slips start
+60-80 ms after them (Johansson & Westling 1984; Cole & Abbs 1988)."""
+REFLEX_TIME_S = 0.1
+"""Time constant of a digit's correction of its realized deficit (a choice: slow enough against the
+latency to stay stable, fast enough to catch a lift's load within a few hundred milliseconds)."""
+RELAX_TIME_S = 1.0
+"""Time constant with which a digit's correction relaxes once its load is met (a choice: grip
+forces relax over about a second in static holds, Johansson & Westling 1984)."""
+LIFT_OFF_MARGIN = 0.5
+"""Extra safety margin while the load comes onto the hand and just after lift-off: the grip force
+peaks shortly after lift-off and then declines to its static level (Johansson & Westling 1984,
+Exp. Brain Res. 56; the peak is a choice within the overshoots they show)."""
+LIFT_OFF_HOLD_S = 0.3
+"""The extra margin is kept this long after lift-off, [s]."""
+LIFT_OFF_DECAY_S = 0.5
+"""Then it decays with this time constant, [s]."""
+CONTROL_PERIOD_FALLBACK_S = 0.004
+"""The control period assumed for a single control tick, [s]."""
 
 
 def _quat_of(R: np.ndarray) -> np.ndarray:
@@ -165,22 +262,39 @@ class Human:
                                                              self.approach)
         self.ctrl = q[:, world.actuator_joint]
         tk = t[::ctrl_every]
-        target, f_nom, f_int = _grip_target(tk, world, motion, plan, pol, living, phases, releases)
+        self.control = scenario.grip_control
+        target, f_nom, press = _grip_target(tk, world, motion, plan, pol, living, phases, releases, self.control)
         self.grip_target = target
         grip = np.zeros_like(target)
         keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
-        g = 0.0
+        g = np.zeros(target.shape[1])
         for i, gt in enumerate(target):
             g = keep * g + (1 - keep) * gt
             grip[i] = g
-        grip *= living.modulation(tk, grip_rng)
-        forces = f_nom + grip[:, None, None] * f_int
+        grip *= living.modulation(tk, grip_rng)[:, None]
+        if self.control == "per-digit":
+            forces = f_nom + np.einsum("nj,jkd->nkd", grip, press)
+        else:  # the squeeze alone (the same operations as a scalar grip times its pattern)
+            forces = f_nom + grip[:, 0, None, None] * press[0]
         norm = np.linalg.norm(forces, axis=2, keepdims=True)
         forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
         off = (tk < phases.reach_end) | ((tk >= phases.open_end) if releases else False)
         forces[off] = 0.0
         self.forces_obj = forces
         self.grip = grip
+        self.on = ~off
+        # tactile feedback (see act): each digit's realized load, delayed, presses it further
+        self.press = press
+        self.slope = (1.0 + pol.safety_margin) / pol.friction
+        self.active = np.asarray(plan.active, bool)
+        self.normals = np.asarray(plan.normal_in, dtype=float)
+        self.feedback = np.zeros(len(plan.active))
+        dt = float(tk[1] - tk[0]) if len(tk) > 1 else CONTROL_PERIOD_FALLBACK_S
+        self._delay = max(1, int(round(REFLEX_LATENCY_S / dt)))
+        self._gain = dt / REFLEX_TIME_S
+        self._leak = float(np.exp(-dt / RELAX_TIME_S))
+        self._deficits = np.zeros((self._delay, len(plan.active)))
+        self._tick = 0
         self._views = None
         self._fingers = []
         for k in np.flatnonzero(plan.active):
@@ -204,11 +318,57 @@ class Human:
         ctrl[:] = self.ctrl[step]
         if step % self.ctrl_every:
             return
-        f = rows_mt(self.forces_obj[step // self.ctrl_every], box_rot)
+        tick = step // self.ctrl_every
+        f_obj = self.forces_obj[tick]
+        if self.on[tick] and self.control == "per-digit":
+            self._correct(data, box_rot)
+            f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback, self.press)
+        else:
+            self.feedback[:] = 0.0
+        f = rows_mt(f_obj, box_rot)
         m, jac = self.world.model, self._jac
         for k, site, dofs in self._fingers:
             mujoco.mj_jacSite(m, data, jac, None, site)
             qfrc[dofs] = vm(f[k], jac[:, dofs])
+
+    def _correct(self, data: mujoco.MjData, box_rot: np.ndarray) -> None:
+        """Tactile feedback: each digit's realized deficit (how far its tangential load, times the
+        margin, exceeds its normal force), sensed :data:`REFLEX_LATENCY_S` ago, raises its press
+        (time constant :data:`REFLEX_TIME_S`); a met load lets it relax (:data:`RELAX_TIME_S`).
+
+        Digit by digit, as people adjust each digit's grip to its own load (Burstedt, Flanagan &
+        Johansson 1999): the feedforward grip follows the planned load, this follows the load the
+        digit actually carries, which a statically indeterminate grasp shares among the digits by
+        their compliance, not by the plan."""
+        n, t = _digit_loads(self.world, data, box_rot, self.normals)
+        self._deficits[self._tick % self._delay] = np.where(self.active, self.slope * t - n, 0.0)
+        self._tick += 1
+        sensed = self._deficits[self._tick % self._delay]
+        self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
+
+
+def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals_obj: np.ndarray) -> tuple:
+    """Each digit's normal and tangential force on the box now, along its planned normal, [N], (K,) each."""
+    m = world.model
+    K = len(normals_obj)
+    force = np.zeros((K, 3))
+    f6 = np.zeros(6)
+    con = data.contact
+    for i in range(data.ncon):
+        g1, g2 = int(con.geom1[i]), int(con.geom2[i])
+        if world.box_geom not in (g1, g2) or con.efc_address[i] < 0:
+            continue
+        k = int(world.geom_finger[g1 if g2 == world.box_geom else g2])
+        if k < 0:
+            continue
+        mujoco.mj_contactForce(m, data, i, f6)
+        frame = con.frame[i].reshape(3, 3)
+        sign = 1.0 if g2 == world.box_geom else -1.0  # the force on geom2, in the contact frame
+        force[k] += sign * vm(f6[:3], frame)
+    f_obj = rows_mt(force, box_rot.T)
+    n = np.einsum("kj,kj->k", f_obj, normals_obj)
+    t = norm_rows(f_obj - n[:, None] * normals_obj)
+    return n, t
 
 
 def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_obj: np.ndarray, approach: np.ndarray):
@@ -229,14 +389,18 @@ def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_ob
     return palm_pos, np.array([_quat_of(R) for R in palm_rot]), q
 
 
-def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool) -> tuple:
-    """The grip the human aims at on every control tick ``tk``, and the per-finger nominal and unit
-    internal forces (object frame) it scales: ``(target (N,), f_nom (N, K, 3), f_int (N, K, 3))``.
+def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool, control: str) -> tuple:
+    """How hard each digit aims to press on every control tick ``tk``, and the per-finger nominal
+    forces and unit presses (object frame) it scales: ``(target (N, K), f_nom (N, K, 3), press (K, K, 3))``.
 
     The grip follows the load planned anticipation_s ahead of its own response (an internal model of
-    the grip's lag), so that it leads or matches the load. It is the sum of the baseline (relaxing in
-    holds), the grip at which every digit presses with min_finger_force_n without load, and the grip
-    the load's slip limit needs: a sum, so that the grip follows the load at light loads too.
+    the grip's lag), so that it leads or matches the load. Under ``control`` "per-digit" it is the
+    baseline squeeze (relaxing in holds), then each digit pressed until it works within its friction
+    cone shrunk by the safety margin (raised around lift-off, :func:`_lift_off`) plus
+    min_finger_force_n (:meth:`GripPolicy.hold`): the digits' presses follow their own share of the
+    load. Under "whole-hand" only the grasp's squeeze (column 0) is set: the sum of the baseline,
+    the grip at which every digit presses with min_finger_force_n without load, and the grip the
+    load's slip limit needs (:meth:`GripPolicy.whole_hand`).
     """
     m = world.model
     mass = float(m.body_mass[world.box_body])
@@ -255,18 +419,33 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
     a_b = np.einsum("nji,nj->ni", rot_a, alpha)
     torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
     wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
-    f_nom, f_int, grip_slip = replace(pol, min_finger_force_n=0.0).distribute(
-        wrench, plan.spot, plan.normal_in, plan.active)
-    n_int = np.einsum("kj,kj->k", f_int, plan.normal_in)[plan.active]
-    grip_floor = float(np.max(pol.min_finger_force_n / np.maximum(n_int, 1e-9)))
+    f_nom, press = pol.nominal_and_compressions(wrench, plan.spot, plan.normal_in, plan.active)
     moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
-    target = pol.baseline_grip_n * living.relaxation(tk, moving) + grip_floor + grip_slip
+    baseline = pol.baseline_grip_n * living.relaxation(tk, moving)
+    if control == "per-digit":
+        target = pol.hold(f_nom, press, plan.normal_in, plan.active, baseline,
+                          margin=pol.safety_margin + LIFT_OFF_MARGIN * _lift_off(ta, ph))
+    else:
+        grip_slip, grip_floor = pol.whole_hand(f_nom, press[0], plan.normal_in, plan.active)
+        target = np.zeros((len(tk), len(plan.active)))
+        target[:, 0] = baseline + grip_floor + grip_slip
     ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
-    target = np.where(tk < ph.close_end, pol.baseline_grip_n * ramp, target)
+    closing = tk < ph.close_end
+    target[closing] = 0.0
+    target[closing, 0] = pol.baseline_grip_n * ramp[closing]
     if releases:
         fade = 1 - _mj((tk - ph.unload_end) / max(ph.open_end - ph.unload_end, 1e-9))
-        target = np.where(tk >= ph.unload_end, pol.baseline_grip_n * fade, target)
-    return target, f_nom, f_int
+        opening = tk >= ph.unload_end
+        target[opening] = 0.0
+        target[opening, 0] = pol.baseline_grip_n * fade[opening]
+    return target, f_nom, press
+
+
+def _lift_off(t: np.ndarray, ph) -> np.ndarray:
+    """1 while the load moves onto the hand and for LIFT_OFF_HOLD_S after lift-off, then decaying
+    with LIFT_OFF_DECAY_S; 0 before the load phase."""
+    after = np.exp(-np.maximum(t - ph.load_end - LIFT_OFF_HOLD_S, 0.0) / LIFT_OFF_DECAY_S)
+    return np.where(t < ph.close_end, 0.0, after)
 
 
 def norm_rows(v: np.ndarray) -> np.ndarray:

@@ -23,6 +23,11 @@ MIN_HOLD_S = 1.0
 """Holds shorter than this are not scored, [s]."""
 MAX_LAG_S = 0.2
 """The grip-load lag is searched within +- this, [s]."""
+LIFT_OFF_TRANSIENT_S = 1.0
+"""The grip-load coupling is measured from this long after each lift-off, [s]: the grip overshoots
+at lift-off and declines to its static level over about a second (Johansson & Westling 1984,
+Exp. Brain Res. 56), a transient apart from the coupling of grip to load in movement, which
+Flanagan & Wing (1993, 1995) measured in the steady state of cyclic movements."""
 
 
 @dataclass(frozen=True)
@@ -35,9 +40,16 @@ class EpisodeHumanness:
         grip_cv: Median over holds (>= MIN_HOLD_S, lifted, still) of the thumb normal force's
             coefficient of variation; nan without such a hold.
         grip_load_corr: Largest correlation of the thumb normal force with the load force |m (a - g)|
-            over lags within +- MAX_LAG_S while lifted.
+            over lags within +- MAX_LAG_S while lifted, from LIFT_OFF_TRANSIENT_S after each
+            lift-off (:func:`coupling_frames`).
         grip_lead_s: The lag of that correlation: > 0 when the grip leads the load, [s].
         newton_euler_n: Largest Newton-Euler force residual over all frames, [N].
+        effective_margin: Median over lifted frames of the grip's effective safety margin
+            1 - L / (mu sum N), L the digits' summed tangential force and sum N their summed normal
+            force (for a thumb opposing the fingers, Johansson & Westling's (G - G_slip) / G); nan
+            without a lifted frame or a friction coefficient.
+        thumb_per_weight: Median over lifted frames of the thumb's normal force over the box's
+            weight m |g|.
     """
 
     peak_acc: float
@@ -46,11 +58,24 @@ class EpisodeHumanness:
     grip_load_corr: float
     grip_lead_s: float
     newton_euler_n: float
+    effective_margin: float = float("nan")
+    thumb_per_weight: float = float("nan")
 
 
 def lifted(truth) -> np.ndarray:
     """Frames held with no table contact, (T,) bool."""
     return truth.held & (np.linalg.norm(truth.env_force, axis=1) == 0)
+
+
+def coupling_frames(truth, fps: float) -> np.ndarray:
+    """Frames lifted (:func:`lifted`) at least LIFT_OFF_TRANSIENT_S after the lift-off that began
+    their run, (T,) bool: where the grip-load coupling is measured."""
+    up = lifted(truth)
+    out = up.copy()
+    skip = int(round(LIFT_OFF_TRANSIENT_S * fps))
+    for start in np.flatnonzero(np.diff(np.concatenate([[0], up.astype(int)])) == 1):
+        out[start : start + skip] = False
+    return out
 
 
 def thumb_normal_force(truth) -> np.ndarray:
@@ -64,8 +89,20 @@ def holds(mask: np.ndarray, fps: float) -> list:
     return [slice(a, b) for a, b in zip(edges[::2], edges[1::2]) if (b - a) / fps >= MIN_HOLD_S]
 
 
-def episode_humanness(truth, fps: float) -> EpisodeHumanness:
-    """The statistics of one episode's truth (see :class:`EpisodeHumanness`)."""
+def effective_margin(truth, friction: float) -> np.ndarray:
+    """The grip's effective safety margin 1 - L / (mu sum N) on every frame, (T,) (nan where no
+    digit presses): L the digits' summed tangential force, sum N their summed normal force."""
+    f, n = truth.contact_force, truth.contact_normal
+    normal = np.einsum("tkj,tkj->tk", f, n)
+    tangential = np.linalg.norm(f - normal[..., None] * n, axis=2)
+    total = normal.sum(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(total > 0, 1.0 - tangential.sum(axis=1) / (friction * total), np.nan)
+
+
+def episode_humanness(truth, fps: float, friction: float = float("nan")) -> EpisodeHumanness:
+    """The statistics of one episode's truth (see :class:`EpisodeHumanness`); ``friction`` is the
+    finger-box friction coefficient of its world (for the effective margin)."""
     up = lifted(truth)
     acc = np.linalg.norm(truth.box_acc, axis=1)
     omega = np.linalg.norm(truth.box_omega, axis=1)
@@ -73,7 +110,7 @@ def episode_humanness(truth, fps: float) -> EpisodeHumanness:
     still = up & (acc < STILL_ACC) & (omega < STILL_OMEGA) & truth.contact_active[:, 0]
     cvs = [np.std(grip[s]) / np.mean(grip[s]) for s in holds(still, fps)]
     load = np.linalg.norm(truth.mass * (truth.box_acc - truth.gravity), axis=1)
-    corr, lead = _best_lag(grip, load, up, int(round(MAX_LAG_S * fps)))
+    corr, lead = _best_lag(grip, load, coupling_frames(truth, fps), int(round(MAX_LAG_S * fps)))
     force, _ = truth.newton_euler_residual()
     return EpisodeHumanness(
         peak_acc=float(acc[up].max()) if up.any() else float("nan"),
@@ -81,6 +118,8 @@ def episode_humanness(truth, fps: float) -> EpisodeHumanness:
         grip_cv=float(np.median(cvs)) if cvs else float("nan"),
         grip_load_corr=corr, grip_lead_s=lead / fps,
         newton_euler_n=float(np.max(np.linalg.norm(force, axis=1))),
+        effective_margin=float(np.nanmedian(effective_margin(truth, friction)[up])) if up.any() and np.isfinite(friction) else float("nan"),
+        thumb_per_weight=float(np.median(grip[up]) / (truth.mass * np.linalg.norm(truth.gravity))) if up.any() else float("nan"),
     )
 
 
@@ -109,4 +148,8 @@ def suite_humanness(suite, progress: bool = True) -> list:
         from tqdm import tqdm
 
         scenarios = tqdm(scenarios, desc=f"simulate {suite.name}", unit="episode", leave=False)
-    return [(sc, episode_humanness(simulate(sc).truth, sc.fps)) for sc in scenarios]
+    rows = []
+    for sc in scenarios:
+        ep = simulate(sc)
+        rows.append((sc, episode_humanness(ep.truth, sc.fps, ep.object_model.friction)))
+    return rows

@@ -21,6 +21,13 @@ HAND_SURFACES = ("capsules", "skin", "skin-rigid")
 ablation: only what would pass into the box is flattened onto it)."""
 DEFAULT_HAND_SURFACE = "capsules"
 """The hand surface of a scenario that names none (episodes with another are named ``...-<surface>``)."""
+GRIP_CONTROLS = ("whole-hand", "per-digit")
+"""How the simulated person controls the grip (``benchmark.world.grip``): "whole-hand" scales the
+grasp's squeeze as one pattern until the digit closest to slipping holds (every digit presses as
+hard as that one needs); "per-digit" presses each digit for its own load, with tactile feedback on
+the load it carries and the grip's overshoot at lift-off."""
+DEFAULT_GRIP_CONTROL = "whole-hand"
+"""The grip control of a scenario that names none (episodes with another are named ``...-<control>``)."""
 SENSORS = ("ds325", "kinect-v1", "ideal")
 """The depth-sensor presets a scenario may name (their models: ``benchmark.camera.sensor.PRESETS``)."""
 
@@ -47,6 +54,8 @@ class Scenario:
             the simulation's collision primitives, "skin", the person's smooth skin with pulps
             that compress and flatten on the box, or "skin-rigid", that skin with rigid pulps
             (the simulation is the same).
+        grip_control: How the person controls the grip (:data:`GRIP_CONTROLS`): "whole-hand"
+            or "per-digit".
     """
 
     task: str = "lift"
@@ -60,6 +69,7 @@ class Scenario:
     sensor: str = "ds325"
     view: int = 0
     hand_surface: str = DEFAULT_HAND_SURFACE
+    grip_control: str = DEFAULT_GRIP_CONTROL
 
     def __post_init__(self):
         for name in ("user", "grasp", "mass", "seed", "view"):
@@ -76,6 +86,8 @@ class Scenario:
             raise ScenarioError(f"sensor must be one of {', '.join(SENSORS)}, got {self.sensor!r}")
         if self.hand_surface not in HAND_SURFACES:
             raise ScenarioError(f"hand surface must be one of {', '.join(HAND_SURFACES)}, got {self.hand_surface!r}")
+        if self.grip_control not in GRIP_CONTROLS:
+            raise ScenarioError(f"grip control must be one of {', '.join(GRIP_CONTROLS)}, got {self.grip_control!r}")
 
     def rng(self, stream: str) -> np.random.Generator:
         """An independent generator for one named use (e.g. "tracker-init", "depth-noise").
@@ -92,8 +104,10 @@ class Scenario:
 
 def episode_name(scenario: Scenario) -> str:
     """``<task>-u<user>-g<grasp>-m<mass>-s<seed>`` (and ``-v<view>`` for a view other than 0,
-    ``-<surface>`` for a hand surface other than :data:`DEFAULT_HAND_SURFACE`): how
+    ``-<surface>`` for a hand surface other than :data:`DEFAULT_HAND_SURFACE`, ``-<control>`` for a
+    grip control other than :data:`DEFAULT_GRIP_CONTROL`): how
     runs, cached episodes, score rows and dataset files name a scenario."""
     name = f"{scenario.task}-u{scenario.user}-g{scenario.grasp}-m{scenario.mass}-s{scenario.seed}"
     return (name + (f"-v{scenario.view}" if scenario.view else "")
-            + ("" if scenario.hand_surface == DEFAULT_HAND_SURFACE else f"-{scenario.hand_surface}"))
+            + ("" if scenario.hand_surface == DEFAULT_HAND_SURFACE else f"-{scenario.hand_surface}")
+            + ("" if scenario.grip_control == DEFAULT_GRIP_CONTROL else f"-{scenario.grip_control}"))

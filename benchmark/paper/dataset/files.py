@@ -81,14 +81,15 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
 
 
 def _expected_stem(meta: dict) -> str | None:
-    from benchmark.world.scenario import DEFAULT_HAND_SURFACE
+    from benchmark.world.scenario import DEFAULT_GRIP_CONTROL, DEFAULT_HAND_SURFACE
 
     sc = meta.get("scenario")
     if not isinstance(sc, dict):
         return None
     stem = f"{sc.get('task')}-u{sc.get('user')}-g{sc.get('grasp')}-m{sc.get('mass')}-s{sc.get('seed')}"
     return (stem + (f"-v{sc['view']}" if sc.get("view") else "")
-            + (f"-{sc['hand_surface']}" if sc.get("hand_surface", DEFAULT_HAND_SURFACE) != DEFAULT_HAND_SURFACE else ""))
+            + (f"-{sc['hand_surface']}" if sc.get("hand_surface", DEFAULT_HAND_SURFACE) != DEFAULT_HAND_SURFACE else "")
+            + (f"-{sc['grip_control']}" if sc.get("grip_control", DEFAULT_GRIP_CONTROL) != DEFAULT_GRIP_CONTROL else ""))
 
 
 def read_episode_file(path: str, sha256: str | None = None, data: bytes | None = None) -> tuple[pa.Table, dict, str]:
