@@ -28,12 +28,24 @@ import traceback
 from benchmark.errors import BenchmarkError
 
 
+def _from_interrupt(error: BaseException | None) -> bool:
+    """Whether ``error`` is a KeyboardInterrupt or was raised while handling one (a compiled
+    module's import that Ctrl-C stopped fails with ImportError("initialization failed"))."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False
+
+
 def _child(fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
     try:
         fn(*args, **kwargs)
-    except KeyboardInterrupt:  # Ctrl-C reaches the whole process group: the parent reports it
-        os._exit(130)
-    except BaseException:
+    except BaseException as e:
+        if _from_interrupt(e):  # Ctrl-C reaches the whole process group: the parent reports it
+            os._exit(130)
         traceback.print_exc(file=sys.stderr)
         sys.stderr.flush()
         os._exit(1)

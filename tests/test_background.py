@@ -72,3 +72,33 @@ def test_a_preloaded_module_is_imported_before_the_fork(tmp_path):
     bg.process("child", lambda: _write(tmp_path / "pid.txt", str(os.getpid())))
     bg.wait()
     assert int((tmp_path / "pid.txt").read_text()) != os.getpid()
+
+
+def _import_stopped_by_ctrl_c():
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        raise ImportError("initialization failed")  # what a compiled module's interrupted import raises
+
+
+def test_a_child_stopped_by_ctrl_c_inside_an_import_exits_130_without_a_traceback(capfd):
+    import multiprocessing
+
+    from benchmark.background import _child, _from_interrupt
+
+    try:
+        _import_stopped_by_ctrl_c()
+    except ImportError as e:
+        assert _from_interrupt(e)
+    assert not _from_interrupt(ImportError("no such module")) and not _from_interrupt(None)
+    for fn, code in ((_import_stopped_by_ctrl_c, 130), (_raise_value_error, 1)):
+        p = multiprocessing.get_context("fork").Process(target=_child, args=(fn, (), {}))
+        p.start()
+        p.join(30)
+        assert p.exitcode == code
+    err = capfd.readouterr().err
+    assert "ImportError" not in err and "ValueError: planted" in err  # only the real failure is reported
+
+
+def _raise_value_error():
+    raise ValueError("planted")
