@@ -64,7 +64,9 @@ def test_effective_margin_is_one_minus_the_load_over_the_slip_limit():
 
     n = np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]])  # two opposed pads
     f = np.array([[[0.0, 2.0, 0.8], [0.0, -2.0, 0.8]], [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]])
-    truth = SimpleNamespace(contact_force=f, contact_normal=np.broadcast_to(n, f.shape))
+    normal = np.broadcast_to(n, f.shape)
+    truth = SimpleNamespace(contact_force=f, contact_normal=normal,
+                            normal_force=lambda: np.einsum("tkj,tkj->tk", f, normal))
     sm = effective_margin(truth, 0.8)
     assert sm[0] == pytest.approx(1 - 1.6 / (0.8 * 4.0))  # L = 1.6 N on 4 N of grip: 0.5
     assert np.isnan(sm[1])  # no digit presses

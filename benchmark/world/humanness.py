@@ -92,9 +92,8 @@ def holds(mask: np.ndarray, fps: float) -> list:
 def effective_margin(truth, friction: float) -> np.ndarray:
     """The grip's effective safety margin 1 - L / (mu sum N) on every frame, (T,) (nan where no
     digit presses): L the digits' summed tangential force, sum N their summed normal force."""
-    f, n = truth.contact_force, truth.contact_normal
-    normal = np.einsum("tkj,tkj->tk", f, n)
-    tangential = np.linalg.norm(f - normal[..., None] * n, axis=2)
+    normal = truth.normal_force()
+    tangential = np.linalg.norm(truth.contact_force - normal[..., None] * truth.contact_normal, axis=2)
     total = normal.sum(axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(total > 0, 1.0 - tangential.sum(axis=1) / (friction * total), np.nan)
@@ -112,14 +111,16 @@ def episode_humanness(truth, fps: float, friction: float = float("nan")) -> Epis
     load = np.linalg.norm(truth.mass * (truth.box_acc - truth.gravity), axis=1)
     corr, lead = _best_lag(grip, load, coupling_frames(truth, fps), int(round(MAX_LAG_S * fps)))
     force, _ = truth.newton_euler_residual()
+    margin = float(np.nanmedian(effective_margin(truth, friction)[up])) if up.any() and np.isfinite(friction) else float("nan")
+    weight = truth.mass * np.linalg.norm(truth.gravity)
     return EpisodeHumanness(
         peak_acc=float(acc[up].max()) if up.any() else float("nan"),
         peak_omega=float(omega[up].max()) if up.any() else float("nan"),
         grip_cv=float(np.median(cvs)) if cvs else float("nan"),
         grip_load_corr=corr, grip_lead_s=lead / fps,
         newton_euler_n=float(np.max(np.linalg.norm(force, axis=1))),
-        effective_margin=float(np.nanmedian(effective_margin(truth, friction)[up])) if up.any() and np.isfinite(friction) else float("nan"),
-        thumb_per_weight=float(np.median(grip[up]) / (truth.mass * np.linalg.norm(truth.gravity))) if up.any() else float("nan"),
+        effective_margin=margin,
+        thumb_per_weight=float(np.median(grip[up]) / weight) if up.any() else float("nan"),
     )
 
 
