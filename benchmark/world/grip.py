@@ -148,6 +148,7 @@ class GripPolicy:
                 break
         return c
 
+
     def whole_hand(self, f_nom: np.ndarray, squeeze: np.ndarray, normals_in: np.ndarray,
                    active: np.ndarray) -> tuple[np.ndarray, float]:
         """The whole-hand grip (``grip_control="whole-hand"``): how far the grasp's squeeze must be
@@ -262,7 +263,6 @@ class Human:
         self.ctrl = q[:, world.actuator_joint]
         tk = t[::ctrl_every]
         self.control = scenario.grip_control
-        self._per_digit = self.control == "per-digit"
         target, f_nom, press = _grip_target(tk, world, motion, plan, pol, living, phases, releases, self.control)
         self.grip_target = target
         grip = np.zeros_like(target)
@@ -272,7 +272,7 @@ class Human:
             g = keep * g + (1 - keep) * gt
             grip[i] = g
         grip *= living.modulation(tk, grip_rng)[:, None]
-        if self._per_digit:
+        if self.control == "per-digit":
             forces = f_nom + np.einsum("nj,jkd->nkd", grip, press)
         else:  # the squeeze alone (the same operations as a scalar grip times its pattern)
             forces = f_nom + grip[:, 0, None, None] * press[0]
@@ -320,7 +320,7 @@ class Human:
             return
         tick = step // self.ctrl_every
         f_obj = self.forces_obj[tick]
-        if self._per_digit and self.on[tick]:
+        if self.on[tick] and self.control == "per-digit":
             self._correct(data, box_rot)
             f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback, self.press)
         else:
