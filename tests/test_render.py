@@ -388,7 +388,7 @@ def test_a_simulated_lift_renders_one_frame_per_truth_frame_and_shows_box_and_fi
 _WORLD_DIGEST = """
 import dataclasses, hashlib, numpy as np
 from benchmark import Scenario, render, simulate
-ep = render(simulate(Scenario(task="lift", seed=0, duration_s=3.0)))
+ep = render(simulate(Scenario(task="lift", seed=0, duration_s=3.0, hand_surface="capsules")))
 h = hashlib.sha256()
 for f in dataclasses.fields(ep.truth):
     v = getattr(ep.truth, f.name)
@@ -418,7 +418,7 @@ def test_truth_and_depth_are_bit_identical_under_every_openblas_kernel():
 _PINNED = """
 import hashlib, sys
 from benchmark import Scenario, render, simulate
-ep = render(simulate(Scenario(task="lift", seed=0, duration_s=2.0)))
+ep = render(simulate(Scenario(task="lift", seed=0, duration_s=2.0, hand_surface="capsules")))
 skin = render(simulate(Scenario(task="lift", seed=0, duration_s=2.0, hand_surface="skin")))
 maps = open("/proc/self/maps").read()
 gl = sorted({lib for lib in ("libEGL", "libGL", "libGLX", "libnvidia", "libOSMesa", "llvmpipe", "swrast")
@@ -428,7 +428,7 @@ print(hashlib.sha256(ep.depth.depth_m.tobytes()).hexdigest(), float(ep.depth.dep
 """
 
 PINNED_DEPTH_SHA256 = "3899189f02b05d4799f34c3769ae547a244617862ef074743e99999c05d94b14"
-"""The depth of ``Scenario(task="lift", seed=0, duration_s=2.0)`` (ds325 sensor, 1 cm noise) as this
+"""The depth of ``Scenario(task="lift", seed=0, duration_s=2.0, hand_surface="capsules")`` (ds325 sensor, 1 cm noise) as this
 project's rasteriser and sensor make it: the same on every machine, with or without a GPU
 (measured on a 2-core AMD EPYC without a GPU and on a 16-core Intel Xeon with an NVIDIA H200)."""
 PINNED_SKIN_DEPTH_SHA256 = "e45a56717d349d6ff1a7995a9372fb766863d9d061a1e34140098b42f760f1a9"

@@ -27,7 +27,7 @@ def test_the_statistics_of_a_known_difference():
 
 
 def test_the_skin_departs_from_the_primitives_by_millimetres_over_the_hand():
-    sc = Scenario(task="lift", seed=3, duration_s=1.0, noise_m=0.0, sensor="ideal")
+    sc = Scenario(task="lift", seed=3, duration_s=1.0, noise_m=0.0, sensor="ideal", hand_surface="capsules")
     prim = render(simulate(sc))
     skin = render(simulate(dataclasses.replace(sc, hand_surface="skin")))
     assert np.array_equal(skin.truth.box_pos, prim.truth.box_pos)  # the same simulation

@@ -33,7 +33,7 @@ from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.method.protocol import check_people
 from benchmark.suites.evaluate import add_method_arguments, load_gates, spec_from_args
 from benchmark.world.assets import validate
-from benchmark.world.scenario import Scenario, episode_name
+from benchmark.world.scenario import DEFAULT_GRIP_CONTROL, DEFAULT_HAND_SURFACE, Scenario, episode_name
 from fsv.errors import InputError
 from fsv.provenance import provenance
 
@@ -100,10 +100,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
     p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres, 0 to 0.1")
     p.add_argument("--sensor", default="ds325", help="depth sensor preset: ds325 (the paper's camera), kinect-v1, ideal")
-    p.add_argument("--hand-surface", default="capsules",
-                   help="what the camera sees of the hand: capsules (the collision primitives), skin (the person's "
-                        "skin, with pulps that compress and flatten on the box) or skin-rigid (its pulps rigid)")
-    p.add_argument("--grip-control", default="whole-hand",
+    p.add_argument("--hand-surface", default=DEFAULT_HAND_SURFACE,
+                   help="what the camera sees of the hand: skin (the default: the person's skin, with pulps that "
+                        "compress and flatten on the box), skin-rigid (its pulps rigid) or capsules (the collision "
+                        "primitives, an ablation)")
+    p.add_argument("--grip-control", default=DEFAULT_GRIP_CONTROL,
                    help="how the simulated person controls the grip: whole-hand (the grasp's squeeze scaled as one "
                         "pattern) or per-digit (each digit pressed for its own load, with tactile feedback)")
     p.add_argument("--user", type=int, default=0, help="the person: 0-4 the named cohort (sim_assets/users.yaml), N >= 5 drawn with seed N (anatomy and grip style)")

@@ -19,7 +19,7 @@ HAND_SURFACES = ("capsules", "skin", "skin-rigid")
 """How the depth camera sees the hand: its collision primitives, the person's skin
 (``benchmark.world.skin``) with pulps that compress under force, or that skin with rigid pulps (an
 ablation: only what would pass into the box is flattened onto it)."""
-DEFAULT_HAND_SURFACE = "capsules"
+DEFAULT_HAND_SURFACE = "skin"
 """The hand surface of a scenario that names none (episodes with another are named ``...-<surface>``)."""
 GRIP_CONTROLS = ("whole-hand", "per-digit")
 """How the simulated person controls the grip (``benchmark.world.grip``): "whole-hand" scales the
