@@ -247,7 +247,7 @@ RESULTS = (
            compare=lambda new, old: _compare_json("reference/scores.json")(new, old)),
     Result(name="knowledge-ablation", path="results/knowledge_ablation", datasets=(),
            commands=(("fsv-bench", "sweep", "--suite", "dev", "--axis", "knowledge", "--values",
-                      "exact,lab-hand,lab-box,lab-camera,lab,lab:2", "--workers", "2", "--quiet", "--out", "{out}"),),
+                      "exact,lab-hand:0,lab-hand,lab-box,lab-camera,lab,lab:2", "--workers", "2", "--quiet", "--out", "{out}"),),
            compare=_compare_json("sweep.json")),
     Result(name="skin-ablation", path="results/skin_ablation", datasets=(),
            commands=(("fsv-bench", "sweep", "--suite", "dev", "--axis", "hand_surface", "--values",
