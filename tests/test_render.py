@@ -301,7 +301,9 @@ def synthetic_episode(noise_m=0.01, seed=0, duration_s=1.0):
     from benchmark.world.assets import build_world
     from conftest import make_analytic_truth
 
-    sc = Scenario(noise_m=noise_m, seed=seed, duration_s=duration_s)
+    # the analytic truth has four contact slots, not the hand's five digits: the hand drawn as its
+    # primitives (no pulp to press)
+    sc = Scenario(noise_m=noise_m, seed=seed, duration_s=duration_s, hand_surface="capsules")
     w = build_world(sc)
     truth = make_analytic_truth(duration_s=duration_s, fps=sc.fps)
     hand = np.zeros(7 + len(w.hand.joint_names))
