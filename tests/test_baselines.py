@@ -78,12 +78,12 @@ def test_every_baseline_fails_the_smoke_gates_of_its_stage_and_the_reference_pas
 
 def test_every_baseline_fails_the_standard_gates_of_its_stage_in_the_committed_results():
     """`standard` is too long for the tests: its committed scores (``fsv-bench reproduce``) are
-    checked against the registered gates. Measured (standard v5, the test split, lab knowledge):
-    the static box 137 mm, zero kinematics 0.579 m/s^2 (gate 0.45), gravity alone 0.497 N (gate
-    0.3), no internal forces 82.8 % and the grip line alone (calibrated) 39.4 % (gate 15); the
-    reference holds every gate but the learned forces' (29.9 % [25.6, 34.8] blind, against 15, set
-    before measuring); its mean least-violation frames are 0.63 % (gate 1 %; 1.48 % with exact
-    knowledge, where one episode's hand tracking failed)."""
+    checked against the registered gates. Measured (standard v6, the test split, lab knowledge, the
+    skin): the static box 137 mm, zero kinematics 0.582 m/s^2 (gate 0.45), gravity alone 0.472 N
+    (gate 0.3), no internal forces 81.5 % and the grip line alone (calibrated) 39.3 % (gate 15); the
+    reference holds every gate but the learned forces' (28.7 % [25.2, 31.6] blind, against 15, set
+    before measuring), and so does it with exact knowledge (28.5 %); the mean least-violation frames
+    are 0.37 % and 0.61 % (gate 1 %; v5's exact knowledge had lost one episode's hand: 1.48 %)."""
     import json
     import pathlib
 
@@ -99,7 +99,7 @@ def test_every_baseline_fails_the_standard_gates_of_its_stage_in_the_committed_r
         return [r.name for r in check_gates(suite.gates, scores["aggregate"]) if not r.passed]
 
     assert set(failed("reference")) == {"median learned_rel_err_pct <= 15"}
-    assert set(failed("exact-knowledge")) == {"median learned_rel_err_pct <= 15", "mean least_violation_frac <= 0.01"}
+    assert set(failed("exact-knowledge")) == {"median learned_rel_err_pct <= 15"}
     for name, stage in BASELINE_STAGE.items():
         fails = failed(f"baseline-{name}")
         assert any(metric in g for g in fails for metric in STAGE_GATES[stage]), (name, fails)
