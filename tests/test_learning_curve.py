@@ -2,7 +2,8 @@
 
 import json
 
-from benchmark.commands.learning_curve import COLUMNS, curve_markdown, main, model_file, people_of, train_model
+from benchmark.commands import learning_curve
+from benchmark.commands.learning_curve import COLUMNS, curve_markdown, main, model_file, people_of, train_model, train_models
 from benchmark.suites import SUITES
 
 
@@ -14,7 +15,7 @@ def test_the_table_has_a_row_per_number_of_people_and_protocol():
     rows = [{"people": 5, "episodes": 60, "samples": 9000, "aggregate": {"blind": _agg(20.0), "calibrated": _agg(15.0)}},
             {"people": 40, "episodes": 480, "samples": 90000, "aggregate": {"blind": _agg(12.5), "calibrated": _agg(9.0)}}]
     table = curve_markdown(SUITES["dev"], rows)
-    assert "Scored on `dev` v4 (48 episodes" in table
+    assert f"Scored on `dev` v{SUITES['dev'].version} (48 episodes" in table
     assert "| 5 | 60 | 9000 | blind | 20 [19, 21] |" in table
     assert "| 40 | 480 | 90000 | calibrated | 9 [8, 10] |" in table
     assert sum(line.startswith("| 5 |") or line.startswith("| 40 |") for line in table.splitlines()) == 4
@@ -29,6 +30,9 @@ def test_people_are_the_datasets_in_order_and_too_many_are_refused_before_any_wo
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--people 2,5: the dataset has 3 people; accepted: 1 to 3" in err
     assert not (tmp_path / "out").exists()
+    assert main(["--data", str(tmp_path / "d"), "--people", "2", "--workers", "0", "--out", str(tmp_path / "out")]) == 2
+    assert "--workers 0: accepted: 1 or more" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
 
 
 def test_each_number_of_people_trains_a_user_blind_model_and_one_with_grip_inputs(monkeypatch, tmp_path):
@@ -42,3 +46,14 @@ def test_each_number_of_people_trains_a_user_blind_model_and_one_with_grip_input
     assert train_model("d", [1000, 1001], "g.json", tmp_path / model_file(2, "calibrated")) == {"grip": "g.json"}
     assert [a.out for a in seen] == [str(tmp_path / "people-2-blind.npz"), str(tmp_path / "people-2.npz")]
     assert all(a.users == "1000,1001" and a.folds == 0 and a.amount_loss == "relative" for a in seen)
+
+
+def test_the_models_are_trained_largest_first_and_returned_per_number_and_protocol(monkeypatch, tmp_path):
+    seen = []
+    monkeypatch.setattr(learning_curve, "train_model",
+                        lambda data, users, grip, out: seen.append((len(users), grip, out.name)) or {"n": len(users), "grip": grip})
+    meta = train_models("d", [1000, 1001, 1002, 1003], [1, 4], "g.json", tmp_path)
+    assert seen == [(4, None, "people-4-blind.npz"), (4, "g.json", "people-4.npz"),
+                    (1, None, "people-1-blind.npz"), (1, "g.json", "people-1.npz")]
+    assert meta == {1: {"blind": {"n": 1, "grip": None}, "calibrated": {"n": 1, "grip": "g.json"}},
+                    4: {"blind": {"n": 4, "grip": None}, "calibrated": {"n": 4, "grip": "g.json"}}}

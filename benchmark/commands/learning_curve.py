@@ -56,6 +56,31 @@ def train_model(data, users: list, grip, out: pathlib.Path) -> dict:
     return training.run(args).metadata
 
 
+def _train_job(job: tuple) -> dict:
+    data, users, grip, out = job
+    return train_model(data, users, grip, pathlib.Path(out))
+
+
+def train_models(data, everyone: list, counts: list, grip, folder: pathlib.Path, workers: int = 1) -> dict:
+    """Trains both protocols' models for every number of people in ``counts`` into ``folder``
+    (:func:`model_file`), the largest first, on ``workers`` local processes (training is
+    single-threaded; a model is the same whichever process trains it).
+
+    Returns:
+        ``{n: {protocol: metadata}}``.
+    """
+    from benchmark.method.protocol import PROTOCOLS
+    from benchmark.parallel import run_jobs
+
+    keys = sorted(((n, pr) for n in counts for pr in PROTOCOLS), key=lambda k: -k[0])
+    jobs = [(str(data), everyone[:n], None if pr == "blind" else str(grip), str(folder / model_file(n, pr)))
+            for n, pr in keys]
+    meta = {n: {} for n in counts}
+    for i, metadata in run_jobs(_train_job, jobs, workers=workers):
+        meta[keys[i][0]][keys[i][1]] = metadata
+    return {n: {pr: meta[n][pr] for pr in PROTOCOLS} for n in counts}
+
+
 def curve_markdown(suite, rows: list) -> str:
     """The table of the curve: per number of people and protocol, the medians [95 % intervals]."""
     lines = ["# Learning curve: the internal-force model against the number of training people",
@@ -92,7 +117,7 @@ def main(argv=None) -> int:
     p.add_argument("--suite", default="dev", help="suite to score on (default dev)")
     p.add_argument("--grip", default=None, help="grip-calibration file of the training people (default: the shipped one)")
     p.add_argument("--out", required=True, help="output folder")
-    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--workers", type=int, default=1, help="local processes for training and scoring (default 1)")
     p.add_argument("--cache", default=None)
     p.add_argument("--quiet", action="store_true")
     args = p.parse_args(argv)
@@ -102,6 +127,9 @@ def main(argv=None) -> int:
     if any(n > len(everyone) or n < 1 for n in counts):
         print(f"{p.prog}: error: --people {args.people}: the dataset has {len(everyone)} people; accepted: 1 to "
               f"{len(everyone)}", file=sys.stderr)
+        return 2
+    if args.workers < 1:
+        print(f"{p.prog}: error: --workers {args.workers}: accepted: 1 or more", file=sys.stderr)
         return 2
     grip = args.grip
     if grip is None:
@@ -115,8 +143,7 @@ def main(argv=None) -> int:
     tmp = staging_folder(out)
     try:
         (tmp / "models").mkdir(parents=True)
-        meta = {n: {pr: train_model(args.data, everyone[:n], None if pr == "blind" else grip,
-                                    tmp / "models" / model_file(n, pr)) for pr in PROTOCOLS} for n in counts}
+        meta = train_models(args.data, everyone, counts, grip, tmp / "models", workers=args.workers)
         specs = [MethodSpec(internal_model=str(tmp / "models" / model_file(n, pr)), protocol=pr)
                  for n in counts for pr in PROTOCOLS]
         docs = evaluate_many(suite, specs + [MethodSpec(method="no-internal")], cache=args.cache,
