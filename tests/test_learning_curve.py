@@ -57,3 +57,26 @@ def test_the_models_are_trained_largest_first_and_returned_per_number_and_protoc
                     (1, None, "people-1-blind.npz"), (1, "g.json", "people-1.npz")]
     assert meta == {1: {"blind": {"n": 1, "grip": None}, "calibrated": {"n": 1, "grip": "g.json"}},
                     4: {"blind": {"n": 4, "grip": None}, "calibrated": {"n": 4, "grip": "g.json"}}}
+
+
+def test_grip_lines_fitted_from_recordings_must_cover_every_training_person(monkeypatch, tmp_path, capsys):
+    import pytest
+
+    from benchmark.errors import DatasetError
+    from benchmark.paper import calibration
+
+    monkeypatch.setattr(calibration, "run", lambda args: print("user 1000: ...") or {1000: object()})
+    learning_curve.fit_calibration(["rec"], tmp_path / "g.json", [1000], quiet=True)
+    assert capsys.readouterr().out == ""
+    with pytest.raises(DatasetError, match=r"person 1001 has no recording there \(1 of the 2 training people"):
+        learning_curve.fit_calibration(["rec"], tmp_path / "g.json", [1000, 1001])
+
+
+def test_a_grip_file_and_recordings_together_are_refused_before_any_work(tmp_path, capsys):
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "dataset.json").write_text(json.dumps({"format": "fsv-bench-dataset", "version": 2,
+                                                             "spec": {"users": [1000, 1001]}}))
+    assert main(["--data", str(tmp_path / "d"), "--people", "2", "--grip", "g.json", "--calibration", "rec",
+                 "--out", str(tmp_path / "out")]) == 2
+    assert "--grip g.json and --calibration: accepted: one of them" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

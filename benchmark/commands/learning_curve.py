@@ -1,11 +1,12 @@
 """Does more generated training data help? ``python -m benchmark.commands.learning_curve``.
 
     python -m benchmark.commands.learning_curve --data DIR --people 5,20,40 --suite dev --out DIR
-        [--grip FILE] [--workers N] [--cache DIR]
+        [--grip FILE | --calibration DIR ...] [--workers N] [--cache DIR]
 
 Trains the reference's two internal-force models, as the shipped ones are trained (relative
-amount loss; one user-blind, one with the people's grip calibrations as inputs), on the first N
-people of a training dataset (``fsv-bench generate --split train --design people``) for each N of
+amount loss; one user-blind, one with the people's grip calibrations as inputs: the shipped file's,
+another file's (``--grip``) or fitted from the people's calibration recordings, ``--calibration``),
+on the first N people of a training dataset (``fsv-bench generate --split train --design people``) for each N of
 ``--people``, then scores them on the suite (``dev``: people never trained on, never scored by
 ``standard``) under their protocols (the user-blind model ``blind``, the other ``calibrated``),
 beside the no-internal-force baseline. The episodes are rendered and tracked once for every model.
@@ -54,6 +55,28 @@ def train_model(data, users: list, grip, out: pathlib.Path) -> dict:
                               "--folds", "0", "--amount-loss", "relative", "--quiet"]
                              + ([] if grip is None else ["--grip", str(grip)]))
     return training.run(args).metadata
+
+
+def fit_calibration(recordings: list, out: pathlib.Path, people: list, quiet: bool = False) -> None:
+    """Fits the grip lines of ``recordings`` (calibration datasets) into the grip-calibration file
+    ``out``, as ``fsv-bench calibrate`` does.
+
+    Raises:
+        DatasetError: If one of ``people`` has no line in the recordings (naming the first).
+    """
+    import contextlib
+    import io
+
+    from benchmark.errors import DatasetError
+    from benchmark.paper import calibration
+
+    with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
+        lines = calibration.run(argparse.Namespace(data=[str(r) for r in recordings], out=str(out)))
+    missing = [u for u in people if u not in lines]
+    if missing:
+        raise DatasetError(f"--calibration {','.join(map(str, recordings))}: person {missing[0]} has no recording "
+                           f"there ({len(missing)} of the {len(people)} training people lack one); accepted: "
+                           "recordings of every training person")
 
 
 def _train_job(job: tuple) -> dict:
@@ -116,6 +139,9 @@ def main(argv=None) -> int:
     p.add_argument("--people", default="5,20,40", help="numbers of training people (default 5,20,40)")
     p.add_argument("--suite", default="dev", help="suite to score on (default dev)")
     p.add_argument("--grip", default=None, help="grip-calibration file of the training people (default: the shipped one)")
+    p.add_argument("--calibration", action="append", default=None,
+                   help="instead of --grip: the training people's calibration recordings (dataset folders, repeat for "
+                        "several), fitted as `fsv-bench calibrate` does into models/grip_calibration.json")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--workers", type=int, default=1, help="local processes for training and scoring (default 1)")
     p.add_argument("--cache", default=None)
@@ -131,8 +157,11 @@ def main(argv=None) -> int:
     if args.workers < 1:
         print(f"{p.prog}: error: --workers {args.workers}: accepted: 1 or more", file=sys.stderr)
         return 2
+    if args.grip is not None and args.calibration:
+        print(f"{p.prog}: error: --grip {args.grip} and --calibration: accepted: one of them", file=sys.stderr)
+        return 2
     grip = args.grip
-    if grip is None:
+    if grip is None and not args.calibration:
         import importlib.resources
 
         from benchmark.method.grip_file import SHIPPED
@@ -143,6 +172,9 @@ def main(argv=None) -> int:
     tmp = staging_folder(out)
     try:
         (tmp / "models").mkdir(parents=True)
+        if args.calibration:
+            grip = tmp / "models" / "grip_calibration.json"
+            fit_calibration(args.calibration, grip, everyone[:max(counts)], quiet=args.quiet)
         meta = train_models(args.data, everyone, counts, grip, tmp / "models", workers=args.workers)
         specs = [MethodSpec(internal_model=str(tmp / "models" / model_file(n, pr)), protocol=pr)
                  for n in counts for pr in PROTOCOLS]
