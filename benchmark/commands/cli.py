@@ -108,7 +108,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="how the simulated person controls the grip: whole-hand (the grasp's squeeze scaled as one "
                         "pattern) or per-digit (each digit pressed for its own load, with tactile feedback)")
     p.add_argument("--user", type=int, default=0, help="the person: 0-4 the named cohort (sim_assets/users.yaml), N >= 5 drawn with seed N (anatomy and grip style)")
-    p.add_argument("--grasp", type=int, default=0, help="index into sim_assets/grasps.yaml")
+    p.add_argument("--grasp", type=int, default=0, help="the grasp: 0-3 the named ones (sim_assets/grasps.yaml), N >= 4 drawn with seed N for the person's hand")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")
     p.add_argument("--seed", type=int, default=0, help="random seed")
     p.add_argument("--view", type=int, default=0,
