@@ -64,6 +64,9 @@ _ALL_TASKS = ",".join(("lift", "place", "release", "rotate", "shake", "free", "e
                        "excite-rx", "excite-ry", "excite-rz"))
 TRAIN_PEOPLE = 40
 """People of the shipped model's training set (training split, 1000-1039): each through every task once."""
+CURVE_PEOPLE = 80
+"""People of the learning curve's training set (training split, 1000-1079; the first 40 are the
+shipped model's), each with a calibration recording."""
 SUITE_PEOPLE = 48
 """People of each split's suite (``standard``: test 500-547; ``dev``: 100-147), each calibrated."""
 _RECORDING = ["--design", "people", "--tasks", "lift", "--masses", "0,2", "--seeds", "900,901", "--duration", "6"]
@@ -76,13 +79,17 @@ DATASETS = {
     "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
     "train": ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users", f"0-{TRAIN_PEOPLE - 1}",
               "--masses", "0-5", "--seeds", "100"],
+    "train-curve": ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users", f"0-{CURVE_PEOPLE - 1}",
+                    "--masses", "0-5", "--seeds", "100"],
     "calibration": ["--tasks", "lift", "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "900"],
     "calibration-train": ["--split", "train", "--users", f"0-{TRAIN_PEOPLE - 1}"] + _RECORDING,
+    "calibration-train-curve": ["--split", "train", "--users", f"0-{CURVE_PEOPLE - 1}"] + _RECORDING,
     "calibration-dev": ["--split", "dev", "--users", f"0-{SUITE_PEOPLE - 1}"] + _RECORDING,
     "calibration-test": ["--split", "test", "--users", f"0-{SUITE_PEOPLE - 1}"] + _RECORDING,
 }
 """``fsv-bench generate`` arguments of every dataset a committed result is made from: the Table 2
-cohort's, the shipped model's training set (training people only, :data:`TRAIN_PEOPLE`), and the
+cohort's, the shipped model's training set (training people only, :data:`TRAIN_PEOPLE`), the
+learning curve's (:data:`CURVE_PEOPLE`, with their recordings), and the
 calibration recordings (the named users' eight 10 s lifts each; every other person's
 :data:`_RECORDING`, never scored)."""
 
@@ -224,9 +231,10 @@ RESULTS = (
            commands=(("fsv-bench", "train", "--data", "{data}/train", "--out", "{out}", "--folds", "3",
                       "--amount-loss", "relative"),),
            compare=_compare_model),
-    Result(name="learning-curve", path="results/learning_curve", datasets=("train",),
-           commands=(("python", "-m", "benchmark.commands.learning_curve", "--data", "{data}/train", "--people",
-                      "5,20,40", "--suite", "dev", "--workers", "2", "--quiet", "--out", "{out}"),),
+    Result(name="learning-curve", path="results/learning_curve", datasets=("train-curve", "calibration-train-curve"),
+           commands=(("python", "-m", "benchmark.commands.learning_curve", "--data", "{data}/train-curve", "--people",
+                      f"5,20,40,{CURVE_PEOPLE}", "--calibration", "{data}/calibration-train-curve", "--suite", "dev",
+                      "--workers", "2", "--quiet", "--out", "{out}"),),
            compare=_compare_json("learning_curve.json")),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),

@@ -80,3 +80,21 @@ def test_a_grip_file_and_recordings_together_are_refused_before_any_work(tmp_pat
                  "--out", str(tmp_path / "out")]) == 2
     assert "--grip g.json and --calibration: accepted: one of them" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_the_training_jobs_pickle_for_the_pool_when_the_command_runs_as_main(monkeypatch, tmp_path):
+    """`python -m benchmark.commands.learning_curve` runs the module as __main__, whose functions a
+    spawned worker cannot look up: the job function must be the importable module's."""
+    import inspect
+    import pickle
+    import types
+
+    from benchmark import parallel
+
+    source = inspect.getsource(learning_curve).replace('if __name__ == "__main__":', "if False:")
+    as_main = types.ModuleType("__main__")
+    exec(compile(source, learning_curve.__file__, "exec"), as_main.__dict__)
+    passed = []
+    monkeypatch.setattr(parallel, "run_jobs", lambda fn, jobs, workers: passed.append(fn) or enumerate([{}] * len(jobs)))
+    as_main.train_models("d", [1000], [1], None, tmp_path, workers=2)
+    assert pickle.loads(pickle.dumps(passed[0])) is learning_curve._train_job

@@ -92,6 +92,7 @@ def train_models(data, everyone: list, counts: list, grip, folder: pathlib.Path,
     Returns:
         ``{n: {protocol: metadata}}``.
     """
+    from benchmark.commands.learning_curve import _train_job  # by its module's name, also when run as __main__
     from benchmark.method.protocol import PROTOCOLS
     from benchmark.parallel import run_jobs
 
