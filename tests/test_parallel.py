@@ -33,7 +33,7 @@ JOBS = textwrap.dedent("""
         return x * x
 
     def sleep(x):
-        print(os.getpid(), flush=True)
+        os.write(1, f"{os.getpid()}\\n".encode())  # one write: the two workers' lines never interleave
         time.sleep(60)
 
     if __name__ == "__main__":
