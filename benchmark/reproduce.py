@@ -72,15 +72,20 @@ SUITE_PEOPLE = 48
 _RECORDING = ["--design", "people", "--tasks", "lift", "--masses", "0,2", "--seeds", "900,901", "--duration", "6"]
 """A person's calibration recording: two 6 s lifts with their own grasp, the 0.30 and the 0.60 kg box."""
 
+def _training_set(people: int) -> list:
+    """The training split's first ``people`` people, each with their own grasp and view through every
+    task once, the six masses rotating, seed 100."""
+    return ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users", f"0-{people - 1}",
+            "--masses", "0-5", "--seeds", "100"]
+
+
 DATASETS = {
     "table2": _TABLE2_GRID + ["--users", "0,4"],
     "table2-users-0-1": _TABLE2_GRID + ["--users", "0,1"],
     "table2-error-model": _TABLE2_GRID + ["--users", "0,4", "--contacts", "error-model"],
     "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
-    "train": ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users", f"0-{TRAIN_PEOPLE - 1}",
-              "--masses", "0-5", "--seeds", "100"],
-    "train-curve": ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users", f"0-{CURVE_PEOPLE - 1}",
-                    "--masses", "0-5", "--seeds", "100"],
+    "train": _training_set(TRAIN_PEOPLE),
+    "train-curve": _training_set(CURVE_PEOPLE),
     "calibration": ["--tasks", "lift", "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "900"],
     "calibration-train": ["--split", "train", "--users", f"0-{TRAIN_PEOPLE - 1}"] + _RECORDING,
     "calibration-train-curve": ["--split", "train", "--users", f"0-{CURVE_PEOPLE - 1}"] + _RECORDING,

@@ -98,3 +98,21 @@ def test_the_training_jobs_pickle_for_the_pool_when_the_command_runs_as_main(mon
     monkeypatch.setattr(parallel, "run_jobs", lambda fn, jobs, workers: passed.append(fn) or enumerate([{}] * len(jobs)))
     as_main.train_models("d", [1000], [1], None, tmp_path, workers=2)
     assert pickle.loads(pickle.dumps(passed[0])) is learning_curve._train_job
+
+
+def test_recordings_without_a_training_person_are_one_line_and_exit_2(monkeypatch, tmp_path, capsys):
+    from benchmark.errors import DatasetError
+
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "dataset.json").write_text(json.dumps({"format": "fsv-bench-dataset", "version": 2,
+                                                             "spec": {"users": [1000, 1001]}}))
+
+    def missing(recordings, out, people, quiet=False):
+        raise DatasetError("--calibration rec: person 1001 has no recording there")
+
+    monkeypatch.setattr(learning_curve, "fit_calibration", missing)
+    assert main(["--data", str(tmp_path / "d"), "--people", "2", "--calibration", "rec",
+                 "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "person 1001 has no recording there" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d"]

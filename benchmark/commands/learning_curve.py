@@ -129,6 +129,7 @@ def _cell(agg: dict) -> str:
 
 def main(argv=None) -> int:
     from benchmark.atomic import check_out
+    from benchmark.errors import DatasetError
     from benchmark.method import MethodSpec
     from benchmark.method.protocol import PROTOCOLS
     from benchmark.paper.dataset.cli import parse_ints
@@ -192,6 +193,10 @@ def main(argv=None) -> int:
         table = curve_markdown(suite, rows)
         write_text(tmp / "learning_curve.md", table)
         swap_folder(tmp, out)
+    except DatasetError as e:  # a recording without a training person: before any training
+        shutil.rmtree(tmp, ignore_errors=True)
+        print(f"{p.prog}: error: {e}", file=sys.stderr)
+        return 2
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

@@ -62,12 +62,12 @@ def score_tracking(tracking: Tracking, truth: Truth, contacts: Contacts | None =
 
 
 CONTACT_BIAS_MM = 3.0
-"""The bar on one episode's mean contact point error per axis, [mm]. Raised from the primitive
-hand's 2 mm when the skin became the world, after the default lift (seed 0) measured -2.05 mm
-(seeds 1-5: -1.09, -0.11, -0.31, -1.20, -0.68 mm; with the primitives seed 0 measured -1.22 mm): a
-rigid model of the hand cannot see a soft one's pulp compress under a grip's 1-5 N (1.4-2.4 mm,
-Serina et al. 1997; ``benchmark.world.skin``), so its contact points sit up to that much off the
-skin's; 3 mm is the 2 mm plus about half of it, the mean over digits and frames."""
+"""The bar on one episode's mean contact point error per axis, [mm]: a rigid model of the hand
+cannot see a soft one's pulp compress under a grip's 1-5 N (1.4-2.4 mm, Serina et al. 1997;
+``benchmark.world.skin``), so its contact points sit up to that much off the skin's; 3 mm is 2 mm
+plus about half of it, the mean over digits and frames. Set after measuring the default lift
+(seed 0): -2.05 mm (seeds 1-5: -1.09, -0.11, -0.31, -1.20, -0.68 mm; -1.22 mm with the hand drawn
+as its primitives)."""
 
 GATES = (
     Gate("box_pos_err_mm_median", "<=", 2.0),
