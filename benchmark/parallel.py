@@ -3,17 +3,19 @@
     for i, result in run_jobs(fn, jobs, workers=2): ...          # local pool (spawned processes)
     for i, result in run_jobs(fn, jobs, ray_address="host:port"): # Ray tasks
 
-``fn`` must be a module-level function (it is pickled to the workers); results arrive as they are
-done, with the index of their job, so callers can keep the jobs' order. The Ray path needs the
+``fn`` must be a module-level function (it is pickled to the workers; one that cannot be is
+refused before any worker starts, :class:`UnpicklableJob`); on any error, the pool's workers are
+ended before the error goes on. Results arrive as they are done, with the index of their job, so callers can keep the jobs' order. The Ray path needs the
 ``ray`` extra (``pip install 'fsv-bench[ray]'``); a bad address fails within seconds
 (:func:`check_ray_address`).
 """
 
 from __future__ import annotations
 
+import pickle
 from typing import Callable, Iterator
 
-from benchmark.errors import DatasetError
+from benchmark.errors import BenchmarkError, DatasetError
 
 
 class RayUnavailable(DatasetError):
@@ -22,6 +24,10 @@ class RayUnavailable(DatasetError):
 
 class RayAddressError(DatasetError):
     """A Ray address that is malformed or where nothing answers."""
+
+
+class UnpicklableJob(BenchmarkError, ValueError):
+    """The function or a job given to the local pool cannot be sent to a worker process (pickled)."""
 
 
 ONE_CORE_ENV = {"LP_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
@@ -98,12 +104,38 @@ def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | N
         yield from _pool(fn, jobs, workers, on_progress)
 
 
+def check_picklable(fn: Callable, jobs: list) -> None:
+    """Raises :class:`UnpicklableJob` (one line) unless ``fn`` and the first job can be sent to a
+    worker process: a lambda, a nested function or an object holding one cannot."""
+    for what, obj in (("the function", fn), ("the first job", jobs[0] if jobs else None)):
+        try:
+            pickle.dumps(obj)
+        except Exception as e:  # PicklingError, or the TypeError/AttributeError of an object that refuses
+            line = str(e).splitlines()[0] if str(e) else type(e).__name__
+            raise UnpicklableJob(f"{what} given to the worker processes cannot be pickled ({line}); give a function "
+                                 "defined at the top level of an importable module, or use one worker") from None
+
+
+def _stop(pool, processes: list) -> None:
+    """Shuts ``pool`` down at once and ends its worker processes (``processes``, taken before the
+    shutdown forgets them): none outlives an error."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    for p in processes:
+        p.terminate()
+    for p in processes:
+        p.join(timeout=5.0)
+        if p.is_alive():
+            p.kill()
+            p.join()
+
+
 def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple]:
     import multiprocessing
     import os
     import queue
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
+    check_picklable(fn, jobs)
     ctx = multiprocessing.get_context("spawn")
     manager = ctx.Manager() if on_progress is not None else None
     heard = manager.Queue() if manager is not None else None
@@ -125,7 +157,7 @@ def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple
             for f in finished:
                 yield futures[f], f.result()
     except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
+        _stop(pool, list((getattr(pool, "_processes", None) or {}).values()))
         if manager is not None:
             manager.shutdown()
         raise

@@ -43,6 +43,7 @@ import numpy as np
 from benchmark.atomic import swap_folder, write_text
 from benchmark.errors import BenchmarkError
 from benchmark.fingerprint import results_fingerprint
+from benchmark.limits import MAX_WORKERS, integer
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RECORD = "results/reproduce.json"
@@ -351,7 +352,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--only", default=None, help="comma-separated result names (default: all; see --list)")
     p.add_argument("--write", action="store_true", help="replace the committed results (default: only compare)")
     p.add_argument("--data", default="data", help="folder of the datasets, generated or resumed (default: data)")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes for the datasets")
+    p.add_argument("--workers", type=integer(1, MAX_WORKERS), default=None,
+                   help=f"local worker processes for the datasets, 1 to {MAX_WORKERS} (default: all cores)")
     p.add_argument("--list", action="store_true", help="list the results and their commands, then exit")
 
 

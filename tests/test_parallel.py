@@ -77,3 +77,47 @@ def _state(pid: int) -> str:
             return fh.read().rsplit(")", 1)[1].split()[0]
     except OSError:
         return "gone"
+
+
+def _fail_or_sleep(x):
+    if x == 0:
+        raise ValueError("job 0 failed")
+    time.sleep(60)
+    return x
+
+
+def _live_workers() -> list:
+    """This process's spawned worker processes still running (not zombies), read from /proc (the
+    resource tracker that multiprocessing keeps for the process's lifetime is not one)."""
+    me, alive = os.getpid(), []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as fh:
+                    fields = fh.read().rsplit(")", 1)[1].split()
+                with open(f"/proc/{entry}/cmdline", "rb") as fh:
+                    command = fh.read()
+            except OSError:
+                continue
+            if int(fields[1]) == me and fields[0] != "Z" and b"spawn_main" in command:
+                alive.append(int(entry))
+    return alive
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
+@pytest.mark.parametrize("fn, jobs, error, needle", [
+    (lambda x: x, [1, 2], "UnpicklableJob", "the function given to the worker processes cannot be pickled"),
+    (_square_reporting, [1, lambda: 0, 3], "PicklingError", "Can't pickle"),
+    (_fail_or_sleep, [1, 0], "ValueError", "job 0 failed"),
+], ids=["lambda", "unpicklable-job", "failing-job"])
+def test_on_any_error_the_pool_ends_its_workers_and_the_call_raises_at_once(fn, jobs, error, needle):
+    import multiprocessing
+
+    t0 = time.monotonic()
+    with pytest.raises(Exception) as caught:
+        list(run_jobs(fn, jobs, workers=2))
+    assert type(caught.value).__name__ == error and needle in str(caught.value)
+    assert len(str(caught.value).splitlines()) == 1
+    assert time.monotonic() - t0 < 10
+    assert not multiprocessing.active_children()
+    assert not _live_workers(), "a worker outlived the call"

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib
+import math
 import pathlib
 import shutil
 import sys
@@ -68,11 +69,17 @@ def exit_status(e: BaseException, prog: str, when_interrupted: str, bad_input: t
     raise e
 
 
+def subcommand_parser(name: str) -> tuple:
+    """``(module, parser)`` of ``fsv-bench <name>``: the sub-command's module and its parser."""
+    module = importlib.import_module(SUBCOMMANDS[name])
+    p = _Parser(prog=f"fsv-bench {name}", description=module.__doc__.strip().splitlines()[0])
+    module.add_arguments(p)
+    return module, p
+
+
 def _subcommand(argv: list) -> int:
     """Runs ``fsv-bench <subcommand> ...``; bad input exits 2, Ctrl-C 130 (re-run to resume)."""
-    module = importlib.import_module(SUBCOMMANDS[argv[0]])
-    p = _Parser(prog=f"fsv-bench {argv[0]}", description=module.__doc__.strip().splitlines()[0])
-    module.add_arguments(p)
+    module, p = subcommand_parser(argv[0])
     args = p.parse_args(argv[1:])
     try:
         module.run(args)
@@ -83,10 +90,21 @@ def _subcommand(argv: list) -> int:
 
 
 class _Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line and exit status 2."""
+    """An argument parser whose errors are one line and exit status 2. No option takes an empty value,
+    and no ``type=float`` option a NaN or an infinity (options that accept ``inf`` have their own type,
+    ``benchmark.limits.number``)."""
 
     def error(self, message: str):
         self.exit(2, f"fsv-bench: error: {message}\n")
+
+    def _get_values(self, action, arg_strings):
+        for text in arg_strings:
+            if not text.strip():
+                raise argparse.ArgumentError(action, f"expected a value, got {text!r}")
+        value = super()._get_values(action, arg_strings)
+        if action.type is float and isinstance(value, float) and not math.isfinite(value):
+            raise argparse.ArgumentError(action, f"expected a finite number, got {arg_strings[0]!r}")
+        return value
 
 
 def build_parser() -> argparse.ArgumentParser:

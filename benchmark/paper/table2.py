@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import time
 from dataclasses import asdict, dataclass
@@ -48,6 +49,7 @@ from benchmark.paper.dataset.files import read_header
 from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset, training_set
 from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N
 from benchmark.errors import DatasetError
+from benchmark.limits import MAX_EPOCHS, MAX_MEMBERS, MAX_SEED, integer, number
 from fsv import ObjectModel
 from fsv.forces import FrameStatus, reconstruct_forces
 from fsv.learn import InternalForceModel, LearnConfig, relative_errors_pct, train
@@ -337,28 +339,35 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """The arguments of ``fsv-bench table2``."""
     p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
     p.add_argument("--out", default="runs/table2", help="output folder (default: runs/table2; the committed results/table2 is made by fsv-bench reproduce)")
-    p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
-    p.add_argument("--seed", type=int, default=0, help="seed of the networks' initial weights")
+    p.add_argument("--epochs", type=integer(1, MAX_EPOCHS), default=LearnConfig.epochs,
+                   help=f"Rprop epochs per network, 1 to {MAX_EPOCHS:,} (default {LearnConfig.epochs})")
+    p.add_argument("--seed", type=integer(0, MAX_SEED), default=0, help=f"seed of the networks' initial weights, 0 to {MAX_SEED}")
     p.add_argument("--train-seeds", default="0-3", help="episode seeds to train on (default 0-3)")
     p.add_argument("--test-seeds", default="4,5", help="episode seeds to evaluate on (default 4,5)")
     p.add_argument("--users", default="0,4",
                    help="the partial training's user and the other user, e.g. 0,4 (default) or 0,1")
-    p.add_argument("--members", type=int, default=TABLE2_MEMBERS,
-                   help=f"networks per ANN, averaged (default {TABLE2_MEMBERS}; 1 = the paper's single pair)")
-    p.add_argument("--max-excess", type=float, default=MAX_EXCESS_N,
+    p.add_argument("--members", type=integer(1, MAX_MEMBERS), default=TABLE2_MEMBERS,
+                   help=f"networks per ANN, averaged, 1 to {MAX_MEMBERS} (default {TABLE2_MEMBERS}; 1 = the paper's "
+                        "single pair)")
+    add_max_excess_argument(p)
+
+
+def add_max_excess_argument(p: argparse.ArgumentParser) -> None:
+    """``--max-excess``: the plausibility rule's tolerance (``train``, ``table2``)."""
+    p.add_argument("--max-excess", type=number(0, math.inf, "N", infinite=True), default=MAX_EXCESS_N,
                    help=f"plausibility rule: drop samples whose nominal force exceeds the tactile reading by more "
-                        f"than this on a finger, [N] (default {MAX_EXCESS_N}; inf keeps the paper's rule only)")
+                        f"than this on a finger, a number >= 0 N (default {MAX_EXCESS_N}; inf: the paper's rule only)")
 
 
 def run(args: argparse.Namespace) -> dict:
     """Runs ``fsv-bench table2``: prints the table and writes it to ``--out``."""
     from benchmark.paper.dataset.cli import parse_ints
 
-    users = parse_ints(args.users)
+    users = parse_ints(args.users, "--users")
     if len(users) != 2 or users[0] == users[1]:
         raise DatasetError(f"--users {args.users!r}: expected two different user indices, e.g. 0,4")
-    protocol = Table2Protocol(user=users[0], other_user=users[1], train_seeds=parse_ints(args.train_seeds),
-                              test_seeds=parse_ints(args.test_seeds))
+    protocol = Table2Protocol(user=users[0], other_user=users[1], train_seeds=parse_ints(args.train_seeds, "--train-seeds"),
+                              test_seeds=parse_ints(args.test_seeds, "--test-seeds"))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     result = score(args.data, protocol, LearnConfig(epochs=args.epochs, seed=args.seed, members=args.members), rule)
     write(result, args.out)

@@ -7,7 +7,7 @@ Runs k-fold cross-validation (folds made of whole episodes) to report the expect
 trains on every selected sample and saves the model with its normalisation and a description of
 the data and command (:meth:`fsv.learn.InternalForceModel.save`, atomic). Samples: those of the
 dataset (the paper's rule) that also pass the plausibility rule
-(:func:`benchmark.scores.samples.nominal_excess_n`, ``--max-excess``; inf turns it off). With
+(:func:`benchmark.scores.samples.nominal_excess_n`, ``--max-excess``, a number >= 0 N; inf turns it off). With
 ``--grip`` (a file of ``fsv-bench calibrate``), the networks also take the grip calibration of each
 sample's user (``LearnConfig.grip_inputs``).
 """
@@ -21,12 +21,12 @@ import time
 
 import numpy as np
 
+from benchmark.limits import MAX_EPOCHS, MAX_FOLDS, MAX_MEMBERS, MAX_SEED, integer
 from benchmark.method.grip_file import CalibrationError, read_calibration
 from benchmark.paper.dataset.files import read_header
 from benchmark.paper.dataset import finger_names_of, load_dataset, training_set
 from benchmark.paper.dataset.cli import parse_ints
-from benchmark.scores.samples import MAX_EXCESS_N
-from benchmark.paper.table2 import TABLE2_MEMBERS
+from benchmark.paper.table2 import TABLE2_MEMBERS, add_max_excess_argument
 from fsv.errors import InputError
 from fsv.learn import AMOUNT_LOSSES, LearnConfig, cross_validate, train
 
@@ -36,20 +36,31 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, help="model file to write (.npz)")
     p.add_argument("--seeds", default=None, help="episode seeds to train on (default: all)")
     p.add_argument("--users", default=None, help="people to train on, e.g. 1000-1019 (default: all)")
-    p.add_argument("--epochs", type=int, default=LearnConfig.epochs, help="Rprop epochs per network")
-    p.add_argument("--folds", type=int, default=LearnConfig.folds, help="cross-validation folds (0: skip)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the initial weights")
+    p.add_argument("--epochs", type=integer(1, MAX_EPOCHS), default=LearnConfig.epochs,
+                   help=f"Rprop epochs per network, 1 to {MAX_EPOCHS:,} (default {LearnConfig.epochs})")
+    p.add_argument("--folds", type=folds, default=LearnConfig.folds,
+                   help=f"cross-validation folds, 2 to {MAX_FOLDS} and at most the dataset's episodes (0: skip; "
+                        f"default {LearnConfig.folds})")
+    p.add_argument("--seed", type=integer(0, MAX_SEED), default=0, help=f"seed of the initial weights, 0 to {MAX_SEED}")
     p.add_argument("--quiet", action="store_true", help="no progress bar (it is also hidden when stderr is not a terminal)")
-    p.add_argument("--members", type=int, default=TABLE2_MEMBERS,
-                   help=f"networks per ANN, averaged (default {TABLE2_MEMBERS}; 1 = the paper's single pair)")
+    p.add_argument("--members", type=integer(1, MAX_MEMBERS), default=TABLE2_MEMBERS,
+                   help=f"networks per ANN, averaged, 1 to {MAX_MEMBERS} (default {TABLE2_MEMBERS}; 1 = the paper's "
+                        "single pair)")
     p.add_argument("--amount-loss", choices=AMOUNT_LOSSES, default=LearnConfig.amount_loss,
                    help="ANN_L2's training loss: squared (the paper's) or relative (|a_hat - a| / a, as the forces "
                         f"are scored; default {LearnConfig.amount_loss})")
     p.add_argument("--grip", default=None, metavar="FILE",
                    help="grip-calibration file (`fsv-bench calibrate`): the networks also take each sample's user's "
                         "grip line (default: none, user-blind as in the paper)")
-    p.add_argument("--max-excess", type=float, default=MAX_EXCESS_N,
-                   help=f"plausibility rule on the samples, [N] (default {MAX_EXCESS_N}; inf: the paper's rule only)")
+    add_max_excess_argument(p)
+
+
+def folds(text: str) -> int:
+    """``--folds``: 0 (no cross-validation) or 2 to ``MAX_FOLDS``."""
+    value = integer(0, MAX_FOLDS)(text)
+    if value == 1:
+        raise argparse.ArgumentTypeError(f"expected 0 (skip) or an integer from 2 to {MAX_FOLDS}, got {text!r}")
+    return value
 
 
 def check_training_people(users) -> None:
@@ -65,9 +76,9 @@ def check_training_people(users) -> None:
 
 
 def run(args: argparse.Namespace):
-    where = {} if args.seeds is None else dict(seed=list(parse_ints(args.seeds)))
+    where = {} if args.seeds is None else dict(seed=list(parse_ints(args.seeds, "--seeds")))
     if args.users is not None:
-        where["user"] = list(parse_ints(args.users))
+        where["user"] = list(parse_ints(args.users, "--users"))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     try:
         grips = None if args.grip is None else read_calibration(args.grip)

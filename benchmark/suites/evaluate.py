@@ -34,6 +34,7 @@ from dataclasses import asdict
 from benchmark.atomic import check_out, remove_stale_temporaries, staging_folder, swap_folder
 from benchmark.scores.aggregate import FEW_EPISODES
 from benchmark.errors import BenchmarkError, EpisodeFileError
+from benchmark.limits import checked
 from benchmark.world.scenario import Scenario, episode_name
 from benchmark.suites import Gate, Suite, get_suite
 
@@ -352,9 +353,9 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, intern
 
 def add_protocol_argument(p) -> None:
     """``--protocol blind|calibrated``: what the method is told of the person."""
-    from benchmark.method.protocol import DEFAULT_PROTOCOL, PROTOCOLS
+    from benchmark.method.protocol import DEFAULT_PROTOCOL, PROTOCOLS, check_protocol
 
-    p.add_argument("--protocol", default=DEFAULT_PROTOCOL, metavar="|".join(PROTOCOLS),
+    p.add_argument("--protocol", default=DEFAULT_PROTOCOL, metavar="|".join(PROTOCOLS), type=checked(check_protocol),
                    help="what the method is told of the person: blind (nothing, the paper's protocol) or "
                         "calibrated (the person's grip line from a calibration recording of their own); "
                         f"default {DEFAULT_PROTOCOL}")
@@ -362,9 +363,9 @@ def add_protocol_argument(p) -> None:
 
 def add_knowledge_argument(p) -> None:
     """``--knowledge lab|exact|...``: what the method is told of the hand, the box and the camera."""
-    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE
+    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE, check_knowledge
 
-    p.add_argument("--knowledge", default=DEFAULT_KNOWLEDGE, metavar="|".join(KNOWLEDGE),
+    p.add_argument("--knowledge", default=DEFAULT_KNOWLEDGE, metavar="|".join(KNOWLEDGE), type=checked(check_knowledge),
                    help="what the method is told of the hand, the box and the camera: lab (measured with a ruler, "
                         "a scale, a tilt test and a camera calibration, with their errors; lab-hand, lab-box, "
                         "lab-camera: one source's alone; NAME:FACTOR scales the errors, e.g. lab:2) or exact (the "

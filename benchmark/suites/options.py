@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 
+from benchmark.limits import MAX_WORKERS, check_grid, folder, integer
 from benchmark.suites.registry import SUITES
 
 
@@ -23,9 +24,11 @@ def add_suite_arguments(p: argparse.ArgumentParser, *, out_help: str, sensor: bo
                        help="how the simulated people control the grip, replacing the suite's: whole-hand or per-digit "
                             "(benchmark.world.grip)")
     p.add_argument("--out", required=True, type=pathlib.Path, help=out_help)
-    p.add_argument("--cache", default=None, type=pathlib.Path, help="episode cache (default: ~/.cache/fsv-bench/episodes)")
+    p.add_argument("--cache", default=None, type=folder,
+                   help="episode cache, a folder (default: ~/.cache/fsv-bench/episodes)")
     if workers:
-        p.add_argument("--workers", type=int, default=1, help="local worker processes over episodes (default 1)")
+        p.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1,
+                       help=f"local worker processes over episodes, 1 to {MAX_WORKERS} (default 1)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -38,8 +41,11 @@ def add_baseline_argument(p: argparse.ArgumentParser) -> None:
 def suite_of(args: argparse.Namespace):
     """The suite a command's arguments name, with ``--sensor``, ``--hand-surface`` and
     ``--grip-control`` applied where the command has them (``benchmark.suites.registry.get_suite``;
-    raises its ValueError)."""
+    raises its ValueError, and ``benchmark.limits.RangeError`` for a suite of more than
+    ``benchmark.limits.MAX_EPISODES`` episodes)."""
     from benchmark.suites.registry import get_suite
 
-    return get_suite(args.suite, getattr(args, "sensor", None), getattr(args, "hand_surface", None),
-                     getattr(args, "grip_control", None))
+    suite = get_suite(args.suite, getattr(args, "sensor", None), getattr(args, "hand_surface", None),
+                      getattr(args, "grip_control", None))
+    check_grid({f"--suite {args.suite}": len(suite.scenarios)})
+    return suite

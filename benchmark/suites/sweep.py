@@ -20,10 +20,14 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import math
 import pathlib
 import shutil
 
 from benchmark.atomic import staging_folder, swap_folder
+from benchmark.errors import ScenarioError
+from benchmark.limits import MAX_EPISODES, MAX_INIT_SCALE, check_grid
+from benchmark.world.scenario import MAX_FPS, MAX_NOISE_M
 
 AXES = {
     "noise": ("noise_m", float, "depth noise std [m]"),
@@ -50,23 +54,46 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     add_suite_arguments(p, out_help="output folder (sweep.json, sweep.md, sweep.png)", sensor=False)
     p.add_argument("--axis", required=True, help=f"one of {', '.join(AXES)}")
-    p.add_argument("--values", required=True, help="comma-separated values along the axis")
+    p.add_argument("--values", required=True,
+                   help=f"comma-separated values along the axis, at least two distinct ones: noise 0 to {MAX_NOISE_M:g} "
+                        f"m, fps {MIN_SWEEP_FPS:g} to {MAX_FPS:g} Hz, init 0 to {MAX_INIT_SCALE:g}, mass an index of "
+                        "sim_assets/masses.yaml, the others one of their names; at most "
+                        f"{MAX_EPISODES:,} episodes in all (suite x values)")
     add_method_arguments(p)
 
 
+MIN_SWEEP_FPS = 10.0
+"""Lowest frame rate of the ``fps`` axis [Hz]: the paper's camera runs at 30 Hz, and at 10 Hz the
+differentiators' widest window (13 frames) already spans more than a second of a task's motion."""
+
+RANGES = {"noise": (0.0, MAX_NOISE_M, "m"), "fps": (MIN_SWEEP_FPS, MAX_FPS, "Hz"), "init": (0.0, MAX_INIT_SCALE, "")}
+"""The numeric axes' accepted values: (lowest, highest, unit), both included."""
+
+
 def parse_values(axis: str, text: str) -> list:
-    """The axis values of ``--values`` (ValueError naming a bad one)."""
+    """The axis values of ``--values``, each checked (ValueError naming ``--values``, the bad value
+    and what the axis accepts): at least two distinct values, numbers within :data:`RANGES`, indices
+    that exist, names of the axis's choices."""
     if axis not in AXES:
         raise ValueError(f"--axis {axis!r}: accepted: {', '.join(AXES)}")
     kind = AXES[axis][1]
+    items = str(text).split(",")
+    if len(items) > MAX_EPISODES:
+        raise ValueError(f"--values: {len(items):,} values, more than the {MAX_EPISODES:,} accepted")
     values = []
-    for item in str(text).split(","):
+    for item in items:
         try:
             values.append(kind(item))
         except ValueError:
             raise ValueError(f"--values {text!r}: {item!r} is not a{'n integer' if kind is int else ' number'}") from None
     if len(set(values)) != len(values) or len(values) < 2:
         raise ValueError(f"--values {text!r}: need at least two distinct values")
+    if axis in RANGES:
+        low, high, unit = RANGES[axis]
+        for v in values:
+            if not (math.isfinite(v) and low <= v <= high):
+                raise ValueError(f"--values {text!r}: {v!r} is outside the {axis} axis's range; accepted: numbers "
+                                 f"from {low:g} to {high:g}{' ' + unit if unit else ''}")
     if axis in ("hand_surface", "grip_control"):
         from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES
 
@@ -74,16 +101,31 @@ def parse_values(axis: str, text: str) -> list:
         for v in values:
             if v not in accepted:
                 raise ValueError(f"--values {text!r}: {v!r} is not {what}; accepted: {', '.join(accepted)}")
+    if axis == "mass":
+        from benchmark.world.assets import validate
+        from benchmark.world.scenario import Scenario
+
+        for v in values:
+            try:
+                validate(Scenario(mass=v))
+            except ScenarioError as e:
+                raise ValueError(f"--values {text!r}: {v!r} is not a mass index: {e}") from None
     if axis == "knowledge":
         from benchmark.method.knowledge import check_knowledge
 
         for v in values:
-            check_knowledge(v)
+            try:
+                check_knowledge(v)
+            except ValueError as e:
+                raise ValueError(f"--values {text!r}: {v!r} is not a knowledge: {e}") from None
     if axis == "protocol":
         from benchmark.method.protocol import check_protocol
 
         for v in values:
-            check_protocol(v)
+            try:
+                check_protocol(v)
+            except ValueError as e:
+                raise ValueError(f"--values {text!r}: {v!r} is not a protocol: {e}") from None
     return values
 
 
@@ -147,7 +189,11 @@ def run(args: argparse.Namespace) -> dict:
 
     suite = get_suite(args.suite)
     values = parse_values(args.axis, args.values)
-    suites = [swept_suite(suite, args.axis, v) for v in values]  # every scenario validated before any work
+    check_grid({f"--suite {args.suite}": len(suite.scenarios), "--values": len(values)})
+    try:
+        suites = [swept_suite(suite, args.axis, v) for v in values]  # every scenario validated before any work
+    except ScenarioError as e:
+        raise ValueError(f"--values {args.values!r}: {e}") from None
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)

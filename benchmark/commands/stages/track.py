@@ -11,6 +11,7 @@ import numpy as np
 from benchmark.commands.pictures.overlay import plot_overlay
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 from benchmark.errors import ScenarioError
+from benchmark.limits import MAX_INIT_SCALE, number
 from benchmark.method import run_method
 from benchmark.method.run import camera_input_and_knowledge
 from benchmark.scores.frames import tracking_in_true_world
@@ -21,16 +22,16 @@ from benchmark.world.contact_error import PAPER_CONTACT_ERROR_MM
 
 def add_arguments(parser) -> None:
     """Options of the track stage of ``fsv-bench``."""
-    parser.add_argument("--init-perturbation", type=float, default=1.0, metavar="SCALE",
-                        help="scale of the tracker's seeded first-frame perturbation (0 = the exact start; "
-                             "see benchmark.method.init.INIT_PERTURBATION)")
+    parser.add_argument("--init-perturbation", type=number(0, MAX_INIT_SCALE), default=1.0, metavar="SCALE",
+                        help=f"scale of the tracker's seeded first-frame perturbation, 0 (the exact start) to "
+                             f"{MAX_INIT_SCALE:g} (default 1; see benchmark.method.init.INIT_PERTURBATION)")
 
 
 def check_options(options) -> None:
-    """Raises ScenarioError for an init-perturbation scale that is not finite and >= 0."""
+    """Raises ScenarioError for an init-perturbation scale outside [0, ``MAX_INIT_SCALE``]."""
     scale = options["init_perturbation"]
-    if not (np.isfinite(scale) and scale >= 0):
-        raise ScenarioError(f"--init-perturbation must be a scale >= 0, got {scale!r}")
+    if not (np.isfinite(scale) and 0 <= scale <= MAX_INIT_SCALE):
+        raise ScenarioError(f"--init-perturbation must be a scale from 0 to {MAX_INIT_SCALE:g}, got {scale!r}")
 
 
 def run(record: Run, options) -> StageResult:

@@ -21,25 +21,32 @@ import time
 
 import pandas as pd
 
+from benchmark import limits
 from benchmark.errors import DatasetError
 from benchmark.paper.dataset.build import generate
 from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, DatasetSpec
 
 
-def parse_ints(text: str) -> tuple:
-    """Parses "0,2,5-7" into (0, 2, 5, 6, 7)."""
-    out = []
-    for part in str(text).split(","):
-        part = part.strip()
-        try:
-            if "-" in part:
-                a, b = part.split("-")
-                out += range(int(a), int(b) + 1)
-            else:
-                out.append(int(part))
-        except ValueError:
-            raise DatasetError(f"expected integers like '0,2,5-7', got {text!r}") from None
-    return tuple(out)
+def parse_ints(text: str, option: str = "") -> tuple:
+    """Parses "0,2,5-7" into (0, 2, 5, 6, 7); DatasetError naming ``option`` for anything but
+    non-negative integers and ascending ranges, or more than ``benchmark.limits.MAX_EPISODES`` values
+    (counted before they are built)."""
+    try:
+        return limits.parse_ints(text, option or "list")
+    except limits.RangeError as e:
+        raise DatasetError(str(e)) from None
+
+
+def grid_size(args: argparse.Namespace) -> int:
+    """The number of episodes the command line asks for, from the counts of its ranges (nothing
+    built); DatasetError above ``benchmark.limits.MAX_EPISODES``."""
+    counts = {"--tasks": len([t for t in args.tasks.split(",") if t.strip()])}
+    names = ("--users", "--seeds") if args.design == "people" else ("--users", "--grasps", "--views", "--masses", "--seeds")
+    try:
+        counts.update({name: limits.count_ints(getattr(args, name[2:]), name) for name in names})
+        return limits.check_grid(counts)
+    except limits.RangeError as e:
+        raise DatasetError(str(e)) from None
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -57,22 +64,31 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--grasps", default="0", help="grasp indices (N >= 4: drawn grasps)")
     p.add_argument("--views", default="0", help="camera views (0: the paper's set-up; N >= 1 drawn)")
     p.add_argument("--masses", default="0", help="mass indices")
-    p.add_argument("--seeds", default="0", help="seeds, e.g. 0-9")
-    p.add_argument("--duration", type=float, default=None, help="episode length in seconds (default: the task's)")
-    p.add_argument("--noise", type=float, default=0.01, help="depth noise in metres (sets the pose errors; default 0.01)")
+    p.add_argument("--seeds", default="0",
+                   help=f"seeds, e.g. 0-9; the grid (tasks x users x grasps x views x masses x seeds, or users x "
+                        f"tasks x seeds for --design people) holds at most {limits.MAX_EPISODES:,} episodes")
+    p.add_argument("--duration", type=float, default=None, help="episode length in seconds, up to 120 (default: the task's)")
+    p.add_argument("--noise", type=float, default=0.01,
+                   help="depth noise in metres, 0 to 0.1 (sets the pose errors; default 0.01)")
     p.add_argument("--kinematics", default="algebraic", choices=KINEMATICS, help="kinematics source (default: algebraic)")
     p.add_argument("--contacts", default="tracker", choices=CONTACTS,
                    help="contacts (and poses) source: tracker (render and track every episode, the method; "
                         "default), error-model (truth + the paper's contact error, tracker-like poses; cheaper) "
                         "or oracle (the truth's contacts; an ablation)")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: all cores)")
+    p.add_argument("--workers", type=limits.integer(1, limits.MAX_WORKERS), default=None,
+                   help=f"local worker processes, 1 to {limits.MAX_WORKERS} (default: all cores)")
     p.add_argument("--ray-address", default=None, help="run on a Ray cluster at this address (needs the 'ray' extra)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
 def run(args: argparse.Namespace) -> pd.DataFrame:
     """Runs ``fsv-bench generate`` with parsed arguments; prints a one-paragraph summary."""
-    users, grasps, views = parse_ints(args.users), parse_ints(args.grasps), parse_ints(args.views)
+    grid_size(args)  # before any list is built
+    if args.ray_address is not None:
+        from benchmark.parallel import check_ray_address
+
+        check_ray_address(args.ray_address)
+    users, grasps, views = (parse_ints(getattr(args, name), f"--{name}") for name in ("users", "grasps", "views"))
     if args.split is not None:
         from benchmark.suites.splits import SPLITS
 
@@ -85,7 +101,7 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
             raise DatasetError(str(e)) from None
     spec = DatasetSpec(
         tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()), users=users,
-        grasps=grasps, masses=parse_ints(args.masses), seeds=parse_ints(args.seeds), views=views, design=args.design,
+        grasps=grasps, masses=parse_ints(args.masses, "--masses"), seeds=parse_ints(args.seeds, "--seeds"), views=views, design=args.design,
         duration_s=args.duration,
         noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
     )

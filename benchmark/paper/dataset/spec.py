@@ -7,6 +7,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from benchmark.errors import DatasetError, ScenarioError
+from benchmark.limits import MAX_EPISODES
 from benchmark.world.scenario import Scenario
 from fsv._check import positive
 
@@ -75,6 +76,9 @@ class DatasetSpec:
             object.__setattr__(self, name, tuple(int(v) for v in vals))
         if not self.tasks:
             raise DatasetError("tasks must name at least one task")
+        if self.size() > MAX_EPISODES:
+            raise DatasetError(f"the dataset's grid holds {self.size():,} episodes, more than the {MAX_EPISODES:,} "
+                               "accepted; split it into several datasets")
         for name, accepted in (("kinematics", KINEMATICS), ("contacts", CONTACTS), ("design", DESIGNS)):
             if getattr(self, name) not in accepted:
                 raise DatasetError(f"{name} source must be one of {accepted}, got {getattr(self, name)!r}")
@@ -100,6 +104,12 @@ class DatasetSpec:
                     validate(replace(base, task=self.tasks[0], **{name: v}))
         except ScenarioError as e:
             raise DatasetError(str(e)) from None
+
+    def size(self) -> int:
+        """The number of episodes of the dataset (its scenarios, counted without building them)."""
+        if self.design == "people":
+            return len(self.users) * len(self.tasks) * len(self.seeds)
+        return len(self.tasks) * len(self.users) * len(self.grasps) * len(self.masses) * len(self.seeds) * len(self.views)
 
     def scenarios(self) -> list[Scenario]:
         """Every scenario of the dataset, in a fixed order."""
