@@ -63,17 +63,18 @@ def integer(low: int, high: int) -> Callable[[str], int]:
     return parse
 
 
-def number(low: float, high: float, unit: str = "", *, infinite: bool = False) -> Callable[[str], float]:
-    """An argparse type: a number from ``low`` to ``high`` (both included), in ``unit``; with
-    ``infinite``, also ``inf`` (which turns something off)."""
-    accepted = f"a number from {low:g} to {high:g}{' ' + unit if unit else ''}" + (" or inf" if infinite else "")
+def number(low: float, high: float, unit: str = "") -> Callable[[str], float]:
+    """An argparse type: a number from ``low`` to ``high`` (both included), in ``unit``; never NaN.
+    With ``high`` infinite, ``inf`` is accepted (an option that it turns off)."""
+    unit = f" {unit}" if unit else ""
+    accepted = f"a number from {low:g} to {high:g}{unit}" if math.isfinite(high) else f"a number >= {low:g}{unit}, or inf"
 
     def parse(text: str) -> float:
         try:
             value = float(text)
         except ValueError:
             value = math.nan
-        if not ((low <= value <= high) or (infinite and value == math.inf)):
+        if not low <= value <= high:
             raise argparse.ArgumentTypeError(f"expected {accepted}, got {text!r}")
         return value
 

@@ -368,7 +368,7 @@ def test_a_bad_ray_address_fails_within_seconds(tmp_path):
 
 @pytest.mark.parametrize("argv, needle", [
     (["--tasks", "nope"], "unknown task 'nope'; accepted: lift"),
-    (["--users", "x"], "expected integers like '0,2,5-7', got 'x'"),
+    (["--users", "x"], "--users 'x': expected non-negative integers and ranges like '0,2,5-7'"),
     (["--split", "cohort"], "--split 'cohort': accepted: train, dev, test"),
     (["--design", "pairs"], "design source must be one of ('grid', 'people'), got 'pairs'"),
     (["--duration", "0.1"], "duration 0.1 s is too short for task 'lift'; accepted: >= 1.0 s"),

@@ -57,3 +57,30 @@ def test_bad_sweeps_exit_2_before_any_work(tiny, tmp_path, capsys, argv, needle)
     assert main(["sweep", "--suite", "tiny", *argv, "--out", str(tmp_path / "o"), "--cache", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err
     assert needle in err and err.count("\n") == 1 and not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--axis", "fps", "--values", "30,0.001"], "--values '30,0.001': 0.001 is outside the fps axis's range; accepted: "
+                                                "numbers from 10 to 240 Hz"),
+    (["--axis", "fps", "--values", "30,inf"], "accepted: numbers from 10 to 240 Hz"),
+    (["--axis", "init", "--values", "1,nan"], "--values '1,nan': nan is outside the init axis's range; accepted: "
+                                              "numbers from 0 to 10"),
+    (["--axis", "init", "--values", "0,-1"], "accepted: numbers from 0 to 10"),
+    (["--axis", "init", "--values", "1,1e9"], "accepted: numbers from 0 to 10"),
+    (["--axis", "noise", "--values", "0.01,nan"], "accepted: numbers from 0 to 0.1 m"),
+    (["--axis", "mass", "--values", "0,-1"], "--values '0,-1': -1 is not a mass index"),
+    (["--axis", "noise", "--values", ",".join(str(i / 1e7) for i in range(100_001))],
+     "--values: 100,001 values, more than the 100,000 accepted"),
+])
+def test_every_sweep_value_is_checked_before_any_work_naming_values(tiny, tmp_path, capsys, monkeypatch, argv, needle):
+    import time
+
+    def work(*args, **kwargs):
+        raise AssertionError("the sweep started its work")
+
+    monkeypatch.setattr("benchmark.suites.evaluate.evaluate", work)
+    t0 = time.perf_counter()
+    assert main(["sweep", "--suite", "tiny", *argv, "--out", str(tmp_path / "o"), "--cache", str(tmp_path / "c")]) == 2
+    assert time.perf_counter() - t0 < 5
+    err = capsys.readouterr().err
+    assert needle in err and err.count("\n") == 1 and not list(tmp_path.iterdir())

@@ -354,7 +354,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_max_excess_argument(p: argparse.ArgumentParser) -> None:
     """``--max-excess``: the plausibility rule's tolerance (``train``, ``table2``)."""
-    p.add_argument("--max-excess", type=number(0, math.inf, "N", infinite=True), default=MAX_EXCESS_N,
+    p.add_argument("--max-excess", type=number(0, math.inf, "N"), default=MAX_EXCESS_N,
                    help=f"plausibility rule: drop samples whose nominal force exceeds the tactile reading by more "
                         f"than this on a finger, a number >= 0 N (default {MAX_EXCESS_N}; inf: the paper's rule only)")
 
