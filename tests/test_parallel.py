@@ -36,10 +36,20 @@ JOBS = textwrap.dedent("""
         os.write(1, f"{os.getpid()}\\n".encode())  # one write: the two workers' lines never interleave
         time.sleep(60)
 
+    def sleep_or_fail(x):
+        if x == 0:
+            time.sleep(1)
+            raise ValueError("job 0 failed")
+        sleep(x)
+
     if __name__ == "__main__":
         if sys.argv[1] == "square":
             heard = []
             print(sorted(run_jobs(square, [1, 2, 3, 4], workers=2, on_progress=heard.append)), sorted(heard))
+        elif sys.argv[1] == "fail":
+            list(run_jobs(sleep_or_fail, [0, 1], workers=2))
+        elif sys.argv[1] == "lambda":
+            list(run_jobs(lambda x: x, [0, 1], workers=2))
         else:
             list(run_jobs(sleep, [0, 1], workers=2))
 """)
@@ -121,3 +131,25 @@ def test_on_any_error_the_pool_ends_its_workers_and_the_call_raises_at_once(fn, 
     assert time.monotonic() - t0 < 10
     assert not multiprocessing.active_children()
     assert not _live_workers(), "a worker outlived the call"
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
+@pytest.mark.parametrize("mode, needle", [("fail", "ValueError: job 0 failed"),
+                                          ("lambda", "UnpicklableJob: the function given to the worker processes")])
+def test_a_command_whose_job_fails_ends_in_seconds_and_leaves_no_worker(tmp_path, mode, needle):
+    (tmp_path / "jobs.py").write_text(JOBS)
+    t0 = time.monotonic()
+    parent = subprocess.Popen([sys.executable, "jobs.py", mode], cwd=tmp_path, stdout=subprocess.PIPE,
+                              stderr=subprocess.PIPE, text=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    try:
+        out, err = parent.communicate(timeout=30)
+    finally:
+        parent.kill()
+    assert parent.returncode == 1 and needle in err
+    assert time.monotonic() - t0 < 20
+    sleepers = [int(line) for line in out.split()]
+    assert len(sleepers) == (1 if mode == "fail" else 0)
+    deadline = time.monotonic() + 5
+    while any(os.path.exists(f"/proc/{p}") and "Z" not in _state(p) for p in sleepers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not [p for p in sleepers if os.path.exists(f"/proc/{p}") and "Z" not in _state(p)], "a worker outlived the command"
