@@ -60,6 +60,7 @@ def integer(low: int, high: int) -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"expected an integer from {low:,} to {high:,}, got {text!r}")
         return value
 
+    parse.high = high
     return parse
 
 
@@ -78,6 +79,7 @@ def number(low: float, high: float, unit: str = "") -> Callable[[str], float]:
             raise argparse.ArgumentTypeError(f"expected {accepted}, got {text!r}")
         return value
 
+    parse.high = high
     return parse
 
 

@@ -9,6 +9,7 @@ one line on stderr, in seconds, having written nothing, or reaches the work and 
 
 from __future__ import annotations
 
+import math
 import os
 import time
 
@@ -129,3 +130,29 @@ def test_every_option_refuses_nan_negative_huge_and_empty_values_before_any_work
     assert not problems, f"fsv-bench {name}:\n" + "\n".join(problems)
     stale = {k for k in ACCEPTED if k[0] == name} - accepted
     assert not stale, f"fsv-bench {name}: listed as accepted but refused: {sorted(stale)}"
+
+
+UNBOUNDED = {
+    **{("main", o): "an index or a seed: it names what is simulated, no work grows with it"
+       for o in ("--user", "--grasp", "--mass", "--seed", "--view")},
+    ("main", "--noise"): "bounded by the scenario (0 to 0.1 m), as its help says",
+    ("main", "--duration"): "bounded by the scenario (up to 120 s), as its help says",
+    ("generate", "--noise"): "bounded by the scenario (0 to 0.1 m), as its help says",
+    ("generate", "--duration"): "bounded by the scenario (up to 120 s), as its help says",
+}
+"""Number options without a ``benchmark.limits`` type, each with its reason."""
+
+
+@pytest.mark.parametrize("name", list(COMMANDS))
+def test_every_number_option_states_its_upper_bound_in_its_help(name):
+    problems = []
+    for action in _options(_parser(name)):
+        option = max(action.option_strings, key=len)
+        high = getattr(action.type, "high", None)
+        if high is None:
+            if action.type in (int, float) and (name, option) not in UNBOUNDED:
+                problems.append(f"{option}: a number without a bound")
+            continue
+        if math.isfinite(high) and not any(f in (action.help or "") for f in (f"{high:,}", f"{high:g}", f"{high}")):
+            problems.append(f"{option}: its help does not state its upper bound {high:,}")
+    assert not problems, f"fsv-bench {name}:\n" + "\n".join(problems)
