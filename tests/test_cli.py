@@ -21,6 +21,15 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)
     assert verdict["method"]["tracker"] == "reference tracker" and f"verdict: {verdict['verdict'].upper()}" in \
         text.replace("verdict: pass", "verdict: PASS")
+    # one set of gates in the printout: the verdict's, each with its limit beside the episode's value
+    assert "gates hold;" not in text and "gates NOT met" not in text and "gates" not in summary["tracking"]
+    lines = text.splitlines()
+    first = next(i for i, line in enumerate(lines) if line.startswith("verdict: "))
+    gate_lines = lines[first + 1:first + 9]
+    assert [line.split()[1] for line in gate_lines] == [g["name"].split()[1] for g in verdict["gates"]]
+    assert all(line.split()[0] == ("pass" if g["passed"] else "FAIL") for line, g in zip(gate_lines, verdict["gates"]))
+    assert "(limit <= 60 %)" in gate_lines[-1] and "learned_rel_err_pct" in gate_lines[-1]
+    assert "(limit <= 8 mm)" in gate_lines[0]
     person, grasp = summary["scenario"].pop("person"), summary["scenario"].pop("grasp_spec")
     assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "sensor": "ds325",
                                    "hand_surface": "skin", "grip_control": "whole-hand", "noise_m": 0.01, "seed": 2, "frames": 46, "fps": 30.0}
