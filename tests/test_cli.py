@@ -248,3 +248,44 @@ def test_the_console_script_ends_the_main_command_after_its_output_is_complete(t
     assert proc.returncode == (0 if summary["verdict"]["verdict"] == "pass" else 1), proc.stderr
     assert proc.stdout.rstrip().splitlines()[-1].startswith(f"summary: {out / 'summary.json'} (")  # flushed
     assert (out / "episode.npz").exists() and not [p for p in tmp_path.iterdir() if p.name != "run"]
+
+
+def test_help_lists_the_task_names(capsys):
+    from benchmark.world.tasks import TASKS
+
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "task name: " + ", ".join(TASKS) in text
+
+
+@pytest.mark.parametrize("name", sorted(__import__("benchmark.commands.cli", fromlist=["SUBCOMMANDS"]).SUBCOMMANDS))
+def test_a_subcommands_help_shows_no_docstring_markup(name, capsys):
+    with pytest.raises(SystemExit):
+        main([name, "--help"])
+    out = capsys.readouterr().out
+    description = out.split("\n\n")[1]
+    assert "``" not in description and ":func:" not in description and ":mod:" not in description, description
+    assert description.startswith(f"fsv-bench {name}") or description[:1].isupper(), description
+
+
+def test_a_person_grasp_or_view_of_the_test_split_is_noted_before_any_work(tmp_path, capsys, monkeypatch):
+    import benchmark.commands.cli as cli
+
+    class Started(Exception):
+        pass
+
+    def refuse(out):
+        raise Started
+
+    monkeypatch.setattr(cli, "staging_folder", refuse)
+    with pytest.raises(Started):
+        main(["--user", "700", "--grasp", "650", "--view", "620", "--out", str(tmp_path / "run")])
+    err = capsys.readouterr().err
+    assert "note: user 700, grasp 650, view 620 are of the test split (500-999" in err and "dev split (100-499)" in err
+    with pytest.raises(Started):
+        main(["--user", "17", "--grasp", "17", "--view", "517", "--out", str(tmp_path / "run")])
+    assert "note: view 517 is of the test split" in capsys.readouterr().err
+    with pytest.raises(Started):
+        main(["--user", "17", "--out", str(tmp_path / "run")])
+    assert "test split" not in capsys.readouterr().err
