@@ -160,7 +160,7 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
     from PIL import Image
 
     img = np.asarray(Image.open(path).convert("RGB")).astype(int)
-    assert img.shape[1] > 3 * img.shape[0]  # four panels side by side
+    assert img.shape[1] >= 3 * 450 and img.shape[0] >= 2 * 200  # four panels, three to a row, each ~500 px wide
 
     def share(rgb, tol=40):
         return float(np.mean(np.all(np.abs(img - np.array(rgb)) <= tol, axis=-1)))
