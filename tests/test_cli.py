@@ -289,3 +289,15 @@ def test_a_person_grasp_or_view_of_the_test_split_is_noted_before_any_work(tmp_p
     with pytest.raises(Started):
         main(["--user", "17", "--out", str(tmp_path / "run")])
     assert "test split" not in capsys.readouterr().err
+
+
+def test_the_learning_block_names_a_model_only_for_the_learned_stage_not_for_a_label_that_reads_like_it(tmp_path):
+    out = tmp_path / "run"
+    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out),
+          "--internal", "external_stages:NominalAsLearned"])
+    learning = json.loads((out / "summary.json").read_text())["learning"]
+    assert learning["program"] == "learned internal forces (an impostor)"
+    assert "model" not in learning and "internal_model" not in learning
+    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(tmp_path / "ref")])
+    learning = json.loads((tmp_path / "ref" / "summary.json").read_text())["learning"]
+    assert learning["internal_model"] == "fsv/data/internal_forces_blind.npz" and not learning["model"]["grip_inputs"]
