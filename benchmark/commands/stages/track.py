@@ -60,8 +60,8 @@ def run(record: Run, options) -> StageResult:
     paper = PAPER_CONTACT_ERROR_MM
     line = (
         f"tracking [{estimate.labels.get('tracker')}] ({block['frames_per_s_after_first']:.1f} frames/s after the "
-        f"first frame, which took {first:.1f} s with any compilation): box {scores['box_pos_err_mm_median']:.2f} mm / "
-        f"{scores['box_rot_err_deg_median']:.2f} deg (median), fingertips {scores['fingertip_err_mm_median']:.1f} mm, "
+        f"first frame, which took {first:.1f} s with any compilation): box {scores['box_pos_err_mm']:.2f} mm / "
+        f"{scores['box_rot_err_deg']:.2f} deg (median), fingertips {scores['fingertip_err_mm']:.1f} mm, "
         f"contact point {scores['contact_err_mm_mean']:+.2f} ± {scores['contact_err_mm_std']:.2f} mm per axis "
         f"(paper {paper['mean']:g} ± {paper['std']:g}), median {scores['contact_err_mm_median_euclid']:.1f} mm, recall "
         f"{scores['contact_recall']:.2f}, precision {scores['contact_precision']:.2f}; overlay {overlay.name}"
