@@ -6,7 +6,7 @@ from matplotlib import colormaps
 from PIL import Image
 
 from benchmark.errors import BenchmarkError
-from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT, colorize, strip, write_preview
+from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT, TURBO_SPAN, colorize, strip, write_preview
 
 
 def video(T=12, H=40, W=32):
@@ -18,11 +18,29 @@ def video(T=12, H=40, W=32):
 def test_colorize_maps_the_range_onto_turbo_and_missing_to_black():
     rgb = colorize(np.array([[0.0, 0.15, 1.0, 2.0, 0.575]]))
     turbo = colormaps["turbo"]
+    lo, hi = TURBO_SPAN
     np.testing.assert_array_equal(rgb[0, 0], [0, 0, 0])
-    np.testing.assert_array_equal(rgb[0, 1], np.round(np.array(turbo(0.0)[:3]) * 255))
-    np.testing.assert_array_equal(rgb[0, 2], np.round(np.array(turbo(1.0)[:3]) * 255))
+    np.testing.assert_array_equal(rgb[0, 1], np.round(np.array(turbo(lo)[:3]) * 255))
+    np.testing.assert_array_equal(rgb[0, 2], np.round(np.array(turbo(hi)[:3]) * 255))
     np.testing.assert_array_equal(rgb[0, 3], rgb[0, 2])  # clipped beyond the far end
-    np.testing.assert_allclose(rgb[0, 4], np.round(np.array(turbo(0.5)[:3]) * 255), atol=4)  # 256-entry table
+    np.testing.assert_allclose(rgb[0, 4], np.round(np.array(turbo((lo + hi) / 2)[:3]) * 255), atol=4)  # 256-entry table
+
+
+def test_no_depth_is_drawn_near_the_black_of_no_measurement_and_the_saved_bar_keeps_its_colours(tmp_path):
+    ramp = np.linspace(0.15, 1.0, 200)
+    rgb = colorize(ramp[None]).astype(int)[0]
+    assert rgb.max(axis=1).min() >= 120  # brightest channel at the map's darkest end (measured 203)
+    d = np.tile(ramp[None, None, :], (2, 60, 1)).astype(np.float32)
+    d[:, :5, :5] = 0.0
+    path = write_preview(d, fps=30.0, out_dir=tmp_path, num=1, gif=False)[0]
+    with Image.open(path) as png:
+        saved = np.asarray(png.convert("RGB")).astype(int)
+    # the frame and the colour bar as saved: every depth within a few levels of its colour, none black or grey
+    np.testing.assert_allclose(saved[30, 10:], rgb[10:], atol=8)
+    bar = saved[60 + 10, 50:150]
+    expected = colorize(np.linspace(0.15, 1.0, 100)[None]).astype(int)[0]
+    np.testing.assert_allclose(bar, expected, atol=8)
+    assert (saved[30, 10:].max(axis=1) >= 120).all() and (saved[:5, :5] == 0).all()
 
 
 def test_strip_holds_evenly_spaced_frames_with_gaps():

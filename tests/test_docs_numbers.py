@@ -53,3 +53,24 @@ def test_a_quoted_standard_number_is_the_committed_one(doc, before, metric, unit
     text = (ROOT / doc).read_text()
     quoted = before + _standard(metric, unit) + after
     assert quoted in text, f"{doc} should quote {quoted!r} (results/standard/reference/scores.json)"
+
+
+def _aggregate(result: str, metric: str, statistic: str = "median") -> float:
+    return json.loads((ROOT / "results" / result / "scores.json").read_text())["aggregate"][metric][statistic]["value"]
+
+
+def test_the_savgol_examples_scores_in_the_methods_page_are_the_committed_ones():
+    """docs/methods.md quotes the example differentiator on smoke (results/smoke_savgol) beside the
+    reference (results/smoke), and which gates it fails."""
+    text = " ".join((ROOT / "docs/methods.md").read_text().split())
+    s, r = "smoke_savgol", "smoke"
+    quoted = (f"acceleration error median {_aggregate(s, 'acc_err_rms'):.3f} m/s² ({_aggregate(r, 'acc_err_rms'):.3f}) "
+              f"against the gate's 0.5, net force {_aggregate(s, 'net_force_err_n_rms'):.3f} N "
+              f"({_aggregate(r, 'net_force_err_n_rms'):.3f}) against 0.3; least-violation frames "
+              f"{_aggregate(s, 'least_violation_frac', 'mean'):g} ({_aggregate(r, 'least_violation_frac', 'mean'):g}), "
+              f"learned forces {_aggregate(s, 'learned_rel_err_pct'):.1f} % ({_aggregate(r, 'learned_rel_err_pct'):.1f} %)")
+    assert quoted in text, quoted
+    scores = json.loads((ROOT / "results/smoke_savgol/scores.json").read_text())
+    failed = [g["name"] for g in scores["gates"] if not g["passed"]]
+    assert failed == ["median acc_err_rms <= 0.5", "median net_force_err_n_rms <= 0.3"]
+    assert "fails two of the eight gates" in text and len(scores["gates"]) == 8

@@ -172,7 +172,7 @@ def test_a_broken_external_tracker_exits_1_naming_the_failed_gates(tiny, tmp_pat
 
 @pytest.mark.parametrize("argv, needle", [
     (["--tracker", "external_stages:Nope"], "--tracker 'external_stages:Nope': external_stages has no attribute 'Nope'"),
-    (["--differentiator", "median"], "--differentiator 'median': accepted: algebraic, central, gaussian, or module:attribute"),
+    (["--differentiator", "median"], "--differentiator 'median': accepted: algebraic, central, gaussian, module:attribute or path/to/file.py:attribute"),
     (["--oracle", "forces"], "--oracle 'forces': accepted: contacts, kinematics"),
     (["--internal-model", "missing.npz"], "--internal-model missing.npz: no internal-force model"),
 ])

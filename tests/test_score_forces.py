@@ -36,6 +36,24 @@ def test_scores_of_nominal_forces_on_a_consistent_truth(tmp_path):
     assert_figure(png, min_height=800, colours={"thumb (C0)": (31, 119, 180), "index (C1)": (255, 127, 14)})
 
 
+def test_the_finger_panels_legends_name_each_digit_and_each_estimate_once():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from benchmark.commands.pictures.fig5 import _finger_panel
+
+    names = ["thumb", "index", "middle", "ring", "little"]
+    t, f = np.arange(10) / 30, np.ones((10, 5))
+    fig, ax = plt.subplots()
+    _finger_panel(ax, t, names, f, f, f, plt.rcParams["axes.prop_cycle"].by_key()["color"])
+    legends = [a for a in ax.get_children() if isinstance(a, matplotlib.legend.Legend)]
+    labels = [[x.get_text() for x in leg.get_texts()] for leg in legends]
+    plt.close(fig)
+    assert sorted(labels) == sorted([names, ["true", "nominal", "learned"]])  # 8 entries, not 15
+
+
 def test_true_net_wrench_is_what_newton_euler_requires():
     truth, model = grasp_truth(4, T=10, K=3)
     for w in (true_net_wrench(truth), true_net_wrench_instant(truth)):

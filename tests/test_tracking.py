@@ -19,8 +19,8 @@ def test_box_gates_hold_on_lift_with_1cm_noise(tracked_lift):
     as on the smoke suite (the ds325's multipath and edge jitter cost ~0.5 mm)."""
     ep, est = tracked_lift
     s = score_tracking(est.tracking, ep.truth)
-    assert s["box_pos_err_mm_median"] <= 2.0, s
-    assert s["box_rot_err_deg_median"] <= 2.0, s
+    assert s["box_pos_err_mm"] <= 2.0, s
+    assert s["box_rot_err_deg"] <= 2.0, s
 
 
 def test_end_to_end_net_force_error_on_the_short_lift(tracked_lift):
@@ -96,7 +96,7 @@ def test_scores_of_a_perfect_tracker_are_zero_and_one(lift_episode):
                        contacts=contacts_from_truth(tr), timing_s={})
     s = score_tracking(perfect, tr)
     assert s["contact_pairs"] == tr.contact_active.sum() > 0
-    for key in ("box_pos_err_mm_median", "box_rot_err_deg_median", "fingertip_err_mm_median",
+    for key in ("box_pos_err_mm", "box_rot_err_deg", "fingertip_err_mm",
                 "contact_err_mm_mean", "contact_err_mm_std", "contact_err_mm_median_euclid"):
         assert abs(s[key]) < 1e-6, key
     assert s["contact_recall"] == s["contact_precision"] == 1.0
@@ -129,7 +129,7 @@ def test_a_camera_from_a_lab_calibration_widens_only_the_box_gates(lift_episode,
                        fingertips=tr.fingertip_pos, observed=np.ones(tr.contact_active.shape, bool),
                        box_inliers=np.ones(T), hand_explained=np.ones(T), contacts=contacts_from_truth(tr), timing_s={})
     s = score_tracking(shifted, tr)  # the box 4 mm off, as a principal point 1.5 px off moves it at 0.55 m
-    assert abs(s["box_pos_err_mm_median"] - 4.0) < 1e-9
+    assert abs(s["box_pos_err_mm"] - 4.0) < 1e-9
     assert not gate_report(s)[0].passed and gate_report(s, True)[0].passed
 
 
@@ -160,7 +160,7 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
     from PIL import Image
 
     img = np.asarray(Image.open(path).convert("RGB")).astype(int)
-    assert img.shape[1] > 3 * img.shape[0]  # four panels side by side
+    assert img.shape[1] >= 3 * 450 and img.shape[0] >= 2 * 200  # four panels, three to a row, each ~500 px wide
 
     def share(rgb, tol=40):
         return float(np.mean(np.all(np.abs(img - np.array(rgb)) <= tol, axis=-1)))
@@ -194,7 +194,7 @@ def test_tracking_gates_hold_as_statistics_over_four_default_lifts(tracked_lifts
     assert med("contact_err_mm_std") <= 3.0 and max(s["contact_err_mm_std"] for s in scores) <= 4.0, scores
     assert abs(np.mean([s["contact_err_mm_mean"] for s in scores])) <= 2.0, [s["contact_err_mm_mean"] for s in scores]
     assert med("contact_recall") >= 0.9 and med("contact_precision") >= 0.9, scores
-    assert med("box_pos_err_mm_median") <= 2.0 and med("box_rot_err_deg_median") <= 2.0, scores
+    assert med("box_pos_err_mm") <= 2.0 and med("box_rot_err_deg") <= 2.0, scores
 
 
 @pytest.mark.accuracy

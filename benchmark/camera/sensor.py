@@ -314,7 +314,6 @@ PRESETS = {
 
 if tuple(PRESETS) != SENSORS:  # pragma: no cover - a preset added in one place only
     raise BenchmarkError(f"the sensor presets {tuple(PRESETS)} differ from the scenario's names {SENSORS}")
-DEFAULT_SENSOR = "ds325"
 
 
 def sensor_preset(name: str, noise_m: float = 0.0) -> SensorModel:

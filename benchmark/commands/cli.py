@@ -19,6 +19,7 @@ import dataclasses
 import importlib
 import math
 import pathlib
+import re
 import shutil
 import sys
 import time
@@ -34,7 +35,9 @@ from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.method.protocol import check_people
 from benchmark.suites.evaluate import add_method_arguments, load_gates, spec_from_args
 from benchmark.world.assets import validate
+from benchmark.suites.splits import SPLITS
 from benchmark.world.scenario import DEFAULT_GRIP_CONTROL, DEFAULT_HAND_SURFACE, Scenario, episode_name
+from benchmark.world.tasks import TASKS
 from fsv.errors import InputError
 from fsv.provenance import provenance
 
@@ -72,7 +75,7 @@ def exit_status(e: BaseException, prog: str, when_interrupted: str, bad_input: t
 def subcommand_parser(name: str) -> tuple:
     """``(module, parser)`` of ``fsv-bench <name>``: the sub-command's module and its parser."""
     module = importlib.import_module(SUBCOMMANDS[name])
-    p = _Parser(prog=f"fsv-bench {name}", description=module.__doc__.strip().splitlines()[0])
+    p = _Parser(prog=f"fsv-bench {name}", description=plain(module.__doc__.strip().splitlines()[0]))
     module.add_arguments(p)
     return module, p
 
@@ -87,6 +90,25 @@ def _subcommand(argv: list) -> int:
         return exit_status(e, f"fsv-bench {argv[0]}", "complete files are kept, run the same command to resume",
                            (ScenarioError, InputError, ValueError))
     return 0
+
+
+def plain(text: str) -> str:
+    """A docstring's line as a terminal shows it: without reStructuredText's roles and literals
+    (``:func:`x``` and ````x```` become ``x``)."""
+    return re.sub(r"``([^`]+)``", r"\1", re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", text))
+
+
+def split_note(scenario: Scenario) -> str | None:
+    """A note when the scenario's person, grasp or view lies in the test split: those are for scoring
+    only (``benchmark.suites.splits``), and a result on them should not choose anything."""
+    test = SPLITS["test"]
+    parts = [f"{kind} {index}" for kind, index in (("user", scenario.user), ("grasp", scenario.grasp),
+                                                   ("view", scenario.view)) if test.holds(index)]
+    if not parts:
+        return None
+    return (f"fsv-bench: note: {', '.join(parts)} {'is' if len(parts) == 1 else 'are'} of the test split "
+            f"({test.start}-{test.stop - 1}: {test.purpose}); choose on the dev split ({SPLITS['dev'].start}-"
+            f"{SPLITS['dev'].stop - 1})")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -115,7 +137,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="sub-commands: " + ", ".join(f"'fsv-bench {name} --help'" for name in SUBCOMMANDS)
         + " (training data, internal-force networks, the paper's Table 2)",
     )
-    p.add_argument("--task", default="lift", help="task name (see benchmark.TASKS)")
+    p.add_argument("--task", default="lift", help=f"task name: {', '.join(TASKS)}")
     p.add_argument("--noise", type=float, default=0.01, help="depth noise standard deviation in metres, 0 to 0.1")
     p.add_argument("--sensor", default="ds325", help="depth sensor preset: ds325 (the paper's camera), kinect-v1, ideal")
     p.add_argument("--hand-surface", default=DEFAULT_HAND_SURFACE,
@@ -198,6 +220,8 @@ def main(argv: list | None = None) -> int:
     except (ScenarioError, InputError, ValueError) as e:
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
+    if note := split_note(scenario):
+        print(note, file=sys.stderr)
     # Every file goes into a temporary sibling folder, moved into place only when the run is complete:
     # an interrupted or failed run leaves the previous output folder as it was.
     tmp = staging_folder(out)

@@ -121,7 +121,8 @@ def _build(spec: MethodSpec):
         if text is None:
             continue
         if name == "differentiator" and ":" not in text and text not in DIFFERENTIATORS:
-            raise ValueError(f"--differentiator {text!r}: accepted: {', '.join(DIFFERENTIATORS)}, or module:attribute")
+            raise ValueError(f"--differentiator {text!r}: accepted: {', '.join(DIFFERENTIATORS)}, "
+                             "module:attribute or path/to/file.py:attribute")
         if name == "differentiator" and text in DIFFERENTIATORS:
             from benchmark.world.motion import DECLARED
             from fsv.method import StencilDifferentiator

@@ -22,7 +22,7 @@ import tempfile
 KERNELS = ("Haswell", "Sandybridge", "Nehalem", "Prescott")
 
 MAIN_FIGURES = {
-    "tracking.box_pos_err_mm_median": "box position error, median [mm]",
+    "tracking.box_pos_err_mm": "box position error, median [mm]",
     "tracking.contact_err_mm_mean": "contact error mean [mm]",
     "tracking.contact_err_mm_std": "contact error std [mm]",
     "tracking.contact_recall": "contact recall",

@@ -49,7 +49,7 @@ def score_episode(episode, estimate, world_from_method=None) -> dict:
     tr = episode.truth
     t = score_tracking(tracking_in_true_world(estimate.tracking, world_from_method), tr, estimate.contacts)
     out = {
-        "box_pos_err_mm": t["box_pos_err_mm_median"], "box_rot_err_deg": t["box_rot_err_deg_median"],
+        "box_pos_err_mm": t["box_pos_err_mm"], "box_rot_err_deg": t["box_rot_err_deg"],
         "contact_err_mm_mean": t["contact_err_mm_mean"], "contact_err_mm_std": t["contact_err_mm_std"],
         "contact_recall": t["contact_recall"], "contact_precision": t["contact_precision"],
     }

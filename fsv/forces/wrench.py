@@ -73,8 +73,3 @@ def tangent_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     tx /= np.maximum(np.linalg.norm(tx, axis=-1, keepdims=True), 1e-300)
     ty = np.cross(n, tx)
     return tx, ty
-
-
-def wrench_of(points: np.ndarray, forces: np.ndarray) -> np.ndarray:
-    """Wrench [F, p x F] of forces applied at points about the origin; shapes (..., 3) -> (..., 6)."""
-    return np.concatenate([forces, np.cross(points, forces)], axis=-1)

@@ -294,6 +294,3 @@ def _check_bool(owner: str, **flags) -> None:
     for key, v in flags.items():
         if not isinstance(v, (bool, np.bool_)):
             raise InputError(f"{owner}.{key} must be True or False, got {v!r}")
-
-
-DifferentiatorConfig = AlgebraicConfig | CentralConfig | GaussianConfig

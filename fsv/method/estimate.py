@@ -46,6 +46,8 @@ class Estimate:
             ``kinematics``, ``forces``, ``learn``, ``total``.
         labels: The name of each stage that produced this estimate (``tracker``, ``differentiator``,
             ``forces``, ``internal``); "oracle" for a stage replaced by truth.
+        learned_model: The ``fsv.learn.InternalForceModel`` the internal-force stage used when it is
+            :class:`fsv.method.LearnedInternalForces`; None for any other internal-force stage or none.
     """
 
     tracking: object
@@ -57,6 +59,7 @@ class Estimate:
     oracle: tuple
     timing_s: dict
     labels: dict = field(default_factory=dict)
+    learned_model: object = None
 
     @property
     def box(self) -> Poses:

@@ -96,7 +96,7 @@ class Method:
             oracle.append("kinematics")
             labels["differentiator"] = ORACLE
         timing["kinematics"] = time.perf_counter() - t0
-        nominal = full = predicted = None
+        nominal = full = predicted = learned_model = None
         timing["forces"] = timing["learn"] = 0.0
         if self.forces is not None:
             t0 = time.perf_counter()
@@ -113,10 +113,13 @@ class Method:
                                  f"(ForceSolution, predicted), got {type(out).__name__}")
             full, predicted = out
             _check_value("internal", labels["internal"], full, ForceSolution, T)
+            if isinstance(self.internal, LearnedInternalForces):
+                learned_model = self.internal.model_for(inputs.grip)
             timing["learn"] = time.perf_counter() - t0
         timing["total"] = track_s + time.perf_counter() - t_start
         return Estimate(tracking=tracking, contacts=contacts, kinematics=kinematics, nominal=nominal, forces=full,
-                        internal_pred=predicted, oracle=tuple(oracle), timing_s=timing, labels=labels)
+                        internal_pred=predicted, oracle=tuple(oracle), timing_s=timing, labels=labels,
+                        learned_model=learned_model)
 
 
 def _check_value(stage: str, label: str, value, kind, T: int) -> None:

@@ -99,12 +99,19 @@ class LearnedInternalForces:
         window = f", amount averaged over {self.smoothing_s:g} s" if self.smoothing_s > 0 else ", per frame"
         return f"learned internal forces ({model}{window})"
 
+    def model_for(self, grip=None):
+        """The model this stage uses for a person with grip calibration ``grip`` (None: nothing is
+        known of the person): :attr:`model`, or the protocol's shipped model."""
+        from fsv.learn import default_model
+
+        return self.model if self.model is not None else default_model(blind=grip is None)
+
     def __call__(self, kinematics: Kinematics, contacts: Contacts, object_model, gravity, *, grip=None) -> tuple:
         """The final forces; ``grip`` is the person's :class:`fsv.grip.GripCalibration` (or None:
         nothing is known of the person), used by a model trained with grip inputs and choosing the
         shipped model when :attr:`model` is None."""
-        from fsv.learn import default_model, learned_forces  # torch is loaded only when this stage runs
+        from fsv.learn import learned_forces  # torch is loaded only when this stage runs
 
-        model = self.model if self.model is not None else default_model(blind=grip is None)
+        model = self.model_for(grip)
         return learned_forces(model, kinematics, contacts, object_model, gravity=gravity, settings=self.settings,
                               smoothing_s=self.smoothing_s, grip=grip)

@@ -1,7 +1,10 @@
 """Pictures of a depth video a person can look at: a PNG strip of frames and an animated GIF.
 
 Depth is shown with matplotlib's "turbo" colour map over the sensor's range (near = blue,
-far = red); pixels without a measurement are black. The PNG strip carries a colour bar in metres.
+far = red), the map's dark ends left out (:data:`TURBO_SPAN`) so that no depth is drawn near the
+black of pixels without a measurement. The PNG strip carries a colour bar in metres. Both pictures
+are palette images over one fixed palette (:func:`palette`), so the colour bar shows exactly the
+colours of the frames.
 """
 
 from __future__ import annotations
@@ -12,6 +15,17 @@ import numpy as np
 
 from benchmark.atomic import atomic_path
 from benchmark.errors import BenchmarkError
+
+TURBO_SPAN = (0.1, 0.93)
+"""The part of the turbo map that depth is drawn with, near to far: its ends are near-black violet
+(0.0) and dark brown (1.0), which would read as "no measurement"."""
+
+DEPTH_LEVELS = 248
+"""Entries of the palette given to depth (the rest: black, white and greys for the labels)."""
+
+_LABEL_GREYS = (0, 255, 64, 128, 192, 224, 32, 160)
+"""The palette's first entries: black (no measurement, text), white (gaps, background) and greys
+(the labels' anti-aliased edges)."""
 
 
 def colorize(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0) -> np.ndarray:
@@ -30,7 +44,8 @@ def colorize(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0) -> n
     if not far_m > near_m:
         raise BenchmarkError(f"preview range needs far_m > near_m, got {near_m}, {far_m}")
     d = np.asarray(depth_m, dtype=np.float64)
-    rgb = colormaps["turbo"](np.clip((d - near_m) / (far_m - near_m), 0, 1))[..., :3]
+    lo, hi = TURBO_SPAN
+    rgb = colormaps["turbo"](lo + (hi - lo) * np.clip((d - near_m) / (far_m - near_m), 0, 1))[..., :3]
     rgb[d <= 0] = 0
     return np.round(rgb * 255).astype(np.uint8)
 
@@ -66,8 +81,8 @@ def write_preview(
 ) -> list[pathlib.Path]:
     """Writes ``depth_preview.png`` (a strip of frames) and ``depth.gif`` (the video) to out_dir.
 
-    The strip is quantised to 64 colours; the animation uses the colour map's own 255-entry
-    palette (index = depth level, black = no measurement), which is exact and fast.
+    Both are palette images over :func:`palette`: the strip is mapped onto it (its colours are the
+    palette's, to within the 248 depth levels), the animation indexes it by depth level directly.
 
     Args:
         depth_m: Depth video, shape (T, H, W), [m].
@@ -87,7 +102,7 @@ def write_preview(
     t = np.arange(len(depth_m)) / fps
     paths = preview_paths(out_dir, gif)
     frames = strip(depth_m, t, num)
-    png = _palette(np.concatenate([frames, colour_bar(frames.shape[1])], axis=0))
+    png = _on_palette(np.concatenate([frames, colour_bar(frames.shape[1])], axis=0))
     _atomic(paths[0], lambda p: png.save(p, format="PNG", optimize=True))
     if gif:
         step = max(1, int(np.ceil(fps / gif_fps)))
@@ -136,25 +151,38 @@ def colour_bar(width: int, near_m: float = 0.15, far_m: float = 1.0) -> np.ndarr
     return np.asarray(pil)
 
 
-def _indexed(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0):
-    """A depth image as a palette image: index 0 black (no measurement), 1..255 the turbo map."""
+def palette() -> np.ndarray:
+    """The pictures' palette, shape (256, 3), uint8: :data:`_LABEL_GREYS` (black first), then
+    :data:`DEPTH_LEVELS` levels of the depth map from near to far."""
     from matplotlib import colormaps
+
+    lo, hi = TURBO_SPAN
+    out = np.empty((256, 3), dtype=np.uint8)
+    out[:len(_LABEL_GREYS)] = np.array(_LABEL_GREYS, dtype=np.uint8)[:, None]
+    out[len(_LABEL_GREYS):] = np.round(colormaps["turbo"](np.linspace(lo, hi, DEPTH_LEVELS))[:, :3] * 255)
+    return out
+
+
+def _indexed(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0):
+    """A depth image as a palette image over :func:`palette` (index 0 black: no measurement)."""
     from PIL import Image
 
     d = np.asarray(depth_m, dtype=np.float32)
-    idx = 1 + np.rint(np.clip((d - near_m) / (far_m - near_m), 0, 1) * 254).astype(np.uint8)
+    level = np.rint(np.clip((d - near_m) / (far_m - near_m), 0, 1) * (DEPTH_LEVELS - 1)).astype(np.uint8)
+    idx = len(_LABEL_GREYS) + level
     idx[d <= 0] = 0
-    palette = np.zeros((256, 3), dtype=np.uint8)
-    palette[1:] = np.round(colormaps["turbo"](np.linspace(0, 1, 255))[:, :3] * 255)
     img = Image.fromarray(idx, mode="P")
-    img.putpalette(palette.ravel().tolist())
+    img.putpalette(palette().ravel().tolist())
     return img
 
 
-def _palette(rgb: np.ndarray):
+def _on_palette(rgb: np.ndarray):
+    """An RGB picture as a palette image over :func:`palette`, each pixel its nearest entry."""
     from PIL import Image
 
-    return Image.fromarray(rgb).quantize(colors=64, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    ref = Image.new("P", (1, 1))
+    ref.putpalette(palette().ravel().tolist())
+    return Image.fromarray(rgb).quantize(palette=ref, dither=Image.Dither.NONE)
 
 
 def _atomic(path: pathlib.Path, write) -> None:

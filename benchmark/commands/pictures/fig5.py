@@ -113,19 +113,28 @@ def _finger_panel(ax, t, names, fn_true, fn_nom, fn_learn, colors) -> None:
     """Per finger: the true normal force (solid), the nominal (dashed) and the learned (dotted)."""
     lim = robust_limits(fn_true, fn_nom, *(() if fn_learn is None else (fn_learn,)))
     clipped = 0
+    from matplotlib.lines import Line2D
+
     for k, name in enumerate(names):
         c = colors[k % len(colors)]
-        ax.plot(t, fn_true[:, k], color=c, lw=1.6, label=f"{name}: true")
-        ax.plot(t, fn_nom[:, k], color=c, ls="--", lw=1.0, label=f"{name}: nominal")
+        ax.plot(t, fn_true[:, k], color=c, lw=1.6)
+        ax.plot(t, fn_nom[:, k], color=c, ls="--", lw=1.0)
         clipped += _clip_outliers(ax, t, fn_nom[:, k:k + 1], lim, c)
         if fn_learn is not None:
-            ax.plot(t, fn_learn[:, k], color=c, ls=":", lw=1.6, label=f"{name}: learned")
+            ax.plot(t, fn_learn[:, k], color=c, ls=":", lw=1.6)
             clipped += _clip_outliers(ax, t, fn_learn[:, k:k + 1], lim, c)
     ax.set_ylim(*lim)
     ax.set_ylabel("normal force per finger [N]")
     ax.set_title("normal forces: true (solid), nominal (dashed)" + (", learned (dotted)" if fn_learn is not None else "")
                  + _beyond(clipped), fontsize=9)
-    ax.legend(ncol=1, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    # two small legends instead of one entry per digit and estimate: the digits by colour, the estimates by line
+    digits = ax.legend(handles=[Line2D([], [], color=colors[k % len(colors)], lw=1.6, label=name)
+                                for k, name in enumerate(names)],
+                       title="digit", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.add_artist(digits)
+    styles = [("true", "-", 1.6), ("nominal", "--", 1.0)] + ([("learned", ":", 1.6)] if fn_learn is not None else [])
+    ax.legend(handles=[Line2D([], [], color="k", ls=ls, lw=lw, label=label) for label, ls, lw in styles],
+              fontsize=7, loc="lower left", bbox_to_anchor=(1.01, 0.0))
 
 
 def _net_force_panel(ax, t, net_est, net_true, colors) -> None:

@@ -52,9 +52,15 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
 
     T = depth.num_frames
     idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
-    fig, axes = plt.subplots(1, len(idx), figsize=(3.2 * len(idx), 3.4), squeeze=False)
     lo, hi = _crop(calib, tracking, object_model, hand_model, idx)
-    for ax, i in zip(axes[0], idx):
+    cols = min(len(idx), PANELS_PER_ROW)
+    rows = -(-len(idx) // cols)
+    aspect = (hi[1] - lo[1] + 1) / max(1.0, hi[0] - lo[0] + 1)
+    fig, axes = plt.subplots(rows, cols, figsize=(PANEL_WIDTH_IN * cols, rows * (PANEL_WIDTH_IN * aspect + 0.35) + 0.4),
+                             squeeze=False)
+    for ax in axes.flat[len(idx):]:
+        ax.axis("off")
+    for ax, i in zip(axes.flat, idx):
         d = np.where(depth.depth_m[i] > 0, depth.depth_m[i], np.nan)
         crop = d[int(lo[1]) : int(hi[1]) + 1, int(lo[0]) : int(hi[0]) + 1]
         vmin, vmax = (np.nanpercentile(crop, 1), np.nanpercentile(crop, 99)) if np.isfinite(crop).any() else (0, 1)
@@ -62,19 +68,25 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         if truth is not None:
             _draw_truth(ax, calib, truth, object_model, hand_model, i)
         _draw_estimate(ax, calib, tracking, object_model, hand_model, i)
-        ax.set_title(f"t = {depth.t[i]:.2f} s", fontsize=8)
+        ax.set_title(f"t = {depth.t[i]:.2f} s", fontsize=9)
         ax.set_xlim(lo[0], hi[0])
         ax.set_ylim(hi[1], lo[1])
         ax.axis("off")
     fig.legend(handles=_legend(truth is not None), loc="lower center", ncol=8 if truth is not None else 5, fontsize=7,
                frameon=False)
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.tight_layout(rect=(0, 0.4 / fig.get_figheight(), 1, 1))
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
     plt.close(fig)
     path = write_bytes(path, buf.getvalue())
     return path
 
+
+PANELS_PER_ROW = 3
+"""Frames per row of the strip (six frames: two rows)."""
+
+PANEL_WIDTH_IN = 4.6
+"""Width of one frame's panel [in] (about 500 px at the 110 dpi the picture is saved with)."""
 
 TRUTH_COLOUR = "#ffd700"
 """The truth's colour (gold): it stands out on the grey depth at any brightness, unlike white."""

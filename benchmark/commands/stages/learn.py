@@ -5,7 +5,6 @@ from __future__ import annotations
 from benchmark.commands.stage import Run, Stage, StageResult
 from benchmark.commands.stages.forces import estimate_inputs, oracle_tag
 from benchmark.scores.learned import model_block, score_episode
-from fsv.learn import default_model, load
 from fsv.learn.model import SHIPPED_MODELS
 
 
@@ -26,11 +25,11 @@ def run(record: Run, options) -> StageResult:
     block = score_episode(record.episode, est.forces, kin, contacts)
     path = options["internal_model"]
     model_info = {}
-    if est.labels["internal"].startswith("learned internal forces"):
+    if est.learned_model is not None:  # the reference's learned stage: the model it used
         grip = record.inputs.grip  # what the track stage handed the method of the person (None: blind)
         blind = grip is None
         model_info = {"internal_model": path or f"fsv/data/{SHIPPED_MODELS[blind]}",
-                      "model": model_block(default_model(blind=blind) if path is None else load(path))}
+                      "model": model_block(est.learned_model)}
         if model_info["model"]["grip_inputs"]:
             model_info["grip_calibration"] = None if blind else {"baseline_n": grip.baseline_n, "gain": grip.gain}
     block = {**labels, "program": est.labels["internal"], **model_info, **block}

@@ -11,7 +11,8 @@ from __future__ import annotations
 from benchmark.commands.stage import Run, Stage, StageResult
 from benchmark.scores.aggregate import aggregate_all
 from benchmark.scores.episode import METRICS, score_episode
-from benchmark.scores.verdict import check_gates, gate_rows
+from benchmark.scores.units import UNITS
+from benchmark.scores.verdict import Gate, GateResult, check_gates, gate_rows
 from benchmark.suites import get_suite
 from benchmark.suites.evaluate import load_gates
 
@@ -38,7 +39,15 @@ def run(record: Run, options) -> StageResult:
     }
     line = (f"verdict: {'FAIL' if failed else 'pass'} ({len(results) - len(failed)} of {len(results)} gates "
             f"of the {gates_file or 'smoke suite'} hold" + (f"; failed: {'; '.join(failed)})" if failed else ")"))
-    return StageResult(blocks=(("verdict", block),), lines=(line,))
+    return StageResult(blocks=(("verdict", block),), lines=(line, *(gate_line(g, r) for g, r in zip(gates, results))))
+
+
+def gate_line(gate: Gate, result: GateResult) -> str:
+    """One gate of the verdict as the command prints it: the episode's value beside the limit, in the
+    metric's unit, e.g. ``  pass  acc_err_rms 0.367 m/s² (limit <= 0.5)``."""
+    unit = UNITS.get(gate.metric, "")
+    value = "not scored" if result.value is None else f"{result.value:.3g}{' ' + unit if unit else ''}"
+    return f"  {'pass' if result.passed else 'FAIL'}  {gate.metric} {value} (limit {gate.op} {gate.limit:g}{' ' + unit if unit else ''})"
 
 
 STAGE = Stage(name="verdict", run=run, options=("gates",), add_arguments=add_arguments)
