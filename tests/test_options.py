@@ -156,3 +156,7 @@ def test_every_number_option_states_its_upper_bound_in_its_help(name):
         if math.isfinite(high) and not any(f in (action.help or "") for f in (f"{high:,}", f"{high:g}", f"{high}")):
             problems.append(f"{option}: its help does not state its upper bound {high:,}")
     assert not problems, f"fsv-bench {name}:\n" + "\n".join(problems)
+
+
+def test_every_sub_command_is_enumerated():
+    assert set(COMMANDS) == {"main", *cli.SUBCOMMANDS}
