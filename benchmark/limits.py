@@ -20,8 +20,8 @@ from typing import Callable
 
 MAX_EPISODES = 100_000
 """Most episodes one command's grid may hold. At the ~10 s one episode takes to simulate and render
-on one core, 100,000 episodes are about twelve days of one core's work; ``generate`` keeps its
-manifest in memory (about 1 kB an episode)."""
+on one core, 100,000 episodes are about twelve days of one core's work; a grid is held in memory
+(its scenarios, the dataset's manifest), and one of 10^8 episodes grew past 24 GB."""
 
 MAX_EPOCHS = 100_000
 """Most Rprop epochs per network (``train``, ``table2``; the default is 1500)."""
