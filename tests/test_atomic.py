@@ -24,12 +24,12 @@ def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):
 
 
 def test_swap_folder_replaces_a_folder_whole_and_leaves_nothing_behind(tmp_path):
-    from benchmark.atomic import OUTPUT_MARKER, swap_folder
+    from benchmark.atomic import OUTPUT_MARKER, swap_folder, write_marker
 
     dest = tmp_path / "out"
     dest.mkdir()
     (dest / "old.txt").write_text("old")
-    (dest / OUTPUT_MARKER).write_text("")  # an earlier run's output
+    write_marker(dest)  # an earlier run's output
     new = tmp_path / ".out.tmp"
     new.mkdir()
     (new / "scores.json").write_text("{}")

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from benchmark.atomic import OUTPUT_MARKER
+from benchmark.atomic import OUTPUT_MARKER, write_marker
 from benchmark.commands.cli import main
 from benchmark.camera.episode_file import load_episode
 
@@ -124,9 +124,9 @@ def test_ctrl_c_exits_130_and_leaves_the_previous_output_as_it_was(tmp_path, cap
     out = tmp_path / "run"
     out.mkdir()
     (out / "summary.json").write_text('{"previous": true}')
-    (out / OUTPUT_MARKER).write_text("")  # an earlier run's output
+    write_marker(out)  # an earlier run's output (of other options: --force)
     _with_render_stage(monkeypatch, KeyboardInterrupt())
-    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--out", str(out)])
+    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--force", "--out", str(out)])
     assert code == 130
     assert "interrupted" in capsys.readouterr().err
     assert [p.name for p in tmp_path.iterdir()] == ["run"]
