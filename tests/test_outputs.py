@@ -202,3 +202,26 @@ def test_the_cache_is_refused_before_any_rendering_where_it_meets_the_output(tmp
     extra = {"score": ["--estimates", str(tmp_path)], "sweep": ["--axis", "noise", "--values", "0.01,0.02"]}.get(command, [])
     _refused([command, "--suite", "smoke", "--quiet", *extra, "--out", out, "--cache", cache], capsys, needle,
              _snapshot(tmp_path), tmp_path)
+
+
+@pytest.mark.parametrize("module, argv, expensive", [
+    ("benchmark.commands.humanness", ["--suite", "smoke", "--quiet"], "suite_humanness"),
+    ("benchmark.commands.table1", ["--score", "--seeds", "5"], "episode_set"),
+])
+def test_the_developer_commands_replace_only_their_own_folders(tmp_path, capsys, monkeypatch, module, argv, expensive):
+    import importlib
+
+    mod = importlib.import_module(module)
+    monkeypatch.setattr(mod, expensive, lambda *a, **k: _stop())
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "table1.md").write_text("my notes")
+    before = _snapshot(tmp_path)
+    try:
+        code = mod.main([*argv, "--out", str(mine)])
+    except SystemExit as e:
+        code = e.code
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"--out {mine}: a folder with files that fsv-bench did not write" in err
+    assert _snapshot(tmp_path) == before

@@ -52,14 +52,15 @@ def read_header(out) -> dict:
 def made_by_generate(out) -> bool:
     """Whether ``out`` is a real folder (not a link) holding a dataset header of this format: a
     dataset of ``fsv-bench generate``, perhaps of a version before folders carried
-    :data:`benchmark.atomic.OUTPUT_MARKER`, which ``generate`` resumes and then marks."""
+    :data:`benchmark.atomic.OUTPUT_MARKER`, which ``generate`` resumes and then marks.
+
+    Raises:
+        DatasetFileError: Naming ``dataset.json`` when it is there but damaged (:func:`read_header`).
+    """
     path = os.path.join(os.fspath(out), "dataset.json")
     if os.path.islink(os.fspath(out)) or not os.path.isfile(path):
         return False
-    try:
-        return read_header(out).get("format") == FORMAT
-    except DatasetFileError:
-        return False
+    return read_header(out).get("format") == FORMAT
 
 
 def _prepare(spec: DatasetSpec, out: str) -> str:
