@@ -1,10 +1,16 @@
 """Atomic file writes: a file the benchmark writes is either as it was or complete, never half-written.
 
 Everything is first written to a temporary file in the target's folder (named
-``.tmp-<name>.<pid>.<random><suffix>``, so that the leftovers of a run that was killed are easy to
-recognise and remove: :func:`remove_stale_temporaries`) and then renamed over the target, which
+``.tmp-<name>.<pid>.<random><suffix>``; a killed run's are removed by the next, but only in
+fsv-bench's own folders: :func:`remove_stale_temporaries`) and then renamed over the target, which
 POSIX makes atomic. A command's output folder is written the same way: into a staging sibling that
 replaces it whole (:func:`staging_folder`, :func:`swap_folder`), and only if fsv-bench wrote it.
+
+Nothing is deleted, renamed or replaced unless a proof inside says fsv-bench wrote it: the
+:data:`OUTPUT_MARKER` of its folders (a random token), the :data:`STAGING_MARKER` and
+:data:`ASIDE_MARKER` of its temporary folders (naming the folder and its process). Names prove
+nothing. File outputs are checked before any work by :func:`check_file_out` (an existing file is
+replaced only when the user says so), output folders by :func:`check_out`, caches by :func:`check_cache`.
 """
 
 from __future__ import annotations

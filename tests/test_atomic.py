@@ -5,9 +5,23 @@ import subprocess
 
 import pytest
 
-from benchmark.atomic import (ASIDE_MARKER, OUTPUT_MARKER, STAGING_MARKER, OutputFolderError, atomic_path, check_cache,
-                              check_file_out, check_out, is_owned, is_replaceable, remove_stale_temporaries,
-                              staging_folder, swap_folder, write_marker, write_text)
+from benchmark.atomic import (
+    ASIDE_MARKER,
+    OUTPUT_MARKER,
+    STAGING_MARKER,
+    OutputFolderError,
+    atomic_path,
+    check_cache,
+    check_file_out,
+    check_out,
+    is_owned,
+    is_replaceable,
+    remove_stale_temporaries,
+    staging_folder,
+    swap_folder,
+    write_marker,
+    write_text,
+)
 
 
 def test_write_text_replaces_the_file(tmp_path):
@@ -52,7 +66,13 @@ def test_swap_folder_replaces_a_folder_whole_and_leaves_nothing_behind(tmp_path)
 def test_an_output_folder_with_the_users_files_is_refused_and_kept(tmp_path):
     import pytest
 
-    from benchmark.atomic import OUTPUT_MARKER, OutputFolderError, check_out, staging_folder, swap_folder
+    from benchmark.atomic import (
+        OUTPUT_MARKER,
+        OutputFolderError,
+        check_out,
+        staging_folder,
+        swap_folder,
+    )
 
     out = tmp_path / "out"
     out.mkdir()
@@ -185,10 +205,12 @@ def test_the_working_folder_and_its_ancestors_are_refused(tmp_path, monkeypatch)
     assert list(work.iterdir()) == []
 
 
+LEGACY = "This folder was written by fsv-bench, which replaces it whole when a command writes here again.\n"
+
+
 def test_markers_prove_ownership_by_their_content(tmp_path):
     for content, owned in (("", False), ("{}", False), ('{"written_by": "fsv-bench", "token": "x"}', False),
-                           ("This folder was written by fsv-bench, which replaces it whole when a command writes "
-                            "here again.\n", True)):
+                           (LEGACY, True)):
         folder = tmp_path / f"f{len(content)}"
         folder.mkdir()
         (folder / OUTPUT_MARKER).write_text(content)
