@@ -88,6 +88,10 @@ def test_a_users_backup_and_old_folders_beside_out_are_never_touched(tmp_path, c
     assert main(["--quiet", "--out", str(tmp_path / "res")]) == 1  # the stand-in's failure, after staging
     assert no_work == [tmp_path / "res"]
     assert _snapshot(tmp_path) == before  # nothing deleted, nothing renamed into place, the staging folder gone
+    _run_folder(tmp_path / "res", cli.run_options(cli.build_parser(), cli.build_parser().parse_args([])))
+    before = _snapshot(tmp_path)  # now with p/res, an earlier run's
+    assert main(["--quiet", "--out", str(tmp_path / "res")]) == 1
+    assert _snapshot(tmp_path) == before
 
 
 @pytest.mark.parametrize("option", [["--protocol", "calibrated"], ["--knowledge", "exact"], ["--sensor", "kinect-v1"],
@@ -189,7 +193,7 @@ def _stop():
 @pytest.mark.parametrize("command", ["eval", "export", "score", "leaderboard", "sweep"])
 @pytest.mark.parametrize("cache, out, needle", [
     ("X", "X", "one inside the other"), ("X/cache", "X", "one inside the other"), ("X", "X/out", "one inside the other"),
-    ("FILE", "X", "exists and is not a folder"),
+    ("FILE", "X", "exists and is not a folder"), ("OWNED", "OWNED", "one inside the other"),
 ])
 def test_the_cache_is_refused_before_any_rendering_where_it_meets_the_output(tmp_path, capsys, monkeypatch, command,
                                                                              cache, out, needle):
@@ -197,7 +201,11 @@ def test_the_cache_is_refused_before_any_rendering_where_it_meets_the_output(tmp
 
     monkeypatch.setattr(evaluate, "cached_episode", lambda *a, **k: _stop())
     (tmp_path / "file").write_text("mine")
-    paths = {"X": str(tmp_path / "x"), "FILE": str(tmp_path / "file")}
+    (tmp_path / "owned").mkdir()  # an earlier output of fsv-bench's, which the swap would replace, cache and all
+    (tmp_path / "owned" / ".fsv-bench-output").write_text(LEGACY_MARKER)
+    (tmp_path / "owned" / "smoke").mkdir()
+    (tmp_path / "owned" / "smoke" / "lift-u1-g1-m1-s11-0123456789abcdef0123.npz").write_bytes(b"a cached episode")
+    paths = {"X": str(tmp_path / "x"), "FILE": str(tmp_path / "file"), "OWNED": str(tmp_path / "owned")}
     cache, out = (paths[p.split("/")[0]] + p[len(p.split("/")[0]):] for p in (cache, out))
     extra = {"score": ["--estimates", str(tmp_path)], "sweep": ["--axis", "noise", "--values", "0.01,0.02"]}.get(command, [])
     _refused([command, "--suite", "smoke", "--quiet", *extra, "--out", out, "--cache", cache], capsys, needle,
