@@ -17,6 +17,8 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert "Newton-Euler residual" in text and "grip while held" in text
     assert "user 0 (u0-average, hand 190 x 85 mm), grasp 0 (g0-four-centred)" in text
     summary = json.loads((out / "summary.json").read_text())
+    options = json.loads((out / "options.json").read_text())["options"]  # what a later run to this folder must match
+    assert options["seed"] == 2 and options["duration"] == 1.5 and options["protocol"] == "blind" and "out" not in options
     verdict = summary["verdict"]  # the smoke suite's gates on this episode; the exit status follows them
     assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)
     assert verdict["method"]["tracker"] == "reference tracker" and f"verdict: {verdict['verdict'].upper()}" in \
