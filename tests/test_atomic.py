@@ -150,6 +150,11 @@ def test_a_users_siblings_named_like_staging_or_backup_folders_are_kept(tmp_path
     fake = tmp_path / f".res.{dead}.abcdef12"  # a proof that names another folder proves nothing
     _left_by(fake, STAGING_MARKER, dead)
     (fake / STAGING_MARKER).write_text(json.dumps({"folder": "elsewhere", "pid": dead}))
+    target = tmp_path / "elsewhere"  # a link named like a staging folder, to a folder whose proof names the link
+    target.mkdir()
+    (target / STAGING_MARKER).write_text(json.dumps({"folder": f".res.{dead}.linked", "pid": dead}))
+    (target / "data.csv").write_text("precious")
+    (tmp_path / f".res.{dead}.linked").symlink_to(target)
     new = staging_folder(tmp_path / "res")  # p/res absent: nothing renamed into place
     assert not (tmp_path / "res").exists()
     swap_folder(new, tmp_path / "res")
@@ -159,6 +164,7 @@ def test_a_users_siblings_named_like_staging_or_backup_folders_are_kept(tmp_path
     for folder in (backup, old, tmp_path / ".res.2024.backup"):
         assert (folder / "data.csv").read_text() == "precious"
     assert (fake / "scores.json").is_file()
+    assert (tmp_path / f".res.{dead}.linked").is_symlink() and (target / "data.csv").read_text() == "precious"
     assert sorted(p.name for p in (tmp_path / "res").iterdir()) == [OUTPUT_MARKER, "scores.json"]
 
 
