@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import pathlib
 import shutil
 import sys
@@ -40,7 +39,7 @@ from typing import Callable
 
 import numpy as np
 
-from benchmark.atomic import swap_folder, write_text
+from benchmark.atomic import atomic_path, staging_folder, swap_folder, write_text
 from benchmark.errors import BenchmarkError
 from benchmark.fingerprint import results_fingerprint
 from benchmark.limits import MAX_WORKERS, integer
@@ -414,16 +413,18 @@ def _replace(new: pathlib.Path, committed: pathlib.Path) -> None:
     """Swaps ``new`` in for ``committed`` (a file, or a folder whose sub-folders of other results are kept)."""
     committed.parent.mkdir(parents=True, exist_ok=True)
     if new.is_file():
-        tmp = committed.with_name(f".{committed.name}.new")
-        shutil.copyfile(new, tmp)
-        os.replace(tmp, committed)
+        with atomic_path(committed) as tmp:
+            shutil.copyfile(new, tmp)
         return
-    staging = committed.with_name(f".{committed.name}.new")
-    shutil.rmtree(staging, ignore_errors=True)
-    shutil.copytree(new, staging)
-    if committed.exists():  # keep nested results (results/table2/<variant>/) that are made separately
-        for child in committed.iterdir():
-            if child.is_dir() and not (staging / child.name).exists():
-                shutil.copytree(child, staging / child.name)
-    swap_folder(staging, committed, replace_any=True)  # the committed results are replaced on purpose
+    staging = staging_folder(committed)
+    try:
+        shutil.copytree(new, staging, dirs_exist_ok=True)
+        if committed.exists():  # keep nested results (results/table2/<variant>/) that are made separately
+            for child in committed.iterdir():
+                if child.is_dir() and not (staging / child.name).exists():
+                    shutil.copytree(child, staging / child.name)
+        swap_folder(staging, committed, replace_any=True)  # the committed results are replaced on purpose
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
 

@@ -1,6 +1,27 @@
+import json
+import os
+import pathlib
+import subprocess
+
 import pytest
 
-from benchmark.atomic import atomic_path, write_text
+from benchmark.atomic import (
+    ASIDE_MARKER,
+    OUTPUT_MARKER,
+    STAGING_MARKER,
+    OutputFolderError,
+    atomic_path,
+    check_cache,
+    check_file_out,
+    check_out,
+    is_owned,
+    is_replaceable,
+    remove_stale_temporaries,
+    staging_folder,
+    swap_folder,
+    write_marker,
+    write_text,
+)
 
 
 def test_write_text_replaces_the_file(tmp_path):
@@ -24,12 +45,12 @@ def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):
 
 
 def test_swap_folder_replaces_a_folder_whole_and_leaves_nothing_behind(tmp_path):
-    from benchmark.atomic import OUTPUT_MARKER, swap_folder
+    from benchmark.atomic import OUTPUT_MARKER, swap_folder, write_marker
 
     dest = tmp_path / "out"
     dest.mkdir()
     (dest / "old.txt").write_text("old")
-    (dest / OUTPUT_MARKER).write_text("")  # an earlier run's output
+    write_marker(dest)  # an earlier run's output
     new = tmp_path / ".out.tmp"
     new.mkdir()
     (new / "scores.json").write_text("{}")
@@ -45,7 +66,13 @@ def test_swap_folder_replaces_a_folder_whole_and_leaves_nothing_behind(tmp_path)
 def test_an_output_folder_with_the_users_files_is_refused_and_kept(tmp_path):
     import pytest
 
-    from benchmark.atomic import OUTPUT_MARKER, OutputFolderError, check_out, staging_folder, swap_folder
+    from benchmark.atomic import (
+        OUTPUT_MARKER,
+        OutputFolderError,
+        check_out,
+        staging_folder,
+        swap_folder,
+    )
 
     out = tmp_path / "out"
     out.mkdir()
@@ -53,7 +80,8 @@ def test_an_output_folder_with_the_users_files_is_refused_and_kept(tmp_path):
     (out / "my-notes.txt").write_text("keep me")
     with pytest.raises(OutputFolderError, match="files that fsv-bench did not write"):
         check_out(out)
-    check_out(out, replace=False)  # a folder that is resumed, not replaced
+    with pytest.raises(OutputFolderError, match="files that fsv-bench did not write"):
+        check_out(out, replace=False)  # nor written into (a resumed dataset)
     new = staging_folder(out)
     (new / "scores.json").write_text("{}")
     with pytest.raises(OutputFolderError):
@@ -68,21 +96,156 @@ def test_an_output_folder_with_the_users_files_is_refused_and_kept(tmp_path):
     assert (tmp_path / "fresh" / "scores.json").read_text() == '{"new": 1}'
 
 
+def _dead_pid() -> int:
+    proc = subprocess.Popen(["true"])
+    proc.wait()
+    return proc.pid
+
+
+def _left_by(folder: pathlib.Path, marker: str, pid: int) -> pathlib.Path:
+    """A folder as a run of process ``pid`` leaves it: with the proof ``marker`` naming it."""
+    folder.mkdir()
+    (folder / marker).write_text(json.dumps({"folder": folder.name, "pid": pid}))
+    (folder / "scores.json").write_text("{}")
+    return folder
+
+
 def test_the_next_run_removes_a_killed_runs_temporaries_and_keeps_a_live_ones(tmp_path):
-    import os
-    import subprocess
-
-    from benchmark.atomic import remove_stale_temporaries, staging_folder
-
-    dead = subprocess.Popen(["true"])
-    dead.wait()
-    (tmp_path / f".tmp-ep.npz.{dead.pid}.abcd1234.npz").write_bytes(b"half")
+    dead = _dead_pid()
+    write_marker(tmp_path)  # fsv-bench's folder: its temporaries may go
+    (tmp_path / f".tmp-ep.npz.{dead}.abcd1234.npz").write_bytes(b"half")
     (tmp_path / f".tmp-ep.npz.{os.getpid()}.abcd1234.npz").write_bytes(b"being written")
     (tmp_path / "ep.npz").write_bytes(b"complete")
     assert remove_stale_temporaries(tmp_path) == 1
-    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([f".tmp-ep.npz.{os.getpid()}.abcd1234.npz", "ep.npz"])
-    (tmp_path / f".out.{dead.pid}.x1y2z3").mkdir()  # a killed run's staging folder
-    (tmp_path / f".out.{os.getpid()}.live00").mkdir()
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([f".tmp-ep.npz.{os.getpid()}.abcd1234.npz", "ep.npz",
+                                                                 OUTPUT_MARKER])
+    _left_by(tmp_path / f".out.{dead}.x1y2z3", STAGING_MARKER, dead)  # a killed run's staging folder
+    _left_by(tmp_path / f".out.{os.getpid()}.live00", STAGING_MARKER, os.getpid())
     new = staging_folder(tmp_path / "out")
     names = {p.name for p in tmp_path.iterdir()}
-    assert f".out.{dead.pid}.x1y2z3" not in names and f".out.{os.getpid()}.live00" in names and new.name in names
+    assert f".out.{dead}.x1y2z3" not in names and f".out.{os.getpid()}.live00" in names and new.name in names
+    assert json.loads((new / STAGING_MARKER).read_text()) == {"folder": new.name, "pid": os.getpid()}
+
+
+def test_temporaries_in_a_users_folder_are_never_removed(tmp_path):
+    """A user's file named like a killed run's temporary stays: a name proves nothing."""
+    dead = _dead_pid()
+    mine = tmp_path / f".tmp-notes.txt.{dead}.abcd1234.txt"
+    mine.write_text("mine")
+    assert remove_stale_temporaries(tmp_path) == 0
+    (tmp_path / "episodes").mkdir()
+    (tmp_path / "episodes" / mine.name).write_text("mine too")
+    assert remove_stale_temporaries(tmp_path / "episodes", owner=tmp_path) == 0
+    assert mine.read_text() == "mine" and (tmp_path / "episodes" / mine.name).read_text() == "mine too"
+
+
+def test_a_users_siblings_named_like_staging_or_backup_folders_are_kept(tmp_path):
+    """``p/.res.<digits>.backup/`` and ``p/.res.old/`` of the user's survive runs to ``p/res``, with
+    and without ``p/res``; the old folder is never renamed into place."""
+    dead = _dead_pid()
+    backup, old = tmp_path / f".res.{dead}.backup", tmp_path / ".res.old"
+    for folder in (backup, old, tmp_path / ".res.2024.backup"):
+        folder.mkdir()
+        (folder / "data.csv").write_text("precious")
+    fake = tmp_path / f".res.{dead}.abcdef12"  # a proof that names another folder proves nothing
+    _left_by(fake, STAGING_MARKER, dead)
+    (fake / STAGING_MARKER).write_text(json.dumps({"folder": "elsewhere", "pid": dead}))
+    target = tmp_path / "elsewhere"  # a link named like a staging folder, to a folder whose proof names the link
+    target.mkdir()
+    (target / STAGING_MARKER).write_text(json.dumps({"folder": f".res.{dead}.linked", "pid": dead}))
+    (target / "data.csv").write_text("precious")
+    (tmp_path / f".res.{dead}.linked").symlink_to(target)
+    new = staging_folder(tmp_path / "res")  # p/res absent: nothing renamed into place
+    assert not (tmp_path / "res").exists()
+    swap_folder(new, tmp_path / "res")
+    again = staging_folder(tmp_path / "res")  # p/res present
+    (again / "scores.json").write_text("{}")
+    swap_folder(again, tmp_path / "res")
+    for folder in (backup, old, tmp_path / ".res.2024.backup"):
+        assert (folder / "data.csv").read_text() == "precious"
+    assert (fake / "scores.json").is_file()
+    assert (tmp_path / f".res.{dead}.linked").is_symlink() and (target / "data.csv").read_text() == "precious"
+    assert sorted(p.name for p in (tmp_path / "res").iterdir()) == [OUTPUT_MARKER, "scores.json"]
+
+
+def test_a_swap_cut_short_is_restored_or_finished_only_where_its_proof_says_so(tmp_path):
+    dead = _dead_pid()
+    out = tmp_path / "res"
+    aside = _left_by(tmp_path / f".res.{dead}.0a1b2c3d.old", ASIDE_MARKER, dead)  # cut between the two renames
+    write_marker(aside)
+    new = staging_folder(out)
+    assert (out / "scores.json").is_file() and not aside.exists() and not (out / ASIDE_MARKER).exists()
+    assert is_owned(out)
+    aside = _left_by(tmp_path / f".res.{dead}.9f8e7d6c.old", ASIDE_MARKER, dead)  # cut before removing the old one
+    live = _left_by(tmp_path / f".res.{os.getpid()}.11111111.old", ASIDE_MARKER, os.getpid())  # a live swap's
+    staging_folder(out)
+    assert not aside.exists() and live.is_dir() and (out / "scores.json").is_file()
+    swap_folder(new, out)
+    assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARKER]
+
+
+def test_a_symlinked_output_is_refused_and_left_as_it_is(tmp_path):
+    target = tmp_path / "target"
+    target.mkdir()
+    write_marker(target)
+    (target / "scores.json").write_text("{}")
+    link = tmp_path / "link"
+    link.symlink_to(target)
+    with pytest.raises(OutputFolderError, match=f"--out {link}: is a symbolic link \\(to {target}\\)"):
+        check_out(link)
+    new = staging_folder(link)
+    with pytest.raises(OutputFolderError, match="symbolic link"):
+        swap_folder(new, link)
+    assert link.is_symlink() and (target / "scores.json").read_text() == "{}"
+    assert {p.name for p in tmp_path.iterdir()} == {"link", new.name, "target"}
+
+
+def test_the_working_folder_and_its_ancestors_are_refused(tmp_path, monkeypatch):
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    for out in (".", str(work), "..", str(tmp_path)):
+        with pytest.raises(OutputFolderError, match="working folder"):
+            check_out(out)
+    check_out("sub")
+    assert list(work.iterdir()) == []
+
+
+LEGACY = "This folder was written by fsv-bench, which replaces it whole when a command writes here again.\n"
+
+
+def test_markers_prove_ownership_by_their_content(tmp_path):
+    for content, owned in (("", False), ("{}", False), ('{"written_by": "fsv-bench", "token": "x"}', False),
+                           (LEGACY, True)):
+        folder = tmp_path / f"f{len(content)}"
+        folder.mkdir()
+        (folder / OUTPUT_MARKER).write_text(content)
+        assert is_owned(folder) is owned, content
+        assert is_replaceable(folder) is owned
+    write_marker(folder)
+    token = json.loads((folder / OUTPUT_MARKER).read_text())["token"]
+    assert is_owned(folder) and len(token) == 32
+    write_marker(folder)
+    assert json.loads((folder / OUTPUT_MARKER).read_text())["token"] != token  # random
+
+
+def test_file_outputs_refuse_an_existing_file_or_a_folder(tmp_path):
+    notes = tmp_path / "notes.txt"
+    notes.write_text("mine")
+    with pytest.raises(OutputFolderError, match=f"--out {notes}: exists; .*--force"):
+        check_file_out(notes)
+    check_file_out(notes, force=True)
+    with pytest.raises(OutputFolderError, match="is a folder"):
+        check_file_out(tmp_path, force=True)
+    check_file_out(tmp_path / "new" / "model.npz")
+    assert notes.read_text() == "mine" and sorted(p.name for p in tmp_path.iterdir()) == ["notes.txt"]
+
+
+def test_a_cache_apart_from_the_output_only(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(OutputFolderError, match="--cache .*file: exists and is not a folder"):
+        check_cache(tmp_path / "file", {"--out": tmp_path / "out"})
+    for cache, out in (("x", "x"), ("x/cache", "x"), ("x", "x/out"), ("a/../x", "x")):
+        with pytest.raises(OutputFolderError, match="one inside the other"):
+            check_cache(tmp_path / cache, {"--out": tmp_path / out})
+    check_cache(tmp_path / "cache", {"--out": tmp_path / "out"})

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from benchmark.atomic import OUTPUT_MARKER
+from benchmark.atomic import OUTPUT_MARKER, write_marker
 from benchmark.commands.cli import main
 from benchmark.camera.episode_file import load_episode
 
@@ -17,6 +17,8 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert "Newton-Euler residual" in text and "grip while held" in text
     assert "user 0 (u0-average, hand 190 x 85 mm), grasp 0 (g0-four-centred)" in text
     summary = json.loads((out / "summary.json").read_text())
+    options = json.loads((out / "options.json").read_text())["options"]  # what a later run to this folder must match
+    assert options["seed"] == 2 and options["duration"] == 1.5 and options["protocol"] == "blind" and "out" not in options
     verdict = summary["verdict"]  # the smoke suite's gates on this episode; the exit status follows them
     assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)
     assert verdict["method"]["tracker"] == "reference tracker" and f"verdict: {verdict['verdict'].upper()}" in \
@@ -136,9 +138,9 @@ def test_ctrl_c_exits_130_and_leaves_the_previous_output_as_it_was(tmp_path, cap
     out = tmp_path / "run"
     out.mkdir()
     (out / "summary.json").write_text('{"previous": true}')
-    (out / OUTPUT_MARKER).write_text("")  # an earlier run's output
+    write_marker(out)  # an earlier run's output (of other options: --force)
     _with_render_stage(monkeypatch, KeyboardInterrupt())
-    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--out", str(out)])
+    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--force", "--out", str(out)])
     assert code == 130
     assert "interrupted" in capsys.readouterr().err
     assert [p.name for p in tmp_path.iterdir()] == ["run"]

@@ -6,6 +6,7 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
+from benchmark.atomic import write_marker
 from benchmark.paper.dataset import DatasetSpec, generate, load_dataset
 from benchmark.world.scenario import episode_name
 from benchmark.paper.dataset.build import _with_meta
@@ -29,6 +30,7 @@ def test_resume_after_interrupt_neither_duplicates_nor_loses(tmp_path, monkeypat
     spec = DatasetSpec(tasks=("lift",), users=(0, 1), seeds=(0, 1, 2))
     CALLS.clear()
     monkeypatch.setenv("FSV_TEST_INTERRUPT", "1")
+    write_marker(tmp_path)  # a killed run's dataset folder: marked when it was made
     (tmp_path / "episodes").mkdir()
     dead = subprocess.Popen(["true"])
     dead.wait()
@@ -340,16 +342,16 @@ def test_a_local_ray_cluster_makes_the_same_dataset_as_the_local_pool(learn_orac
     pool = generate(spec, tmp_path / "pool", workers=2, progress=False)
     for f in pool["file"]:
         assert (tmp_path / "pool" / f).read_bytes() == (out / f).read_bytes(), f
-    man = generate(spec, tmp_path, ray_address=ray_cluster, progress=False)
+    man = generate(spec, tmp_path / "ray", ray_address=ray_cluster, progress=False)
     assert sorted(man["episode"]) == ["lift-u0-g0-m0-s0", "lift-u0-g0-m0-s1"] and (man["status"] == "ok").all()
-    pd.testing.assert_frame_equal(load_dataset(tmp_path), load_dataset(out))
+    pd.testing.assert_frame_equal(load_dataset(tmp_path / "ray"), load_dataset(out))
     import json
 
     import pyarrow.parquet as pq
 
     for f in man["file"]:  # the episode files are the same bytes; only the timing beside them differs
-        assert (tmp_path / f).read_bytes() == (out / f).read_bytes(), f
-        assert "seconds" not in json.loads(pq.read_table(tmp_path / f).schema.metadata[b"fsv"])
+        assert (tmp_path / "ray" / f).read_bytes() == (out / f).read_bytes(), f
+        assert "seconds" not in json.loads(pq.read_table(tmp_path / "ray" / f).schema.metadata[b"fsv"])
     assert (man["seconds"] > 0).all() and np.isfinite(man["seconds"]).all()
 
 
@@ -395,6 +397,7 @@ def test_a_stale_claim_of_a_dead_run_is_taken_over(tmp_path):
     import socket
 
     spec = DatasetSpec(tasks=("lift",), seeds=(0, 1))
+    write_marker(tmp_path)  # a killed run's dataset folder: marked when it was made
     (tmp_path / "episodes").mkdir(parents=True)
     claim = tmp_path / "episodes" / "lift-u0-g0-m0-s0.claim"
     claim.write_text(json.dumps({"host": socket.gethostname(), "pid": _dead_pid()}))  # a killed run's claim
@@ -418,6 +421,7 @@ def test_concurrent_runs_share_the_work_instead_of_repeating_it(tmp_path, monkey
     monkeypatch.setattr(claims, "CLAIM_POLL_S", 0.05)
     spec = DatasetSpec(tasks=("lift",), seeds=(0, 1, 2))
     (tmp_path / "d" / "episodes").mkdir(parents=True)
+    write_marker(tmp_path / "d")  # another run's dataset folder: marked when it was made
     other = tmp_path / "d" / "episodes" / "lift-u0-g0-m0-s1.claim"
     other.write_text(json.dumps({"host": socket.gethostname(), "pid": os.getppid()}))  # a live "other run"
     CALLS.clear()

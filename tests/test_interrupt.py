@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from benchmark.atomic import OUTPUT_MARKER
+from benchmark.atomic import OUTPUT_MARKER, write_marker
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="process groups and signals as on Linux")
 
@@ -25,7 +25,7 @@ loaded two-core machine (measured 0.05-1.1 s)."""
 
 def _run_and_interrupt(out, delay_s: float) -> tuple:
     cmd = [sys.executable, "-m", "benchmark.commands.entry", "--task", "lift", "--duration", "2", "--quiet",
-           "--no-gif", "--out", str(out)]
+           "--no-gif", "--force", "--out", str(out)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
                             env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     time.sleep(delay_s)
@@ -41,7 +41,7 @@ def _run_and_interrupt(out, delay_s: float) -> tuple:
 def test_ctrl_c_at_random_times_gives_130_and_keeps_the_previous_output(tmp_path):
     out = tmp_path / "run"
     out.mkdir()
-    (out / OUTPUT_MARKER).write_text("")
+    write_marker(out)
     (out / "summary.json").write_text('{"previous": true}')
     delays = np.random.default_rng(2026).uniform(0.2, 6.0, size=4)
     interrupted = 0
@@ -80,7 +80,7 @@ def test_ctrl_c_ends_a_sub_command_with_130_and_no_worker_outlives_it(tmp_path, 
     out = tmp_path / "out"
     if argv[0] == "eval":  # a previous output of eval's, to be kept
         out.mkdir()
-        (out / OUTPUT_MARKER).write_text("")
+        write_marker(out)
         (out / "note.txt").write_text("the previous output")
     cmd = [sys.executable, "-m", "benchmark.commands.entry", *argv, "--out", str(out)]
     if argv[0] == "eval":

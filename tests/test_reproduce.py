@@ -71,3 +71,25 @@ def test_list_names_every_result_and_its_commands(capsys):
     for r in reproduce.RESULTS:
         assert f"{r.name}: {r.path}" in text
     assert "fsv-bench train --data {data}/train" in text
+
+
+def test_writing_results_keeps_nested_results_and_touches_no_folder_of_the_users(tmp_path):
+    committed, new = tmp_path / "results" / "table2", tmp_path / "new"
+    (committed / "users-0-1").mkdir(parents=True)
+    (committed / "users-0-1" / "table2.md").write_text("a variant, made separately")
+    (committed / "table2.md").write_text("old")
+    new.mkdir()
+    (new / "table2.md").write_text("new")
+    mine = tmp_path / "results" / ".table2.new"  # a folder of the user's, named like the old staging folder
+    mine.mkdir()
+    (mine / "notes.txt").write_text("mine")
+    reproduce._replace(new, committed)
+    assert (committed / "table2.md").read_text() == "new"
+    assert (committed / "users-0-1" / "table2.md").read_text() == "a variant, made separately"
+    assert (mine / "notes.txt").read_text() == "mine"
+    assert sorted(p.name for p in (tmp_path / "results").iterdir()) == [".table2.new", "table2"]
+    (new / "model.npz").write_bytes(b"model")
+    (tmp_path / "results" / ".model.npz.new").write_text("mine too")
+    reproduce._replace(new / "model.npz", tmp_path / "results" / "model.npz")
+    assert (tmp_path / "results" / "model.npz").read_bytes() == b"model"
+    assert (tmp_path / "results" / ".model.npz.new").read_text() == "mine too"

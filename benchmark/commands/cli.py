@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import hashlib
 import importlib
+import json
 import math
 import pathlib
 import re
@@ -155,7 +157,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the camera's pose: 0 the paper's set-up (sim_assets/camera.yaml), N >= 1 drawn around it with seed N")
     p.add_argument("--duration", type=float, default=None, help="episode length in seconds, up to 120 (default: the task's)")
     p.add_argument("--out", type=pathlib.Path, default=None,
-                   help="output directory (default: runs/<task>-u<user>-g<grasp>-m<mass>-s<seed>)")
+                   help="output directory (default: runs/<task>-u<user>-g<grasp>-m<mass>-s<seed>, then -v<view>, "
+                        "-<hand surface>, -<grip control> where not the default, and -o<digest> when any other "
+                        "option that changes the result is not its default; the options go into options.json)")
+    p.add_argument("--force", action="store_true",
+                   help="replace an output folder of fsv-bench's that was made with other options (or holds no "
+                        "options.json); without it that is refused")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     for stage in STAGES:
         stage.add_arguments(p)
@@ -165,11 +172,79 @@ def build_parser() -> argparse.ArgumentParser:
 
 def scenario_from_args(args: argparse.Namespace) -> Scenario:
     """The scenario of the command line, fully validated (raises ScenarioError)."""
-    sc = Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
-                  seed=args.seed, duration_s=args.duration, sensor=args.sensor, view=args.view,
-                  hand_surface=args.hand_surface, grip_control=args.grip_control)
+    sc = _scenario(args)
     validate(sc)
     return sc
+
+
+def _scenario(args: argparse.Namespace) -> Scenario:
+    return Scenario(task=args.task, user=args.user, grasp=args.grasp, mass=args.mass, noise_m=args.noise,
+                    seed=args.seed, duration_s=args.duration, sensor=args.sensor, view=args.view,
+                    hand_surface=args.hand_surface, grip_control=args.grip_control)
+
+
+PRESENTATION_OPTIONS = ("help", "out", "force", "quiet", "no_gif")
+"""The main command's options that change no number of a run (where it goes, what is printed,
+whether the GIF is drawn); every other option changes the result and is recorded in ``options.json``."""
+OPTIONS_FILE = "options.json"
+"""The file of a run folder that records the options of the run that wrote it (:func:`run_options`)."""
+
+
+def run_options(parser: argparse.ArgumentParser, args: argparse.Namespace) -> dict:
+    """Every option of ``parser`` that changes the result (all but :data:`PRESENTATION_OPTIONS`),
+    with its value in ``args``: what ``options.json`` records."""
+    return {a.dest: _plain(getattr(args, a.dest)) for a in parser._actions if a.dest not in PRESENTATION_OPTIONS}
+
+
+def default_out(parser: argparse.ArgumentParser, args: argparse.Namespace) -> pathlib.Path:
+    """``runs/<episode name>`` (:func:`benchmark.world.scenario.episode_name`), and ``-o<digest>``
+    when options the name does not show (:func:`run_options`: the sensor, the noise, the duration,
+    the method's stages, knowledge and protocol, the gates, ...) are not their defaults, so that
+    runs with other options never share a folder. The README's ``fsv-bench --task lift --noise
+    0.01`` (every default) writes ``runs/lift-u0-g0-m0-s0``."""
+    defaults = argparse.Namespace(**{a.dest: a.default for a in parser._actions})
+    options, default_options = run_options(parser, args), run_options(parser, defaults)
+    plain = episode_name(_scenario(defaults))
+    hidden = {}
+    for k, v in options.items():
+        if v == default_options[k]:
+            continue
+        try:  # an option the episode name shows on its own (the person, the view, ...) needs no digest
+            shown = episode_name(_scenario(argparse.Namespace(**{**vars(defaults), k: getattr(args, k)}))) != plain
+        except ScenarioError:
+            shown = False
+        if not shown:
+            hidden[k] = v
+    name = episode_name(_scenario(args))
+    if hidden:
+        name += "-o" + hashlib.sha256(json.dumps(hidden, sort_keys=True).encode()).hexdigest()[:8]
+    return pathlib.Path("runs") / name
+
+
+def check_same_options(out: pathlib.Path, options: dict, force: bool) -> None:
+    """Refuses (ValueError, one line) to replace a run folder of fsv-bench's whose ``options.json``
+    differs from ``options``, or that has none (a run of an earlier fsv-bench or another command),
+    unless ``force``. A new or empty folder, or one of the same options, is replaced silently."""
+    if force or not out.is_dir() or out.is_symlink() or not any(out.iterdir()):
+        return
+    try:
+        recorded = json.loads((out / OPTIONS_FILE).read_text()).get("options")
+    except (OSError, ValueError, AttributeError):
+        recorded = None
+    if recorded == options:
+        return
+    if recorded is None:
+        why = f"holds no readable {OPTIONS_FILE} (a run of an earlier fsv-bench, or another command's output)"
+    else:
+        changed = sorted(k for k in set(options) | set(recorded) if options.get(k) != recorded.get(k))
+        why = "was made with other options (" + ", ".join(
+            f"--{k.replace('_', '-')} {recorded.get(k)!r}, now {options.get(k)!r}" for k in changed) + ")"
+    raise ValueError(f"--out {out}: {why}; give another --out, or --force to replace it")
+
+
+def _plain(value):
+    """An option's value as JSON has it (a path as its text)."""
+    return str(value) if isinstance(value, pathlib.PurePath) else value
 
 
 def method_spec_from_args(args: argparse.Namespace):
@@ -215,8 +290,10 @@ def main(argv: list | None = None) -> int:
         check_people((scenario.user,), spec.protocol)
         if args.gates:
             load_gates(args.gates)
-        out = args.out or pathlib.Path("runs") / episode_name(scenario)
+        out = args.out or default_out(parser, args)
         check_out(out)
+        options = run_options(parser, args)
+        check_same_options(out, options, args.force)
     except (ScenarioError, InputError, ValueError) as e:
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
@@ -238,6 +315,7 @@ def main(argv: list | None = None) -> int:
         summary["timing_s"] = timing
         summary["provenance"] = provenance()
         write_json(tmp / "summary.json", summary)
+        write_json(tmp / OPTIONS_FILE, {"options": options})
         swap_folder(tmp, out)
     except BaseException as e:
         background.cancel()

@@ -11,11 +11,12 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
+import shutil
 from dataclasses import asdict
 
 import numpy as np
 
-from benchmark.atomic import write_text
+from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_text
 from benchmark.scores.aggregate import span
 from benchmark.suites import get_suite
 from benchmark.world import living
@@ -66,14 +67,16 @@ def main(argv=None) -> int:
     """``python -m benchmark.commands.humanness``: writes humanness.md and humanness.json."""
     p = argparse.ArgumentParser(prog="python -m benchmark.commands.humanness", description=__doc__.splitlines()[0])
     p.add_argument("--suite", default="standard", help="suite whose episodes are simulated (default standard)")
-    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results/world"), help="output folder")
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results/world"),
+                   help="output folder, replaced whole if fsv-bench wrote it")
     p.add_argument("--grip-control", default=None, help="the people's grip control, replacing the suite's: "
                                                           "whole-hand or per-digit (benchmark.world.grip)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     args = p.parse_args(argv)
     try:
         suite = get_suite(args.suite, grip_control=args.grip_control)
-    except ValueError as e:
+        check_out(args.out)
+    except (ValueError, OutputFolderError) as e:
         p.exit(2, f"{p.prog}: error: {e}\n")
     rows = suite_humanness(suite, progress=not args.quiet)
     md = report_markdown(suite, rows)
@@ -82,9 +85,14 @@ def main(argv=None) -> int:
 
     doc = {"suite": {"name": suite.name, "version": suite.version},
            "episodes": [{"scenario": asdict(sc), **strict(h)} for sc, h in rows], "provenance": provenance()}
-    args.out.mkdir(parents=True, exist_ok=True)
-    write_text(str(args.out / "humanness.md"), md)
-    write_text(str(args.out / "humanness.json"), json.dumps(doc, indent=1, allow_nan=False) + "\n")
+    tmp = staging_folder(args.out)
+    try:
+        write_text(str(tmp / "humanness.md"), md)
+        write_text(str(tmp / "humanness.json"), json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        swap_folder(tmp, args.out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
     print(md)
     print(f"written to {args.out}/ (humanness.md, humanness.json)")
     return 0

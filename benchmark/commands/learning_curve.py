@@ -128,13 +128,13 @@ def _cell(agg: dict) -> str:
 
 
 def main(argv=None) -> int:
-    from benchmark.atomic import check_out
+    from benchmark.atomic import OutputFolderError, check_out
     from benchmark.errors import DatasetError
     from benchmark.method import MethodSpec
     from benchmark.method.protocol import PROTOCOLS
     from benchmark.paper.dataset.cli import parse_ints
     from benchmark.suites import get_suite
-    from benchmark.suites.evaluate import evaluate_many, strict
+    from benchmark.suites.evaluate import check_cache_args, evaluate_many, strict
 
     p = argparse.ArgumentParser(prog="python -m benchmark.commands.learning_curve", description=__doc__.split("\n\n")[0])
     p.add_argument("--data", required=True, help="a training dataset (fsv-bench generate --split train --design people)")
@@ -170,7 +170,12 @@ def main(argv=None) -> int:
 
         grip = str(importlib.resources.files("sim_assets").joinpath(SHIPPED))
     out = pathlib.Path(args.out)
-    check_out(out)
+    try:
+        check_out(out)
+        check_cache_args(argparse.Namespace(cache=args.cache, out=out))
+    except OutputFolderError as e:
+        print(f"{p.prog}: error: {e}", file=sys.stderr)
+        return 2
     tmp = staging_folder(out)
     try:
         (tmp / "models").mkdir(parents=True)

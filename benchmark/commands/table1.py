@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import argparse
 import os
+import shutil
+import sys
 from pathlib import Path
 
-from benchmark.atomic import write_bytes
+from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_bytes
 from benchmark.commands.pictures.fig4 import plot_fig4
 from benchmark.errors import ScenarioError
 from benchmark.paper.table1 import (
@@ -66,7 +68,9 @@ def main(argv=None) -> int:
     parser.add_argument("--tasks", default=",".join(SIX_AXIS_TASKS), help="comma-separated tasks (default: the six excitations)")
     parser.add_argument("--seeds", default="0", help="comma-separated seeds scored by --score (never the calibration seeds)")
     parser.add_argument("--noise", type=float, default=0.01)
-    parser.add_argument("--out", type=Path, default=None, help="with --score: write table1.md, table1.csv and Fig. 4 here")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="with --score: write table1.md, table1.csv and Fig. 4 into this folder (replaced whole if "
+                             "fsv-bench wrote it)")
     parser.add_argument(
         "--tracked", action="store_true", help="with --score: differentiate the tracker's poses (render + fsv.track; slow)"
     )
@@ -74,6 +78,12 @@ def main(argv=None) -> int:
     if not (args.calibrate or args.sweep or args.score):
         parser.print_help()
         return 0
+    if args.score and args.out is not None:
+        try:
+            check_out(args.out)
+        except OutputFolderError as e:
+            print(f"{parser.prog}: error: {e}", file=sys.stderr)
+            return 2
     tasks = _csv_list(args.tasks)
     if args.calibrate or args.sweep:
         calibration = episode_set(tasks, args.noise, CALIBRATION_SEEDS)
@@ -112,8 +122,14 @@ def main(argv=None) -> int:
             wanted = [f"excite-{kind}{axis}" for kind in "tr" for axis in "xyz"]
             if all(t in by_task for t in wanted):
                 panels = [(episodes[by_task[t]][0], kins[by_task[t]], t) for t in wanted]
-            paths = write_outputs(table, episodes[0][0], kins[0], args.out, panels=panels)
-            print(f"wrote {', '.join(str(p) for p in paths.values())}")
+            tmp = staging_folder(args.out)
+            try:
+                paths = write_outputs(table, episodes[0][0], kins[0], tmp, panels=panels)
+                swap_folder(tmp, args.out)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)
+                raise
+            print(f"wrote {', '.join(str(args.out / p.name) for p in map(Path, paths.values()))}")
     return 0
 
 

@@ -43,13 +43,13 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
     """Writes the camera inputs of every episode of ``suite`` into ``out`` (as ``<episode>.npz``, or
     ``.h5`` with ``container="hdf5"``), the hand, box and camera as ``knowledge`` says and the
     person's grip calibration under the ``calibrated`` protocol; returns ``suite.json``'s content."""
-    from benchmark.suites.evaluate import cached_episode, default_cache
+    from benchmark.suites.evaluate import cached_episode, episode_cache
     from benchmark.world.scenario import episode_name
     from benchmark.exchange import camera_file, estimates_file
     from benchmark.method.run import camera_input_and_knowledge
     from fsv.provenance import provenance
 
-    cache = pathlib.Path(cache or default_cache())
+    cache = episode_cache(cache)
     out = pathlib.Path(out)
     suffix = FORMATS[container]
     tmp = staging_folder(out)
@@ -86,12 +86,14 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
 
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
+    from benchmark.suites.evaluate import check_cache_args
     from benchmark.suites.options import suite_of
 
     from benchmark.method.protocol import check_people
 
     suite = suite_of(args)
     check_out(args.out)
+    check_cache_args(args)
     check_people((sc.user for sc in suite.scenarios), args.protocol)
     index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format,
                          knowledge=args.knowledge, protocol=args.protocol)

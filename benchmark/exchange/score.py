@@ -69,7 +69,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     from benchmark.fingerprint import world_fingerprint
     from benchmark.world.grasp_plan import grasp_spec
     from benchmark.scores.episode import score_episode
-    from benchmark.suites.evaluate import cached_episode, default_cache, scores_document
+    from benchmark.suites.evaluate import cached_episode, episode_cache, scores_document
     from benchmark.world.scenario import episode_name
 
     protocol = check_protocol(protocol or DEFAULT_PROTOCOL)
@@ -80,7 +80,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     for sc, meta in metas.items():
         check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world,
                        knowledge=knowledge or DEFAULT_KNOWLEDGE)
-    cache = pathlib.Path(cache or default_cache())
+    cache = episode_cache(cache)
     t0 = time.perf_counter()
     rows = []
     scenarios = suite.scenarios
@@ -119,7 +119,7 @@ def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowled
 
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
-    from benchmark.suites.evaluate import load_gates, print_verdict, write_outputs
+    from benchmark.suites.evaluate import check_cache_args, load_gates, print_verdict, write_outputs
     from benchmark.suites.options import suite_of
 
     from benchmark.method.protocol import check_protocol
@@ -127,6 +127,7 @@ def run(args: argparse.Namespace) -> dict:
     suite = suite_of(args)
     gates = load_gates(args.gates) if args.gates else None
     check_out(args.out)
+    check_cache_args(args)
     check_protocol(args.protocol)
     estimate_paths(suite, args.estimates, args.format)
     if args.pictures:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 
+from benchmark.atomic import check_file_out
 from benchmark.method.grip_file import write_calibration
 from fsv.grip import GripCalibration, fit_grip
 
@@ -45,7 +46,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", required=True, action="append",
                    help="a calibration recording: a dataset folder made by `fsv-bench generate` (repeat for several; "
                         "no person in two)")
-    p.add_argument("--out", required=True, help="grip-calibration file to write (.json)")
+    p.add_argument("--out", required=True, help="grip-calibration file to write (.json); an existing file needs --force")
+    p.add_argument("--force", action="store_true", help="replace --out if it exists (without it an existing file is refused)")
 
 
 def run(args: argparse.Namespace) -> dict:
@@ -54,6 +56,7 @@ def run(args: argparse.Namespace) -> dict:
     from benchmark.paper.dataset.files import read_header
     from benchmark.scores.samples import MAX_EXCESS_N
 
+    check_file_out(args.out, force=args.force)
     recordings = [read_header(d)["spec"] for d in args.data]  # every header checked before any work
     calibrations = {}
     for folder in args.data:

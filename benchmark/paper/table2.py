@@ -38,13 +38,14 @@ import argparse
 import json
 import math
 import os
+import shutil
 import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
 
-from benchmark.atomic import save_figure, write_text
+from benchmark.atomic import check_out, save_figure, staging_folder, swap_folder, write_text
 from benchmark.paper.dataset.files import read_header
 from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset, training_set
 from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N
@@ -338,7 +339,9 @@ def write(result: dict, out) -> None:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The arguments of ``fsv-bench table2``."""
     p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
-    p.add_argument("--out", default="runs/table2", help="output folder (default: runs/table2; the committed results/table2 is made by fsv-bench reproduce)")
+    p.add_argument("--out", default="runs/table2",
+                   help="output folder, replaced whole if fsv-bench wrote it (default: runs/table2; the committed "
+                        "results/table2 is made by fsv-bench reproduce)")
     p.add_argument("--epochs", type=integer(1, MAX_EPOCHS), default=LearnConfig.epochs,
                    help=f"Rprop epochs per network, 1 to {MAX_EPOCHS:,} (default {LearnConfig.epochs})")
     p.add_argument("--seed", type=integer(0, MAX_SEED), default=0, help=f"seed of the networks' initial weights, 0 to {MAX_SEED}")
@@ -363,6 +366,7 @@ def run(args: argparse.Namespace) -> dict:
     """Runs ``fsv-bench table2``: prints the table and writes it to ``--out``."""
     from benchmark.paper.dataset.cli import parse_ints
 
+    check_out(args.out)
     users = parse_ints(args.users, "--users")
     if len(users) != 2 or users[0] == users[1]:
         raise DatasetError(f"--users {args.users!r}: expected two different user indices, e.g. 0,4")
@@ -370,7 +374,13 @@ def run(args: argparse.Namespace) -> dict:
                               test_seeds=parse_ints(args.test_seeds, "--test-seeds"))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     result = score(args.data, protocol, LearnConfig(epochs=args.epochs, seed=args.seed, members=args.members), rule)
-    write(result, args.out)
+    tmp = staging_folder(args.out)
+    try:
+        write(result, tmp)
+        swap_folder(tmp, args.out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
     print(markdown(result))
     print(f"written to {args.out}/ (table2.md, table2.csv, table2.json, fig6.png)")
     return result

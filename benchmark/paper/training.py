@@ -21,6 +21,7 @@ import time
 
 import numpy as np
 
+from benchmark.atomic import check_file_out
 from benchmark.limits import MAX_EPOCHS, MAX_FOLDS, MAX_MEMBERS, MAX_SEED, integer
 from benchmark.method.grip_file import CalibrationError, read_calibration
 from benchmark.paper.dataset.files import read_header
@@ -33,7 +34,8 @@ from fsv.learn import AMOUNT_LOSSES, LearnConfig, cross_validate, train
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")
-    p.add_argument("--out", required=True, help="model file to write (.npz)")
+    p.add_argument("--out", required=True, help="model file to write (.npz); an existing file needs --force")
+    p.add_argument("--force", action="store_true", help="replace --out if it exists (without it an existing file is refused)")
     p.add_argument("--seeds", default=None, help="episode seeds to train on (default: all)")
     p.add_argument("--users", default=None, help="people to train on, e.g. 1000-1019 (default: all)")
     p.add_argument("--epochs", type=integer(1, MAX_EPOCHS), default=LearnConfig.epochs,
@@ -76,6 +78,7 @@ def check_training_people(users) -> None:
 
 
 def run(args: argparse.Namespace):
+    check_file_out(args.out, force=args.force)
     where = {} if args.seeds is None else dict(seed=list(parse_ints(args.seeds, "--seeds")))
     if args.users is not None:
         where["user"] = list(parse_ints(args.users, "--users"))

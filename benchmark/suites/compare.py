@@ -18,6 +18,7 @@ import argparse
 import json
 import pathlib
 
+from benchmark.atomic import check_file_out, write_text
 from benchmark.scores.aggregate import FEW_EPISODES, aggregate, paired_test
 from benchmark.scores.units import labelled
 
@@ -76,10 +77,13 @@ def compare(a: dict, b: dict) -> dict:
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("a", help="evaluation folder A (scores.json)")
     p.add_argument("b", help="evaluation folder B (scores.json)")
-    p.add_argument("--out", default=None, help="also write the comparison as JSON here")
+    p.add_argument("--out", default=None, help="also write the comparison as JSON here; an existing file needs --force")
+    p.add_argument("--force", action="store_true", help="replace --out if it exists (without it an existing file is refused)")
 
 
 def run(args: argparse.Namespace) -> dict:
+    if args.out:
+        check_file_out(args.out, force=args.force)
     result = compare(load_scores(args.a), load_scores(args.b))
     n = len(result["episodes"])
     print(f"{result['suite']['name']} v{result['suite']['version']}: B - A over n = {n} episodes (A = {args.a}, "
@@ -94,8 +98,6 @@ def run(args: argparse.Namespace) -> dict:
         print(f"{labelled(m):28s} {r['mean_diff']:10.4g} [{r['ci_low']:10.4g}, {r['ci_high']:10.4g}] {r['pairs']:5d} "
               f"{p:>8s}  {r['better']}")
     if args.out:
-        from benchmark.atomic import write_text
-
         write_text(args.out, json.dumps(result, indent=1, allow_nan=False) + "\n")
     return result
 

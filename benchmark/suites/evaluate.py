@@ -31,7 +31,7 @@ import sys
 import time
 from dataclasses import asdict
 
-from benchmark.atomic import check_out, remove_stale_temporaries, staging_folder, swap_folder
+from benchmark.atomic import check_cache, check_out, claim_folder, is_owned, remove_stale_temporaries, staging_folder, swap_folder
 from benchmark.scores.aggregate import FEW_EPISODES
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.limits import checked
@@ -45,6 +45,25 @@ class GateFailure(BenchmarkError):
 def default_cache() -> pathlib.Path:
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return pathlib.Path(base) / "fsv-bench" / "episodes"
+
+
+def episode_cache(cache: str | os.PathLike | None = None) -> pathlib.Path:
+    """The episode cache ``cache`` (default :func:`default_cache`), made fsv-bench's
+    (:func:`benchmark.atomic.claim_folder`) when it is new or empty, or when it is the default
+    cache (fsv-bench's own folder under the user's cache) of an earlier version. A user's folder
+    with other files is used as it is, but no file in it is ever removed
+    (:func:`benchmark.atomic.remove_stale_temporaries` needs the marker)."""
+    cache = pathlib.Path(cache or default_cache())
+    if not is_owned(cache) and (not cache.exists() or (cache.is_dir() and not any(cache.iterdir()))
+                                or cache == default_cache()):
+        claim_folder(cache, "--cache", adopt=True)
+    return cache
+
+
+def check_cache_args(args: argparse.Namespace) -> None:
+    """Refuses ``--cache`` before any work: a file, or the same folder as ``--out`` or one inside
+    the other (:func:`benchmark.atomic.check_cache`)."""
+    check_cache(args.cache or default_cache(), {"--out": args.out})
 
 
 def episode_identity(suite: Suite, scenario: Scenario) -> dict:
@@ -71,7 +90,7 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
 
     path = cache / suite.name / f"{episode_name(scenario)}-{episode_key(suite, scenario)}.npz"
     if path.parent.is_dir():
-        remove_stale_temporaries(path.parent)  # a killed run's half-written episodes
+        remove_stale_temporaries(path.parent, owner=cache)  # a killed run's half-written episodes
     identity = episode_identity(suite, scenario)
     if path.exists():
         try:
@@ -155,7 +174,7 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
     specs = list(specs)
     for spec in specs:
         spec.check()
-    cache = pathlib.Path(cache or default_cache())
+    cache = episode_cache(cache)
     gates = suite.gates if gates is None else gates
     t0 = time.perf_counter()
     bar = None
@@ -400,6 +419,7 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)
+    check_cache_args(args)
     spec = spec_from_args(args)
     from benchmark.method.protocol import check_people
 

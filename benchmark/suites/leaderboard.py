@@ -53,7 +53,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> list:
     from benchmark.atomic import check_out
-    from benchmark.suites.evaluate import GateFailure, baselines_block, evaluate_many, write_outputs
+    from benchmark.suites.evaluate import GateFailure, baselines_block, check_cache_args, evaluate_many, write_outputs
     from benchmark.scores.leaderboard import leaderboard_markdown
     from benchmark.suites.options import suite_of
 
@@ -61,6 +61,7 @@ def run(args: argparse.Namespace) -> list:
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)
+    check_cache_args(args)
     results = evaluate_many(suite, list(VARIANTS.values()), cache=args.cache, progress=not args.quiet,
                             workers=args.workers)
     entries = list(zip(VARIANTS, results))

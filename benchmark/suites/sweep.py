@@ -181,7 +181,7 @@ def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
 
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
-    from benchmark.suites.evaluate import evaluate, spec_from_args, strict
+    from benchmark.suites.evaluate import check_cache_args, evaluate, spec_from_args, strict
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
     from benchmark.method.protocol import DEFAULT_PROTOCOL
     from benchmark.suites import get_suite
@@ -197,6 +197,7 @@ def run(args: argparse.Namespace) -> dict:
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")
     check_out(args.out)
+    check_cache_args(args)
     spec = spec_from_args(args)
     from benchmark.method.protocol import check_people
 

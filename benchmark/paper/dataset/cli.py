@@ -51,7 +51,8 @@ def grid_size(args: argparse.Namespace) -> int:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """The arguments of ``fsv-bench generate``."""
-    p.add_argument("--out", required=True, help="dataset folder (created, or resumed if it exists)")
+    p.add_argument("--out", required=True,
+                   help="dataset folder (created, or resumed if generate made it; a folder with other files is refused)")
     p.add_argument("--tasks", default="lift", help="comma-separated task names (default: lift)")
     p.add_argument("--split", default=None, metavar="train|dev|test",
                    help="draw people, grasps and views from a split: --users/--grasps/--views are then positions "
@@ -106,8 +107,10 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
     )
     from benchmark.atomic import check_out
+    from benchmark.paper.dataset.files import made_by_generate
 
-    check_out(pathlib.Path(args.out), replace=False)  # a dataset folder is resumed, not replaced
+    if not made_by_generate(args.out):  # new, empty, or fsv-bench's: resumed, never a user's folder
+        check_out(pathlib.Path(args.out), replace=False)
     t0 = time.perf_counter()
     man = generate(spec, args.out, workers=args.workers, ray_address=args.ray_address, progress=not args.no_progress)
     failed = int((man["status"] != "ok").sum())

@@ -14,7 +14,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from benchmark.atomic import remove_stale_temporaries, write_bytes, write_text
+from benchmark.atomic import claim_folder, remove_stale_temporaries, write_bytes, write_text
 from benchmark.errors import DatasetError, DatasetFileError
 from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec
 from benchmark.world.scenario import episode_name
@@ -49,11 +49,26 @@ def read_header(out) -> dict:
     return header
 
 
+def made_by_generate(out) -> bool:
+    """Whether ``out`` is a real folder (not a link) holding a dataset header of this format: a
+    dataset of ``fsv-bench generate``, perhaps of a version before folders carried
+    :data:`benchmark.atomic.OUTPUT_MARKER`, which ``generate`` resumes and then marks.
+
+    Raises:
+        DatasetFileError: Naming ``dataset.json`` when it is there but damaged (:func:`read_header`).
+    """
+    path = os.path.join(os.fspath(out), "dataset.json")
+    if os.path.islink(os.fspath(out)) or not os.path.isfile(path):
+        return False
+    return read_header(out).get("format") == FORMAT
+
+
 def _prepare(spec: DatasetSpec, out: str) -> str:
+    claim_folder(out, adopt=made_by_generate(out))  # new, empty, or fsv-bench's: never a user's folder
     episodes = os.path.join(out, "episodes")
     os.makedirs(episodes, exist_ok=True)
     for folder in (out, episodes):  # a killed run's half-written files (a live run's are kept)
-        remove_stale_temporaries(folder)
+        remove_stale_temporaries(folder, owner=out)
     from benchmark.fingerprint import world_fingerprint
 
     header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict(), world=world_fingerprint())
