@@ -53,7 +53,11 @@ def no_work(monkeypatch):
 
 def _refused(argv, capsys, needle: str, before: dict, folder: pathlib.Path) -> str:
     t0 = time.perf_counter()
-    assert main(argv) == 2
+    try:
+        code = main(argv)
+    except SystemExit as e:  # refused while the command line is parsed
+        code = e.code
+    assert code == 2
     assert time.perf_counter() - t0 < 5
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and needle in err, err
