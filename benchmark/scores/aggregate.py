@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
+from benchmark.scores.episode import WORST
+
 CONFIDENCE = 0.95
 RESAMPLES = 2000
 BOOTSTRAP_SEED = 0  # the intervals are a deterministic function of the scores
@@ -18,32 +20,61 @@ def span(values, missing: str = "-") -> str:
     return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
 
 
-def aggregate(values, statistic: str) -> dict:
-    """A statistic of per-episode values with its percentile-bootstrap confidence interval.
+def aggregate(values, statistic: str, worst: float | None = None) -> dict:
+    """A statistic of per-episode values with its percentile-bootstrap confidence interval; every
+    episode counts.
 
     Args:
-        values: One value per episode; NaN entries (a stage with nothing to score) are left out.
+        values: One value per episode. A value that is None or not finite (a metric that could not
+            be computed) counts as ``worst``; never left out.
         statistic: ``"median"`` or ``"mean"``.
+        worst: The metric's worst value (:data:`benchmark.scores.episode.WORST`); None: the
+            statistic is undefined when any value is missing.
 
     Returns:
-        ``{"value", "ci_low", "ci_high", "n"}``; with fewer than two finite values the interval is
-        the value itself (nothing to resample), and with none every entry is None.
+        ``{"value", "ci_low", "ci_high", "n", "at_worst"}``: ``n`` is every value's count, ``at_worst``
+        how many counted at ``worst``; with fewer than two values, or all equal, the interval is the
+        value itself; the value is None when nothing can be said (no values, or a missing one
+        without a worst value). An infinite ``worst`` makes the statistic and interval a
+        deterministic function of the ranks: +inf where the worst values reach them.
     """
     fn = {"median": np.median, "mean": np.mean}[statistic]
-    x = np.asarray([v for v in values if v is not None and np.isfinite(v)], dtype=float)
-    if x.size == 0:
-        return {"value": None, "ci_low": None, "ci_high": None, "n": 0}
+    raw = np.asarray([np.nan if v is None else v for v in values], dtype=float)
+    missing = ~np.isfinite(raw)
+    n, at_worst = int(raw.size), int(missing.sum())
+    if n == 0 or (at_worst and worst is None):
+        return {"value": None, "ci_low": None, "ci_high": None, "n": n, "at_worst": at_worst}
+    x = np.where(missing, worst, raw) if at_worst else raw
     value = float(fn(x))
     if x.size < 2 or np.all(x == x[0]):
-        return {"value": value, "ci_low": value, "ci_high": value, "n": int(x.size)}
-    res = stats.bootstrap((x,), fn, confidence_level=CONFIDENCE, n_resamples=RESAMPLES, method="percentile",
-                          rng=np.random.default_rng(BOOTSTRAP_SEED))
-    ci = res.confidence_interval
-    return {"value": value, "ci_low": float(ci.low), "ci_high": float(ci.high), "n": int(x.size)}
+        return {"value": value, "ci_low": value, "ci_high": value, "n": n, "at_worst": at_worst}
+    if np.isfinite(x).all():
+        res = stats.bootstrap((x,), fn, confidence_level=CONFIDENCE, n_resamples=RESAMPLES, method="percentile",
+                              rng=np.random.default_rng(BOOTSTRAP_SEED))
+        low, high = res.confidence_interval
+    else:
+        low, high = _bootstrap_with_infinities(x, fn)
+    return {"value": value, "ci_low": float(low), "ci_high": float(high), "n": n, "at_worst": at_worst}
+
+
+def _bootstrap_with_infinities(x: np.ndarray, fn) -> tuple:
+    """The percentile-bootstrap interval of ``fn`` over values some of which are +inf (NumPy's
+    percentile interpolates inf - inf to NaN: here two equal neighbours give themselves)."""
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    theta = np.sort(fn(x[rng.integers(0, x.size, size=(RESAMPLES, x.size))], axis=1))
+    alpha = (1.0 - CONFIDENCE) / 2.0
+    out = []
+    for q in (alpha, 1.0 - alpha):
+        pos = q * (RESAMPLES - 1)
+        frac = pos - np.floor(pos)
+        lo, hi = theta[int(np.floor(pos))], theta[int(np.ceil(pos))]
+        out.append(lo if frac == 0 or lo == hi else (np.inf if np.isinf(hi) else lo + (hi - lo) * frac))
+    return tuple(out)
 
 
 def aggregate_all(rows: list[dict], metrics, by: str | None = None) -> dict:
-    """Median and mean of every metric over ``rows`` (per-episode dicts), optionally per ``by`` value.
+    """Median and mean of every metric over ``rows`` (per-episode dicts), optionally per ``by`` value;
+    every row counts, a missing metric at its :data:`~benchmark.scores.episode.WORST` value.
 
     Returns:
         ``{metric: {"median": aggregate, "mean": aggregate}}``, or ``{group: that}`` with ``by``.
@@ -51,7 +82,7 @@ def aggregate_all(rows: list[dict], metrics, by: str | None = None) -> dict:
     if by is not None:
         groups = sorted({r[by] for r in rows})
         return {g: aggregate_all([r for r in rows if r[by] == g], metrics) for g in groups}
-    return {m: {s: aggregate([r[m] for r in rows], s) for s in ("median", "mean")} for m in metrics}
+    return {m: {s: aggregate([r.get(m) for r in rows], s, WORST.get(m)) for s in ("median", "mean")} for m in metrics}
 
 
 MIN_PAIRED_EPISODES = 6
