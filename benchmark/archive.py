@@ -66,9 +66,12 @@ def _entry_name(member: str) -> str:
 
 
 def _check_dtype(name: str, dtype: np.dtype) -> None:
-    if dtype.hasobject or dtype.kind not in "biuf" or dtype.fields is not None or dtype.subdtype is not None:
-        what = "strings" if dtype.kind in "SUO" else f"dtype {dtype.str}"
-        raise _Refused(f"array {name!r} holds {what}; an archive holds numbers and booleans only")
+    """Numbers, booleans and fixed-width text (an episode's names) only: never objects (variable-length
+    strings included), bytes, complex numbers or records."""
+    if dtype.hasobject or dtype.kind not in "biufU" or dtype.fields is not None or dtype.subdtype is not None:
+        what = {"S": "byte strings", "O": "objects or variable-length strings", "c": "complex numbers"}.get(
+            dtype.kind, f"dtype {dtype.str}")
+        raise _Refused(f"array {name!r} holds {what}; an archive holds numbers, booleans and fixed-width text only")
 
 
 class _ZipEntries:
@@ -102,7 +105,6 @@ class _ZipEntries:
         major, _ = fmt.read_magic(fp)
         read = fmt.read_array_header_1_0 if major == 1 else fmt.read_array_header_2_0
         shape, fortran, dtype = read(fp, max_header_size=10000)
-        _check_dtype(name, dtype)
         return dtype, tuple(int(n) for n in shape), fortran
 
     def read(self, name: str, limit: int) -> np.ndarray:
@@ -111,6 +113,7 @@ class _ZipEntries:
         info = self._infos[name]
         with self._zip.open(info) as fp:
             dtype, shape, fortran = self._read_header(name, fp)
+            _check_dtype(name, dtype)
             nbytes = int(np.prod(shape, dtype=object)) * dtype.itemsize
             if nbytes > limit:
                 raise _Refused(f"array {name!r} holds {nbytes} bytes, above the {limit} bytes its format allows")

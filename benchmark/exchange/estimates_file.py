@@ -213,9 +213,10 @@ def check_entry(name: str, dtype: np.dtype, shape: tuple, meta: dict) -> str | N
     return None
 
 
-def read_estimates(path, *, arrays: bool = True) -> tuple:
+def read_estimates(path, *, arrays: bool = True, identity=None) -> tuple:
     """``(meta, sections)`` of an estimates file, every entry checked against the format from its
-    header before any array is read (:func:`check_entry`), ``meta.json`` by :func:`check_meta`;
+    header before any array is read (:func:`check_entry`), ``meta.json`` by :func:`check_meta`, then
+    by ``identity(meta)`` if given (e.g. :func:`check_identity`), before the entries;
     ``arrays=False`` reads no array.
 
     Raises:
@@ -226,12 +227,17 @@ def read_estimates(path, *, arrays: bool = True) -> tuple:
     def rule(name, dtype, shape, meta):
         if not checked:
             check_meta(path, meta)
+            if identity is not None:
+                identity(meta)
             checked.append(True)
         return check_entry(name, dtype, shape, meta)
 
     meta, sections = read_archive(path, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
                                   digests_required=False, check_entry=rule, arrays=arrays)
-    check_meta(path, meta)
+    if not checked:
+        check_meta(path, meta)
+        if identity is not None:
+            identity(meta)
     return meta, sections
 
 

@@ -73,11 +73,14 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
 
     protocol = check_protocol(protocol or DEFAULT_PROTOCOL)
     paths = estimate_paths(suite, folder, container)
-    metas = {sc: read_estimates(p, arrays=False)[0] for sc, p in paths.items()}  # every header before any work
     world = world_fingerprint()
-    for sc, meta in metas.items():
-        check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world,
-                       knowledge=knowledge or DEFAULT_KNOWLEDGE)
+
+    def identity(sc):
+        return lambda meta: check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world,
+                                           knowledge=knowledge or DEFAULT_KNOWLEDGE)
+
+    # every header before any work
+    metas = {sc: read_estimates(p, arrays=False, identity=identity(sc))[0] for sc, p in paths.items()}
     cache = pathlib.Path(cache or default_cache())
     t0 = time.perf_counter()
     rows = []
