@@ -29,6 +29,7 @@ files written by other programs; when present they are checked.
     contacts/point     (T, K, 3)  float  contact point, object frame, [m]                required
     contacts/normal    (T, K, 3)  float  unit normal into the box, object frame          required
     contacts/slide_dir (T, K, 3)  float  sliding direction, object frame; default 0      optional
+                                         (required where a contact slides)
     kinematics/vel, acc, omega, alpha  (T, 3)  world frame, [m/s, m/s^2, rad/s, rad/s^2] required
     kinematics/valid   (T,)       bool   frames whose derivatives are defined            required
     kinematics/pos     (T, 3), kinematics/rot (T, 3, 3)  the filtered pose; default box/*  optional
@@ -310,6 +311,15 @@ def check_physics(path, box, contacts, kinematics, solutions: dict, fingertips=N
     unit = (np.abs(length - 1.0) <= UNIT_TOL) | ~act
     if not unit.all():
         bad("contacts/normal", ~unit.all(axis=1), f"is not a unit vector for an active finger (within {UNIT_TOL:g})")
+    slides = contacts.sliding & act
+    if slides.any():
+        n = np.where(slides[..., None], contacts.normal, 0.0)
+        d = np.where(slides[..., None], np.clip(np.nan_to_num(contacts.slide_dir), -1e3, 1e3), 0.0)
+        tangential = np.linalg.norm(d - np.einsum("tki,tki->tk", d, n)[..., None] * n, axis=2)
+        flat = (slides & ~(tangential > 1e-6)).any(axis=1)
+        if flat.any():
+            bad("contacts/slide_dir", flat, "has no component in the contact's tangent plane for a sliding finger "
+                                            "(a sliding contact needs its direction; the default is 0)")
     for f in ("vel", "acc", "omega", "alpha"):
         v = getattr(kinematics, f)
         ok = np.isfinite(v).all(axis=1) | ~kinematics.valid
