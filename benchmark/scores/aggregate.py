@@ -33,19 +33,23 @@ def aggregate(values, statistic: str, worst: float | None = None) -> dict:
 
     Returns:
         ``{"value", "ci_low", "ci_high", "n", "at_worst"}``: ``n`` is every value's count, ``at_worst``
-        how many counted at ``worst``; with fewer than two values, or all equal, the interval is the
+        how many were missing or not finite (counted at ``worst``, or infinite); with fewer than two values, or all equal, the interval is the
         value itself; the value is None when nothing can be said (no values, or a missing one
         without a worst value). An infinite ``worst`` makes the statistic and interval a
         deterministic function of the ranks: +inf where the worst values reach them.
     """
     fn = {"median": np.median, "mean": np.mean}[statistic]
     raw = np.asarray([np.nan if v is None else v for v in values], dtype=float)
-    missing = ~np.isfinite(raw)
-    n, at_worst = int(raw.size), int(missing.sum())
-    if n == 0 or (at_worst and worst is None):
-        return {"value": None, "ci_low": None, "ci_high": None, "n": n, "at_worst": at_worst}
-    x = np.where(missing, worst, raw) if at_worst else raw
-    value = float(fn(x))
+    missing = np.isnan(raw) if worst is None or np.isinf(worst) else ~np.isfinite(raw)
+    n, at_worst = int(raw.size), int((~np.isfinite(raw)).sum())
+    none = {"value": None, "ci_low": None, "ci_high": None, "n": n, "at_worst": at_worst}
+    if n == 0 or (missing.any() and worst is None):
+        return none
+    x = np.where(missing, worst, raw) if missing.any() else raw
+    with np.errstate(invalid="ignore"):
+        value = float(fn(x))
+    if np.isnan(value):  # +inf and -inf together (a signed metric's overflows): no statistic
+        return none
     if x.size < 2 or np.all(x == x[0]):
         return {"value": value, "ci_low": value, "ci_high": value, "n": n, "at_worst": at_worst}
     if np.isfinite(x).all():
@@ -61,14 +65,16 @@ def _bootstrap_with_infinities(x: np.ndarray, fn) -> tuple:
     """The percentile-bootstrap interval of ``fn`` over values some of which are +inf (NumPy's
     percentile interpolates inf - inf to NaN: here two equal neighbours give themselves)."""
     rng = np.random.default_rng(BOOTSTRAP_SEED)
-    theta = np.sort(fn(x[rng.integers(0, x.size, size=(RESAMPLES, x.size))], axis=1))
+    with np.errstate(invalid="ignore"):
+        theta = np.sort(fn(x[rng.integers(0, x.size, size=(RESAMPLES, x.size))], axis=1))
     alpha = (1.0 - CONFIDENCE) / 2.0
     out = []
     for q in (alpha, 1.0 - alpha):
         pos = q * (RESAMPLES - 1)
         frac = pos - np.floor(pos)
         lo, hi = theta[int(np.floor(pos))], theta[int(np.ceil(pos))]
-        out.append(lo if frac == 0 or lo == hi else (np.inf if np.isinf(hi) else lo + (hi - lo) * frac))
+        out.append(lo if frac == 0 or lo == hi else (hi if np.isinf(hi) else lo if np.isinf(lo)
+                                                     else lo + (hi - lo) * frac))
     return tuple(out)
 
 
@@ -97,16 +103,23 @@ label such intervals "few episodes"."""
 def paired_test(differences) -> dict:
     """Wilcoxon's signed-rank test of paired per-episode differences (exact for up to 50 pairs).
 
+    Args:
+        differences: One per episode; None or NaN (no difference defined) is left out, an infinite
+            one (one side at its worst value) ranks beyond every finite one.
+
     Returns:
-        ``{"n", "p", "median_diff"}``: ``n`` the non-zero finite differences (ties at zero are
-        dropped, Wilcoxon's rule); ``p`` the two-sided p-value, or None when ``n`` is below
+        ``{"n", "p", "median_diff"}``: ``n`` the non-zero differences (ties at zero are dropped,
+        Wilcoxon's rule); ``p`` the two-sided p-value, or None when ``n`` is below
         :data:`MIN_PAIRED_EPISODES` (too few episodes for any verdict at 95 %); the median difference.
     """
-    d = np.asarray([v for v in differences if v is not None and np.isfinite(v)], dtype=float)
+    d = np.asarray([v for v in differences if v is not None and not np.isnan(v)], dtype=float)
     nonzero = d[d != 0]
     median = float(np.median(d)) if d.size else None
     if nonzero.size < MIN_PAIRED_EPISODES:
         return {"n": int(nonzero.size), "p": None, "median_diff": median}
+    finite = nonzero[np.isfinite(nonzero)]
+    beyond = 2.0 * (np.abs(finite).max() if finite.size else 1.0) + 1.0  # the test sees ranks and signs only
+    ranked = np.where(np.isinf(nonzero), np.sign(nonzero) * beyond, nonzero)
     method = "exact" if nonzero.size <= 50 else "approx"
-    p = float(stats.wilcoxon(nonzero, alternative="two-sided", method=method).pvalue)
+    p = float(stats.wilcoxon(ranked, alternative="two-sided", method=method).pvalue)
     return {"n": int(nonzero.size), "p": p, "median_diff": median}
