@@ -79,13 +79,18 @@ class _ZipEntries:
 
     def __init__(self, path):
         self._zip = zipfile.ZipFile(path)
-        infos = self._zip.infolist()
-        names = [i.filename for i in infos]
-        if len(set(names)) != len(names):
-            dup = next(n for n in names if names.count(n) > 1)
-            raise _Refused(f"entry {dup!r} is stored twice")
+        try:
+            self._index(self._zip.infolist())
+        except BaseException:
+            self._zip.close()
+            raise
+        self.files = list(self._infos)
+
+    def _index(self, infos):
         self._infos = {}
         for info in infos:
+            if _entry_name(info.filename) in self._infos:
+                raise _Refused(f"entry {info.filename!r} is stored twice")
             if info.compress_type not in (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED):
                 raise _Refused(f"entry {info.filename!r} uses compression method {info.compress_type}; the format "
                                "stores or deflates")
@@ -93,7 +98,6 @@ class _ZipEntries:
                 raise _Refused(f"entry {info.filename!r} expands {info.file_size / max(info.compress_size, 1):.0f} "
                                f"times (above {MAX_COMPRESSION_RATIO}, deflate's limit)")
             self._infos[_entry_name(info.filename)] = info
-        self.files = list(self._infos)
 
     def header(self, name: str) -> tuple:
         """``(dtype, shape)`` of an entry, from its ``.npy`` header alone."""
@@ -120,13 +124,16 @@ class _ZipEntries:
             if fp.tell() + nbytes != info.file_size:
                 raise _Refused(f"entry {info.filename!r} is {info.file_size} bytes, not the {fp.tell() + nbytes} "
                                "bytes its .npy header gives")
-            data = fp.read(nbytes)
+            data = bytearray(nbytes)  # filled in place: one copy of the array in memory, writable
+            view, got = memoryview(data), 0
+            while got < nbytes:
+                n = fp.readinto(view[got:])
+                if not n:
+                    raise ValueError(f"entry {info.filename!r} is truncated")
+                got += n
             fp.read(1)  # at the end: the CRC is checked
-        if len(data) != nbytes:
-            raise ValueError(f"entry {info.filename!r} is truncated")
-        if fortran:
-            return np.frombuffer(data, dtype).reshape(shape[::-1]).T.copy()
-        return np.frombuffer(data, dtype).reshape(shape).copy()
+        array = np.frombuffer(data, dtype)
+        return np.ascontiguousarray(array.reshape(shape[::-1]).T) if fortran else array.reshape(shape)
 
     def __enter__(self):
         return self

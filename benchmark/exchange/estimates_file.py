@@ -132,7 +132,7 @@ META_KEYS = ("format", "version", "episode", "finger_names", "method", "stages",
 
 def force_bound_n() -> float:
     """:data:`FORCE_WEIGHTS` times the heaviest box's weight, [N]."""
-    from benchmark.world.assets import masses
+    from benchmark.world.assets import masses  # here: it imports MuJoCo, which reading a file does not need
 
     return FORCE_WEIGHTS * max(float(m["mass_kg"]) for m in masses()) * 9.81
 
