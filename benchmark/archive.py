@@ -292,7 +292,8 @@ def read_archive(path, fmt: str, version: int, *, kind: str, error: type, digest
         try:
             z = _container(path)
         except (zipfile.BadZipFile, OSError) as e:
-            raise error(f"{path} is not an fsv-bench {kind} file: not {container}, or truncated ({one_line(e)})") from e
+            raise error(f"{path} is truncated or corrupt, or not an fsv-bench {kind} file: not {container} "
+                        f"({one_line(e)})") from e
         with z:
             if "meta.json" not in z.files:
                 raise error(f"{path} is not an fsv-bench {kind} file (no meta.json entry)")
@@ -306,7 +307,7 @@ def read_archive(path, fmt: str, version: int, *, kind: str, error: type, digest
                 raise error(f"{path} is not an fsv-bench {kind} file (format {str(got)[:60]!r}, expected {fmt!r})")
             held = meta.get("version")
             if type(held) is not int or held != version:
-                raise error(f"{path} is {kind} format version {str(held)[:60]!r}; this fsv-bench reads version "
+                raise error(f"{path} is {kind} format version {repr(held)[:60]}; this fsv-bench reads version "
                             f"{version} (an integer)")
             digests = meta.get("array_sha256")
             if "meta_sha256" in meta or digests_required:
