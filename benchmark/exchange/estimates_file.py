@@ -197,9 +197,10 @@ def check_meta(path, meta: dict) -> None:
         refuse(f'"suite" must be {{"name": string, "version": integer}}, got {str(suite)[:60]}')
 
 
-def check_entry(name: str, dtype: np.dtype, shape: tuple, meta: dict) -> str | None:
+def check_entry(name: str, dtype: np.dtype, shape: tuple, meta: dict, frames: int | None = None) -> str | None:
     """The format's rule on one array, from its header alone (:func:`benchmark.archive.read_archive`'s
-    ``check_entry``): why it is refused, or None."""
+    ``check_entry``): why it is refused, or None. ``frames``: the episode's, when known (else any
+    number up to :data:`MAX_FRAMES`)."""
     if name not in ARRAYS:
         return f"array {name!r} is not in the estimates format (docs/formats.md lists its arrays)"
     kind, tail = ARRAYS[name]
@@ -207,6 +208,8 @@ def check_entry(name: str, dtype: np.dtype, shape: tuple, meta: dict) -> str | N
         return f"{name} holds {_describe(dtype)}; expected {TYPES[kind]}"
     K = len(meta.get("finger_names") or ())
     want = tuple(K if d == "K" else d for d in tail)
+    if frames is not None and tuple(shape) != (frames, *want):
+        return f"{name} has shape {tuple(shape)}, expected {(frames, *want)}"
     if len(shape) != 1 + len(tail) or tuple(shape[1:]) != want or shape[0] > MAX_FRAMES:
         expected = "(" + ", ".join(["T", *map(str, want)]) + ("," if not want else "") + ")"
         return (f"{name} has shape {shape}; expected {expected} with T <= {MAX_FRAMES} frames"
@@ -214,11 +217,12 @@ def check_entry(name: str, dtype: np.dtype, shape: tuple, meta: dict) -> str | N
     return None
 
 
-def read_estimates(path, *, arrays: bool = True, identity=None) -> tuple:
+def read_estimates(path, *, arrays: bool = True, identity=None, frames: int | None = None) -> tuple:
     """``(meta, sections)`` of an estimates file, every entry checked against the format from its
     header before any array is read (:func:`check_entry`), ``meta.json`` by :func:`check_meta`, then
     by ``identity(meta)`` if given (e.g. :func:`check_identity`), before the entries;
-    ``arrays=False`` reads no array.
+    ``arrays=False`` reads no array; ``frames``: the episode's frame count, when known (every array's
+    first axis must be it).
 
     Raises:
         EstimatesFileError: The first problem, naming the file and the entry.
@@ -231,7 +235,7 @@ def read_estimates(path, *, arrays: bool = True, identity=None) -> tuple:
             if identity is not None:
                 identity(meta)
             checked.append(True)
-        return check_entry(name, dtype, shape, meta)
+        return check_entry(name, dtype, shape, meta, frames)
 
     meta, sections = read_archive(path, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
                                   digests_required=False, check_entry=rule, arrays=arrays)
@@ -387,10 +391,8 @@ def load_estimate(path, *, t: np.ndarray, finger_names: tuple):
     from fsv.forces import FrameStatus
     from fsv.method import Estimate, TrackOutput
 
-    meta, s = read_estimates(path)
+    meta, s = read_estimates(path, frames=len(t), identity=lambda meta: _same_fingers(path, meta, finger_names))
     names = tuple(meta.get("finger_names") or ())
-    if names != tuple(finger_names):
-        raise EstimatesFileError(f"{path}: finger_names {list(names)} do not match the episode's {list(finger_names)}")
     T, K = len(t), len(names)
 
     def get(section, name, shape, dtype=float, default=None, finite=False):
@@ -446,6 +448,12 @@ def load_estimate(path, *, t: np.ndarray, finger_names: tuple):
     return Estimate(tracking=tracking, contacts=contacts, kinematics=kin, nominal=solutions.get("nominal"),
                     forces=solutions.get("forces"), internal_pred=None, oracle=tuple(meta.get("oracle", ())),
                     timing_s={}, labels=dict(meta.get("stages", {})))
+
+
+def _same_fingers(path, meta: dict, finger_names) -> None:
+    names = tuple(meta.get("finger_names") or ())
+    if names != tuple(finger_names):
+        raise EstimatesFileError(f"{path}: finger_names {list(names)} do not match the episode's {list(finger_names)}")
 
 
 def _solution(kind: str, contacts, force: np.ndarray, env_wrench: np.ndarray, status: np.ndarray):
