@@ -45,8 +45,8 @@ files written by other programs; when present they are checked.
 Types, exactly: float is float64 or float32 (not float16, complex, integer or boolean); bool is
 bool, or uint8 holding only 0 and 1 (for writers without a boolean type); a status is an integer
 type (int8 by fsv-bench) whose every value is one of the eight above. No other entry is read: an
-array not listed here, or of more than MAX_FRAMES frames or MAX_FINGERS fingers, is refused from its
-header, before its data is read.
+array not listed here, or of other than the episode's T frames (at most MAX_FRAMES) and K fingers
+(at most MAX_FINGERS), is refused from its header, before its data is read.
 
 Physics is checked before scoring: rotations orthonormal with determinant +1 (within 1e-5),
 positions finite and in the scene (box, filtered pose and fingertips within SCENE_BOUND_M = 5 m of
