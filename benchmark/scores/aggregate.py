@@ -1,4 +1,5 @@
-"""Aggregates of per-episode metrics over a suite: medians and means with 95 % bootstrap intervals."""
+"""Aggregates of per-episode metrics over a suite: medians and means with 95 % bootstrap intervals,
+over every episode (a metric that could not be computed counts at its worst value)."""
 
 from __future__ import annotations
 
@@ -25,18 +26,18 @@ def aggregate(values, statistic: str, worst: float | None = None) -> dict:
     episode counts.
 
     Args:
-        values: One value per episode. A value that is None or not finite (a metric that could not
-            be computed) counts as ``worst``; never left out.
+        values: One value per episode. None or NaN (a metric that could not be computed) counts as
+            ``worst``, never left out; so does an infinite value where ``worst`` is finite (a rate).
         statistic: ``"median"`` or ``"mean"``.
         worst: The metric's worst value (:data:`benchmark.scores.episode.WORST`); None: the
             statistic is undefined when any value is missing.
 
     Returns:
-        ``{"value", "ci_low", "ci_high", "n", "at_worst"}``: ``n`` is every value's count, ``at_worst``
-        how many were missing or not finite (counted at ``worst``, or infinite); with fewer than two values, or all equal, the interval is the
-        value itself; the value is None when nothing can be said (no values, or a missing one
-        without a worst value). An infinite ``worst`` makes the statistic and interval a
-        deterministic function of the ranks: +inf where the worst values reach them.
+        ``{"value", "ci_low", "ci_high", "n", "at_worst"}``: ``n`` is every value's count,
+        ``at_worst`` how many were missing or not finite; with fewer than two values, or all equal,
+        the interval is the value itself; the value is None when nothing can be said (no values, or
+        a missing one without a worst value). An infinite ``worst`` keeps the statistic and interval
+        deterministic: +inf where the worst values reach them.
     """
     fn = {"median": np.median, "mean": np.mean}[statistic]
     raw = np.asarray([np.nan if v is None else v for v in values], dtype=float)

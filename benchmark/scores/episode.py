@@ -1,6 +1,7 @@
 """Per-episode metrics of every stage of the method, pure functions of (estimate, truth).
 
-Metrics (all floats; NaN where a stage has nothing to score):
+Metrics (all floats; NaN where a stage has nothing to score: aggregates count such an episode at
+the metric's :data:`WORST` value):
 
 * tracking (:func:`benchmark.scores.tracking.score_tracking`): ``box_pos_err_mm`` and ``box_rot_err_deg``
   (medians over frames), ``contact_err_mm_mean`` / ``contact_err_mm_std`` (per axis, pooled),
