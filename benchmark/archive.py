@@ -46,9 +46,9 @@ MAX_META_BYTES = 1 << 20
 """The largest ``meta.json`` entry, [bytes]: fsv-bench's own are a few KiB."""
 
 MAX_ENTRY_BYTES = 1 << 32
-"""The largest array of an archive whose format gives no tighter bound, [bytes] (4 GiB: an episode's
-depth at the longest duration, the highest frame rate and resolution is below it). Estimates files
-bound each array by its shape (:data:`benchmark.exchange.estimates_file.MAX_FRAMES`)."""
+"""The largest array of an archive whose format gives no tighter bound, [bytes] (4 GiB: about a
+hundred times a 10 s depth recording at 30 fps and 320 x 240, 46 MB). Estimates files bound each array by its shape
+(the episode's frames, :data:`benchmark.exchange.estimates_file.MAX_FRAMES`)."""
 
 _HDF5_FILTERS = {1: "gzip", 2: "shuffle", 3: "fletcher32"}
 """HDF5 filters a dataset may use (h5py's ids): fsv-bench writes gzip; shuffle and the checksum are
