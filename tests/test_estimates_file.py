@@ -2,6 +2,7 @@
 what is accepted, before any array is read; the readers never read more than the format allows."""
 
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -15,6 +16,8 @@ from benchmark.commands.cli import main
 from benchmark.exchange import EstimatesFileError, load_estimate
 from benchmark.exchange.estimates_file import FORMAT, force_bound_n
 from benchmark.suites import SUITES
+from fsv.errors import InputError
+from fsv.learn.model import load as load_model
 from test_evaluate import TINY
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -130,17 +133,14 @@ def test_a_file_that_is_not_an_archive_never_mentions_pickles(tmp_path, capsys, 
 
 
 def test_a_model_that_is_not_an_archive_never_mentions_pickles(tmp_path):
-    from fsv.errors import InputError
-    from fsv.learn.model import load
-
     path = tmp_path / "model.npz"
     path.write_text('{"format": "fsv-internal-forces"}')
     with pytest.raises(InputError) as e:
-        load(path)
+        load_model(path)
     assert "pickle" not in str(e.value).lower() and "not a .npz archive" in str(e.value)
     np.savez(path, header=np.array([{"a": 1}], dtype=object), allow_pickle=True)
     with pytest.raises(InputError) as e:
-        load(path)
+        load_model(path)
     assert "pickle" not in str(e.value).lower() and "holds Python objects" in str(e.value)
 
 
@@ -279,8 +279,6 @@ def test_check_and_score_on_a_hostile_file_use_at_most_twice_a_valid_files_memor
     hostile file before any episode is made at 315 MB (its imports), against 374 MB scoring a valid
     file of the same suite from a warm cache (not run here: it needs the episode rendered and a
     method's estimates; a valid score reads at least what check reads, so 2x check's bounds it)."""
-    import os
-
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     valid = write(tmp_path / "valid.npz", valid_arrays())
     check = ["-m", "benchmark.commands.entry", "check"]

@@ -12,6 +12,7 @@ from benchmark.exchange import EstimatesFileError, load_estimate
 from benchmark.exchange.estimates_file import ARRAYS, FORMAT, META_KEYS
 from benchmark.scores.aggregate import aggregate_all
 from benchmark.scores.episode import METRICS, score_episode
+from benchmark.suites.evaluate import cached_episode
 from test_evaluate import TINY
 
 CASES = 150
@@ -20,8 +21,6 @@ CASES = 150
 
 @pytest.fixture(scope="module")
 def episode(tmp_path_factory):
-    from benchmark.suites.evaluate import cached_episode
-
     return cached_episode(TINY, TINY.scenarios[0], tmp_path_factory.mktemp("cache"))[0]
 
 

@@ -4,6 +4,9 @@ metric at its worst value."""
 import numpy as np
 
 from benchmark.scores.aggregate import aggregate, aggregate_all
+from benchmark.scores.episode import METRICS, WORST
+from benchmark.scores.verdict import Gate, check_gates
+from benchmark.suites.compare import HIGHER_IS_BETTER
 
 
 def test_median_and_mean_with_intervals_that_bracket_them():
@@ -30,8 +33,6 @@ def test_a_missing_value_counts_at_the_worst_and_degenerate_samples_have_no_widt
 
 def test_an_overflowing_episode_counts_and_the_gate_fails():
     """box/pos = 1e300 overflowed the episode's error to NaN: it was left out (n = 3 of 4, passing)."""
-    from benchmark.scores.verdict import Gate, check_gates
-
     rows = [{"box_pos_err_mm": v} for v in (3.0, 4.0, 5.0, float("nan"))]
     aggregates = aggregate_all(rows, ["box_pos_err_mm"])
     assert aggregates["box_pos_err_mm"]["median"]["n"] == 4 and aggregates["box_pos_err_mm"]["mean"]["n"] == 4
@@ -54,9 +55,6 @@ def test_an_episode_without_valid_kinematics_cannot_improve_the_median():
 
 
 def test_every_metric_has_a_worst_value_of_its_direction():
-    from benchmark.scores.episode import METRICS, WORST
-    from benchmark.suites.compare import HIGHER_IS_BETTER
-
     assert set(WORST) == set(METRICS)
     for m in METRICS:
         assert WORST[m] == (0.0 if m in HIGHER_IS_BETTER else None if m == "contact_err_mm_mean" else
