@@ -35,6 +35,21 @@ def test_a_uniformly_better_method_is_named_with_its_p_value_and_noise_is_not():
     assert compare(a, worse_recall)["metrics"]["contact_recall"]["better"] == "A"
 
 
+def test_hiding_the_worst_episode_cannot_make_a_method_better():
+    """B is lower than A on seven episodes and has no value (null: NaN or overflowed) on the eighth:
+    left out, that gave B better at p = 2/2^7; at its worst value it ranks above every difference."""
+    a = _scores([1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0])
+    b = _scores([0.5, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5, None])
+    m = compare(a, b)["metrics"]["box_pos_err_mm"]
+    assert m["n"] == 8 and m["pairs"] == 8 and m["mean_diff"] == float("inf") and m["better"] == "neither"
+    both = compare(_scores([None, 1.0]), _scores([None, 1.0]))["metrics"]["box_pos_err_mm"]
+    assert both["mean_diff"] == 0.0 and both["better"] == "neither"  # two worst values tie
+    recall = _scores([1.0] * 8)
+    for e in recall["episodes"][:7]:
+        e["contact_recall"] = None  # a rate's worst is 0
+    assert compare(_scores([1.0] * 8), recall)["metrics"]["contact_recall"]["better"] == "A"
+
+
 def test_other_suite_versions_are_refused():
     with pytest.raises(ValueError, match="same suite and version"):
         compare(_scores([1.0]), _scores([1.0], version=2))

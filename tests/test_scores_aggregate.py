@@ -1,8 +1,12 @@
-"""Aggregates: statistics with deterministic 95 % bootstrap intervals; NaN left out."""
+"""Aggregates: statistics with deterministic 95 % bootstrap intervals; every episode counts, a missing
+metric at its worst value."""
 
 import numpy as np
 
 from benchmark.scores.aggregate import aggregate, aggregate_all
+from benchmark.scores.episode import METRICS, WORST
+from benchmark.scores.verdict import Gate, check_gates
+from benchmark.suites.compare import HIGHER_IS_BETTER
 
 
 def test_median_and_mean_with_intervals_that_bracket_them():
@@ -15,10 +19,46 @@ def test_median_and_mean_with_intervals_that_bracket_them():
     assert mean["ci_high"] - mean["ci_low"] > 1.0  # a 10 among small values widens the mean's interval
 
 
-def test_nan_is_left_out_and_degenerate_samples_have_no_width():
-    assert aggregate([1.0, float("nan"), 3.0], "mean")["n"] == 2
-    assert aggregate([2.0], "median") == {"value": 2.0, "ci_low": 2.0, "ci_high": 2.0, "n": 1}
-    assert aggregate([float("nan")], "median") == {"value": None, "ci_low": None, "ci_high": None, "n": 0}
+def test_a_missing_value_counts_at_the_worst_and_degenerate_samples_have_no_width():
+    inf = float("inf")
+    assert aggregate([1.0, float("nan"), 3.0], "mean", inf) == {"value": inf, "ci_low": 1.0, "ci_high": inf, "n": 3,
+                                                               "at_worst": 1}
+    assert aggregate([2.0], "median") == {"value": 2.0, "ci_low": 2.0, "ci_high": 2.0, "n": 1, "at_worst": 0}
+    assert aggregate([float("nan")], "median", inf)["value"] == inf
+    assert aggregate([0.9, None], "median", 0.0)["value"] == 0.45  # a rate's worst is 0
+    # without a worst value (a signed bias) the statistic is undefined: null, a gate on it fails
+    assert aggregate([float("nan")], "median") == {"value": None, "ci_low": None, "ci_high": None, "n": 1,
+                                                   "at_worst": 1}
+
+
+def test_an_overflowing_episode_counts_and_the_gate_fails():
+    """box/pos = 1e300 overflowed the episode's error to NaN: it was left out (n = 3 of 4, passing)."""
+    rows = [{"box_pos_err_mm": v} for v in (3.0, 4.0, 5.0, float("nan"))]
+    aggregates = aggregate_all(rows, ["box_pos_err_mm"])
+    assert aggregates["box_pos_err_mm"]["median"]["n"] == 4 and aggregates["box_pos_err_mm"]["mean"]["n"] == 4
+    (result,) = check_gates([Gate("box_pos_err_mm", "<=", 4.4)], aggregates)
+    assert result.n == 4 and result.value == 4.5 and not result.passed  # 3 of 4 gave 4.0: a pass
+    (result,) = check_gates([Gate("box_pos_err_mm", "<=", 8.0, statistic="mean")], aggregates)
+    assert result.value == float("inf") and not result.passed
+
+
+def test_an_episode_without_valid_kinematics_cannot_improve_the_median():
+    """kinematics/valid all false in one episode made acc_err_rms NaN: dropped, the median improved
+    from 0.387 to 0.361."""
+    values = [0.30, 0.361, 0.387, 0.42, 0.45]
+    honest = aggregate_all([{"acc_err_rms": v} for v in values], ["acc_err_rms"])["acc_err_rms"]["median"]
+    hidden = aggregate_all([{"acc_err_rms": v} for v in values[:-1]] + [{"acc_err_rms": float("nan")}],
+                           ["acc_err_rms"])["acc_err_rms"]["median"]
+    assert honest["value"] == 0.387 and hidden["value"] >= honest["value"] and hidden["n"] == 5
+    assert hidden["ci_high"] == float("inf") and hidden == aggregate_all(  # deterministic
+        [{"acc_err_rms": v} for v in values[:-1]] + [{"acc_err_rms": None}], ["acc_err_rms"])["acc_err_rms"]["median"]
+
+
+def test_every_metric_has_a_worst_value_of_its_direction():
+    assert set(WORST) == set(METRICS)
+    for m in METRICS:
+        assert WORST[m] == (0.0 if m in HIGHER_IS_BETTER else None if m == "contact_err_mm_mean" else
+                            1.0 if m == "least_violation_frac" else float("inf"))
 
 
 def test_aggregate_all_groups_by_a_key():

@@ -25,13 +25,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def check(path: pathlib.Path, inputs: pathlib.Path | None = None) -> str:
     """Checks an estimates file; returns a one-line description (raises EstimatesFileError, CameraFileError)."""
-    from benchmark.archive import read_archive
     from benchmark.exchange.camera_file import load_camera_input
-    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, check_identity, load_estimate
+    from benchmark.exchange.estimates_file import EstimatesFileError, check_identity, load_estimate, read_estimates
     from benchmark.fingerprint import world_fingerprint
 
-    meta, arrays = read_archive(path, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
-                                digests_required=False)
+    meta, arrays = read_estimates(path)
     if inputs is not None:
         camera, cmeta = load_camera_input(inputs)
         suite = argparse.Namespace(**cmeta["suite"])

@@ -62,8 +62,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     told it of the person (``--protocol``; recorded with every episode)."""
     from dataclasses import asdict
 
-    from benchmark.archive import read_archive
-    from benchmark.exchange.estimates_file import FORMAT, VERSION, EstimatesFileError, check_identity, load_estimate
+    from benchmark.exchange.estimates_file import check_identity, load_estimate, read_estimates
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
     from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
     from benchmark.fingerprint import world_fingerprint
@@ -74,12 +73,14 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
 
     protocol = check_protocol(protocol or DEFAULT_PROTOCOL)
     paths = estimate_paths(suite, folder, container)
-    metas = {sc: read_archive(p, FORMAT, VERSION, kind="estimates", error=EstimatesFileError,
-                              digests_required=False)[0] for sc, p in paths.items()}  # every header before any work
     world = world_fingerprint()
-    for sc, meta in metas.items():
-        check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world,
-                       knowledge=knowledge or DEFAULT_KNOWLEDGE)
+
+    def identity(sc):
+        return lambda meta: check_identity(paths[sc], meta, episode=episode_name(sc), suite=suite, world=world,
+                                           knowledge=knowledge or DEFAULT_KNOWLEDGE)
+
+    # every header before any work
+    metas = {sc: read_estimates(p, arrays=False, identity=identity(sc))[0] for sc, p in paths.items()}
     cache = episode_cache(cache)
     t0 = time.perf_counter()
     rows = []

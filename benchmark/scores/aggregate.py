@@ -1,9 +1,12 @@
-"""Aggregates of per-episode metrics over a suite: medians and means with 95 % bootstrap intervals."""
+"""Aggregates of per-episode metrics over a suite: medians and means with 95 % bootstrap intervals,
+over every episode (a metric that could not be computed counts at its worst value)."""
 
 from __future__ import annotations
 
 import numpy as np
 from scipy import stats
+
+from benchmark.scores.episode import WORST
 
 CONFIDENCE = 0.95
 RESAMPLES = 2000
@@ -18,32 +21,67 @@ def span(values, missing: str = "-") -> str:
     return f"{np.median(v):.3g} ({v.min():.3g}-{v.max():.3g})"
 
 
-def aggregate(values, statistic: str) -> dict:
-    """A statistic of per-episode values with its percentile-bootstrap confidence interval.
+def aggregate(values, statistic: str, worst: float | None = None) -> dict:
+    """A statistic of per-episode values with its percentile-bootstrap confidence interval; every
+    episode counts.
 
     Args:
-        values: One value per episode; NaN entries (a stage with nothing to score) are left out.
+        values: One value per episode. None or NaN (a metric that could not be computed) counts as
+            ``worst``, never left out; so does an infinite value where ``worst`` is finite (a rate).
         statistic: ``"median"`` or ``"mean"``.
+        worst: The metric's worst value (:data:`benchmark.scores.episode.WORST`); None: the
+            statistic is undefined when any value is missing.
 
     Returns:
-        ``{"value", "ci_low", "ci_high", "n"}``; with fewer than two finite values the interval is
-        the value itself (nothing to resample), and with none every entry is None.
+        ``{"value", "ci_low", "ci_high", "n", "at_worst"}``: ``n`` is every value's count,
+        ``at_worst`` how many were missing or not finite; with fewer than two values, or all equal,
+        the interval is the value itself; the value is None when nothing can be said (no values, or
+        a missing one without a worst value). An infinite ``worst`` keeps the statistic and interval
+        deterministic: +inf where the worst values reach them.
     """
     fn = {"median": np.median, "mean": np.mean}[statistic]
-    x = np.asarray([v for v in values if v is not None and np.isfinite(v)], dtype=float)
-    if x.size == 0:
-        return {"value": None, "ci_low": None, "ci_high": None, "n": 0}
-    value = float(fn(x))
+    raw = np.asarray([np.nan if v is None else v for v in values], dtype=float)
+    missing = np.isnan(raw) if worst is None or np.isinf(worst) else ~np.isfinite(raw)
+    n, at_worst = int(raw.size), int((~np.isfinite(raw)).sum())
+    none = {"value": None, "ci_low": None, "ci_high": None, "n": n, "at_worst": at_worst}
+    if n == 0 or (missing.any() and worst is None):
+        return none
+    x = np.where(missing, worst, raw) if missing.any() else raw
+    with np.errstate(invalid="ignore"):
+        value = float(fn(x))
+    if np.isnan(value):  # +inf and -inf together (a signed metric's overflows): no statistic
+        return none
     if x.size < 2 or np.all(x == x[0]):
-        return {"value": value, "ci_low": value, "ci_high": value, "n": int(x.size)}
-    res = stats.bootstrap((x,), fn, confidence_level=CONFIDENCE, n_resamples=RESAMPLES, method="percentile",
-                          rng=np.random.default_rng(BOOTSTRAP_SEED))
-    ci = res.confidence_interval
-    return {"value": value, "ci_low": float(ci.low), "ci_high": float(ci.high), "n": int(x.size)}
+        return {"value": value, "ci_low": value, "ci_high": value, "n": n, "at_worst": at_worst}
+    if np.isfinite(x).all():
+        res = stats.bootstrap((x,), fn, confidence_level=CONFIDENCE, n_resamples=RESAMPLES, method="percentile",
+                              rng=np.random.default_rng(BOOTSTRAP_SEED))
+        low, high = res.confidence_interval
+    else:
+        low, high = _bootstrap_with_infinities(x, fn)
+    return {"value": value, "ci_low": float(low), "ci_high": float(high), "n": n, "at_worst": at_worst}
+
+
+def _bootstrap_with_infinities(x: np.ndarray, fn) -> tuple:
+    """The percentile-bootstrap interval of ``fn`` over values some of which are +inf (NumPy's
+    percentile interpolates inf - inf to NaN: here two equal neighbours give themselves)."""
+    rng = np.random.default_rng(BOOTSTRAP_SEED)
+    with np.errstate(invalid="ignore"):
+        theta = np.sort(fn(x[rng.integers(0, x.size, size=(RESAMPLES, x.size))], axis=1))
+    alpha = (1.0 - CONFIDENCE) / 2.0
+    out = []
+    for q in (alpha, 1.0 - alpha):
+        pos = q * (RESAMPLES - 1)
+        frac = pos - np.floor(pos)
+        lo, hi = theta[int(np.floor(pos))], theta[int(np.ceil(pos))]
+        out.append(lo if frac == 0 or lo == hi else (hi if np.isinf(hi) else lo if np.isinf(lo)
+                                                     else lo + (hi - lo) * frac))
+    return tuple(out)
 
 
 def aggregate_all(rows: list[dict], metrics, by: str | None = None) -> dict:
-    """Median and mean of every metric over ``rows`` (per-episode dicts), optionally per ``by`` value.
+    """Median and mean of every metric over ``rows`` (per-episode dicts), optionally per ``by`` value;
+    every row counts, a missing metric at its :data:`~benchmark.scores.episode.WORST` value.
 
     Returns:
         ``{metric: {"median": aggregate, "mean": aggregate}}``, or ``{group: that}`` with ``by``.
@@ -51,7 +89,7 @@ def aggregate_all(rows: list[dict], metrics, by: str | None = None) -> dict:
     if by is not None:
         groups = sorted({r[by] for r in rows})
         return {g: aggregate_all([r for r in rows if r[by] == g], metrics) for g in groups}
-    return {m: {s: aggregate([r[m] for r in rows], s) for s in ("median", "mean")} for m in metrics}
+    return {m: {s: aggregate([r.get(m) for r in rows], s, WORST.get(m)) for s in ("median", "mean")} for m in metrics}
 
 
 MIN_PAIRED_EPISODES = 6
@@ -66,16 +104,23 @@ label such intervals "few episodes"."""
 def paired_test(differences) -> dict:
     """Wilcoxon's signed-rank test of paired per-episode differences (exact for up to 50 pairs).
 
+    Args:
+        differences: One per episode; None or NaN (no difference defined) is left out, an infinite
+            one (one side at its worst value) ranks beyond every finite one.
+
     Returns:
-        ``{"n", "p", "median_diff"}``: ``n`` the non-zero finite differences (ties at zero are
-        dropped, Wilcoxon's rule); ``p`` the two-sided p-value, or None when ``n`` is below
+        ``{"n", "p", "median_diff"}``: ``n`` the non-zero differences (ties at zero are dropped,
+        Wilcoxon's rule); ``p`` the two-sided p-value, or None when ``n`` is below
         :data:`MIN_PAIRED_EPISODES` (too few episodes for any verdict at 95 %); the median difference.
     """
-    d = np.asarray([v for v in differences if v is not None and np.isfinite(v)], dtype=float)
+    d = np.asarray([v for v in differences if v is not None and not np.isnan(v)], dtype=float)
     nonzero = d[d != 0]
     median = float(np.median(d)) if d.size else None
     if nonzero.size < MIN_PAIRED_EPISODES:
         return {"n": int(nonzero.size), "p": None, "median_diff": median}
+    finite = nonzero[np.isfinite(nonzero)]
+    beyond = 2.0 * (np.abs(finite).max() if finite.size else 1.0) + 1.0  # the test sees ranks and signs only
+    ranked = np.where(np.isinf(nonzero), np.sign(nonzero) * beyond, nonzero)
     method = "exact" if nonzero.size <= 50 else "approx"
-    p = float(stats.wilcoxon(nonzero, alternative="two-sided", method=method).pvalue)
+    p = float(stats.wilcoxon(ranked, alternative="two-sided", method=method).pvalue)
     return {"n": int(nonzero.size), "p": p, "median_diff": median}

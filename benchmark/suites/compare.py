@@ -3,13 +3,15 @@
     fsv-bench compare DIR_A DIR_B [--out FILE.json]
 
 Both folders hold a ``scores.json`` written by ``fsv-bench eval`` on the same suite and version.
-For every metric, the per-episode differences B - A over the episodes both scored give a mean
+For every metric, the per-episode differences B - A over the episodes both hold give a mean
 difference with its 95 % bootstrap interval (labelled "few episodes" below
 :data:`benchmark.scores.aggregate.FEW_EPISODES`) and Wilcoxon's signed-rank test. A method is
 called better on a metric only when the test's two-sided p is below 0.05 (lower is better for
 errors, higher for recall and precision); with fewer than
 :data:`benchmark.scores.aggregate.MIN_PAIRED_EPISODES` differing pairs no p below 0.05 is possible,
-and the verdict is "too few episodes".
+and the verdict is "too few episodes". Every episode counts: a metric missing on one side counts at
+its worst value (:data:`benchmark.scores.episode.WORST`; two worst values tie), as in ``scores.json``'s
+aggregates.
 """
 
 from __future__ import annotations
@@ -20,6 +22,8 @@ import pathlib
 
 from benchmark.atomic import check_file_out, write_text
 from benchmark.scores.aggregate import FEW_EPISODES, aggregate, paired_test
+from benchmark.scores.episode import WORST
+from benchmark.suites.evaluate import strict
 from benchmark.scores.units import labelled
 
 ALPHA = 0.05
@@ -54,7 +58,7 @@ def compare(a: dict, b: dict) -> dict:
         raise ValueError("the two evaluations share no episode")
     out = {}
     for m in a["metrics"]:
-        d = [eb[k][m] - ea[k][m] for k in common if ea[k][m] is not None and eb[k][m] is not None]
+        d = [paired_difference(ea[k][m], eb[k][m], WORST.get(m)) for k in common]
         agg = aggregate(d, "mean")
         test = paired_test(d)
         if agg["value"] is None:
@@ -72,6 +76,16 @@ def compare(a: dict, b: dict) -> dict:
                   "interval": "few episodes" if agg["n"] < FEW_EPISODES else "bootstrap",
                   "median_diff": test["median_diff"], "pairs": test["n"], "p": test["p"], "better": better}
     return {"suite": sa, "a": a.get("method"), "b": b.get("method"), "episodes": common, "metrics": out}
+
+
+def paired_difference(a, b, worst):
+    """B - A on one episode, a missing value (None: NaN or infinite in ``scores.json``) at the metric's
+    ``worst``: two worst values tie (0), one gives an infinite difference; None where a value is
+    missing and the metric has no worst value (then no mean is defined)."""
+    a, b = (worst if v is None else v for v in (a, b))
+    if a is None or b is None:
+        return None
+    return 0.0 if a == b else b - a
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -98,7 +112,7 @@ def run(args: argparse.Namespace) -> dict:
         print(f"{labelled(m):28s} {r['mean_diff']:10.4g} [{r['ci_low']:10.4g}, {r['ci_high']:10.4g}] {r['pairs']:5d} "
               f"{p:>8s}  {r['better']}")
     if args.out:
-        write_text(args.out, json.dumps(result, indent=1, allow_nan=False) + "\n")
+        write_text(args.out, json.dumps(strict(result), indent=1, allow_nan=False) + "\n")
     return result
 
 

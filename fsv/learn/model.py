@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import zipfile
 from dataclasses import asdict
 
 import numpy as np
@@ -206,9 +207,31 @@ def _from_arrays(npz) -> dict:
 
 
 def read_state(path) -> dict:
-    """The raw content of a model file (what :meth:`InternalForceModel.state` wrote), unchecked."""
+    """The raw content of a model file (what :meth:`InternalForceModel.state` wrote), unchecked.
+
+    Raises:
+        InputError: If the file is not a ``.npz`` archive or a member holds Python objects (never
+            loaded).
+    """
+    if not zipfile.is_zipfile(path):
+        raise InputError(f"{os.fspath(path)!r} is not a .npz archive (an internal-force model is one, written by "
+                         "fsv-bench train)")
     with np.load(path, allow_pickle=False) as npz:
+        for name in npz.files:
+            if _holds_objects(npz.zip, name + ".npy"):
+                raise InputError(f"{os.fspath(path)!r}: member {name!r} holds Python objects; a model holds "
+                                 "numeric arrays only")
         return _from_arrays(npz)
+
+
+def _holds_objects(archive, member: str) -> bool:
+    """Whether a ``.npy`` member of a zip archive declares an object dtype (from its header alone)."""
+    if member not in archive.namelist():
+        return False
+    with archive.open(member) as fp:
+        major, _ = np.lib.format.read_magic(fp)
+        read = np.lib.format.read_array_header_1_0 if major == 1 else np.lib.format.read_array_header_2_0
+        return read(fp)[2].hasobject
 
 
 def load(path) -> InternalForceModel:
