@@ -103,6 +103,7 @@ def test_the_valid_file_is_accepted_and_the_bound_is_the_heaviest_box(tmp_path, 
     ({"stages": "x"}, ('"stages" must be an object',)),
     ({"stages": {"tracker": 3}}, ('"stages" \'tracker\' must be a string, got int',)),
     ({"finger_names": "thumb"}, ('"finger_names" must be a list',)),
+    ({"finger_names": "line\nbreak"}, ("\"finger_names\" must be a list of 1 to 10 names, got 'line\\nbreak'",)),
     ({"method": "m" * 10_000_000}, ("'meta.json' holds 10000165 bytes, above the 1048576",)),  # above the 1 MiB bound of meta.json
     ({"method": "m" * 5000}, ('"method" has 5000 characters; at most 1000',)),
     ({"method": "line one\nline two"}, ('"method" holds a line break',)),

@@ -151,6 +151,12 @@ def _describe(dtype: np.dtype) -> str:
     return f"{names.get(dtype.kind, 'numbers')} ({dtype.str})" if dtype.kind != "f" else f"{dtype.name}"
 
 
+def _shown(value, chars: int = 60) -> str:
+    """A value of a file as one line of a message: its repr (line breaks escaped), cut to ``chars``."""
+    text = repr(value)
+    return text if len(text) <= chars else text[:chars] + "..."
+
+
 def _name_problem(value, what: str) -> str | None:
     if not isinstance(value, str):
         return f"{what} must be a string, got {type(value).__name__}"
@@ -178,13 +184,13 @@ def check_meta(path, meta: dict) -> None:
             refuse(problem)
     names = meta.get("finger_names", [])
     if not isinstance(names, list) or not 0 < len(names) <= MAX_FINGERS:
-        refuse(f'"finger_names" must be a list of 1 to {MAX_FINGERS} names, got {str(names)[:60]}')
+        refuse(f'"finger_names" must be a list of 1 to {MAX_FINGERS} names, got {_shown(names)}')
     for key, value in (("stages", meta.get("stages", {})), ("array_sha256", meta.get("array_sha256", {}))):
         if not isinstance(value, dict) or len(value) > 2 * len(ARRAYS):
-            refuse(f'"{key}" must be an object of at most {2 * len(ARRAYS)} names, got {str(value)[:60]}')
+            refuse(f'"{key}" must be an object of at most {2 * len(ARRAYS)} names, got {_shown(value)}')
     oracle = meta.get("oracle", [])
     if not isinstance(oracle, list) or len(oracle) > len(ARRAYS):
-        refuse(f'"oracle" must be a list of stage names, got {str(oracle)[:60]}')
+        refuse(f'"oracle" must be a list of stage names, got {_shown(oracle)}')
     items = [(f'"finger_names" entry', v) for v in names] + [('"oracle" entry', v) for v in oracle]
     items += [(f'"stages" name', k) for k in meta.get("stages", {})]
     items += [(f'"stages" {str(k)[:40]!r}', v) for k, v in meta.get("stages", {}).items()]
@@ -194,7 +200,7 @@ def check_meta(path, meta: dict) -> None:
     suite = meta.get("suite", {"name": "", "version": 0})
     if not (isinstance(suite, dict) and set(suite) == {"name", "version"} and isinstance(suite["name"], str)
             and type(suite["version"]) is int):
-        refuse(f'"suite" must be {{"name": string, "version": integer}}, got {str(suite)[:60]}')
+        refuse(f'"suite" must be {{"name": string, "version": integer}}, got {_shown(suite)}')
 
 
 def check_entry(name: str, dtype: np.dtype, shape: tuple, meta: dict, frames: int | None = None) -> str | None:
