@@ -84,3 +84,19 @@ def test_every_sweep_value_is_checked_before_any_work_naming_values(tiny, tmp_pa
     assert time.perf_counter() - t0 < 5
     err = capsys.readouterr().err
     assert needle in err and err.count("\n") == 1 and not list(tmp_path.iterdir())
+
+
+def test_an_infinite_aggregate_is_drawn_at_the_axis_top_without_warnings():
+    import warnings
+
+    import numpy as np
+
+    from benchmark.suites.sweep import _capped
+
+    v, lo, hi = np.array([1.0, np.inf]), np.array([0.5, 2.0]), np.array([1.5, np.inf])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cv, clo, chi, beyond = _capped(v, lo, hi)
+        yerr = [cv - clo, chi - cv]
+    assert beyond.tolist() == [False, True] and cv[1] == chi[1] == 2.0 + 0.15 * 2.0
+    assert np.isfinite(yerr).all() and (np.array(yerr) >= 0).all()

@@ -164,8 +164,11 @@ def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
         v = np.array([a["value"] if a["value"] is not None else np.nan for a in aggs], float)
         lo = np.array([a["ci_low"] if a["ci_low"] is not None else np.nan for a in aggs], float)
         hi = np.array([a["ci_high"] if a["ci_high"] is not None else np.nan for a in aggs], float)
+        v, lo, hi, beyond = _capped(v, lo, hi)
         ax.errorbar(x, v, yerr=[v - lo, hi - v], marker="o", capsize=3, color="tab:blue", label=f"{stat} [95 % CI]")
-        ax.set_title(metric, fontsize=9)
+        if beyond.any():  # an aggregate at an episode's worst value (infinite): drawn at the axis' top
+            ax.plot(x[beyond], v[beyond], "^", color="tab:red", ms=8)
+        ax.set_title(metric + (" (▲: infinite, an episode counted at its worst)" if beyond.any() else ""), fontsize=9)
         ax.set_xlabel(AXES[axis][2], fontsize=8)
         if categorical:
             ax.set_xticks(x, [str(v) for v in values], fontsize=8)
@@ -177,6 +180,20 @@ def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
     out = save_figure(fig, path)
     plt.close(fig)
     return out
+
+
+def _capped(v, lo, hi) -> tuple:
+    """Median and interval bounds with their infinite values (episodes counted at their worst,
+    docs/suites.md) replaced by a cap 15 % above the largest finite one, and which medians were
+    capped: ``(v, lo, hi, beyond)``."""
+    import numpy as np
+
+    both = np.concatenate([v, lo, hi])
+    finite = both[np.isfinite(both)]
+    top = float(finite.max()) if finite.size else 1.0
+    cap = top + 0.15 * max(abs(top), 1e-9)
+    beyond = np.isposinf(v)
+    return tuple(np.where(np.isposinf(a), cap, a) for a in (v, lo, hi)) + (beyond,)
 
 
 def run(args: argparse.Namespace) -> dict:
