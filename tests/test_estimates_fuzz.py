@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_evaluate import TINY
 
 from benchmark.exchange import EstimatesFileError, load_estimate
 from benchmark.exchange.estimates_file import ARRAYS, FORMAT, META_KEYS
 from benchmark.scores.aggregate import aggregate_all
-from benchmark.scores.episode import METRICS, score_episode
+from benchmark.scores.episode import score_episode
+from benchmark.scores.metrics import METRICS
 from benchmark.suites.evaluate import cached_episode
-from test_evaluate import TINY
 
 CASES = 150
 """Hypothesis examples (derandomized: the same cases every run; about 10 s here)."""

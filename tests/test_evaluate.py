@@ -28,7 +28,7 @@ def test_every_registered_suite_is_valid(name):
     assert suite.version >= 1 and suite.description and suite.gates
     for sc in suite.scenarios:
         validate(sc)  # task, user, grasp, mass exist; duration suits the task
-    from benchmark.scores.episode import METRICS
+    from benchmark.scores.metrics import METRICS
 
     assert all(g.metric in METRICS for g in suite.gates)
 

@@ -158,8 +158,11 @@ def test_an_unknown_knowledge_is_refused_by_name():
 def test_the_main_command_refuses_an_unknown_knowledge_with_status_2(tmp_path, capsys):
     from benchmark.commands.cli import main
 
-    assert main(["--task", "lift", "--knowledge", "guess", "--out", str(tmp_path / "o")]) == 2
+    with pytest.raises(SystemExit) as refused:  # refused while the command line is parsed
+        main(["--task", "lift", "--knowledge", "guess", "--out", str(tmp_path / "o")])
+    assert refused.value.code == 2
     err = capsys.readouterr().err
+    assert err.count("\n") == 1
     assert "--knowledge 'guess': accepted: exact, lab, lab-hand" in err and not (tmp_path / "o").exists()
 
 

@@ -4,7 +4,7 @@ metric at its worst value."""
 import numpy as np
 
 from benchmark.scores.aggregate import aggregate, aggregate_all
-from benchmark.scores.episode import METRICS, WORST
+from benchmark.scores.metrics import METRICS, WORST
 from benchmark.scores.verdict import Gate, check_gates
 from benchmark.suites.compare import HIGHER_IS_BETTER
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import stats
 
-from benchmark.scores.episode import WORST
+from benchmark.scores.metrics import WORST
 
 CONFIDENCE = 0.95
 RESAMPLES = 2000

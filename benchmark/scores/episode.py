@@ -1,7 +1,7 @@
 """Per-episode metrics of every stage of the method, pure functions of (estimate, truth).
 
 Metrics (all floats; NaN where a stage has nothing to score: aggregates count such an episode at
-the metric's :data:`WORST` value):
+the metric's :data:`benchmark.scores.metrics.WORST` value):
 
 * tracking (:func:`benchmark.scores.tracking.score_tracking`): ``box_pos_err_mm`` and ``box_rot_err_deg``
   (medians over frames), ``contact_err_mm_mean`` / ``contact_err_mm_std`` (per axis, pooled),
@@ -24,19 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-METRICS = ("box_pos_err_mm", "box_rot_err_deg", "contact_err_mm_mean", "contact_err_mm_std", "contact_recall",
-           "contact_precision", "acc_err_rms", "gyro_err_rms", "net_force_err_n_rms", "net_force_err_n_rms_instant",
-           "net_torque_err_nm_rms", "least_violation_frac", "learned_rel_err_pct", "learned_mae_n",
-           "learned_rel_err_pct_paper")
-"""Names of the per-episode metrics, in report order."""
+from benchmark.scores.metrics import METRICS
 
-WORST = {**{m: float("inf") for m in METRICS}, "contact_recall": 0.0, "contact_precision": 0.0,
-         "least_violation_frac": 1.0, "contact_err_mm_mean": None}
-"""The value at which an episode counts in an aggregate when its metric cannot be computed (NaN: a
-stage with nothing to score, no valid frame, an overflow): +inf for an error, 0 for recall and
-precision, 1 for the fallback fraction. The signed contact bias has no worst value: one such
-episode leaves its aggregate undefined (null; a gate on it fails). docs/suites.md, "Every episode
-counts"."""
 
 def score_episode(episode, estimate, world_from_method=None) -> dict:
     """Every metric of one episode.

@@ -26,12 +26,18 @@ Metric definitions (docs/design.md):
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from benchmark.world.truth import Truth
 from fsv import Contacts, Kinematics, ObjectModel
-from fsv.forces import FALLBACKS, ForceSettings, ForceSolution, FrameStatus, nominal_forces, to_world_frame
+from fsv.forces import (
+    FALLBACKS,
+    ForceSettings,
+    ForceSolution,
+    FrameStatus,
+    nominal_forces,
+    to_world_frame,
+)
 
 PAPER_SENSITIVITY_N = {"mean": 0.216, "std": 1.548}
 

@@ -22,11 +22,15 @@ predicts the internal forces from the episode's kinematics and contacts; the rec
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from benchmark.scores.forces import true_normal_forces
-from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N, nominal_excess_n, sample_mask
+from benchmark.scores.samples import (
+    DATASET_FORCE_SETTINGS,
+    MAX_EXCESS_N,
+    nominal_excess_n,
+    sample_mask,
+)
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
 from fsv.forces import SOLVED, FrameStatus
@@ -141,6 +145,7 @@ def model_block(model) -> dict:
 
 def _take(x, idx):
     """The frames ``idx`` of a :class:`fsv.Kinematics` or :class:`fsv.Contacts`."""
-    from benchmark.scores.samples import take_contacts as _take_con, take_kinematics as _take_kin
+    from benchmark.scores.samples import take_contacts as _take_con
+    from benchmark.scores.samples import take_kinematics as _take_kin
 
     return _take_kin(x, idx) if isinstance(x, Kinematics) else _take_con(x, idx)

@@ -24,6 +24,7 @@ from fsv.rotation import angle_between
 from fsv.track.tracker import Tracking
 from fsv.types import Contacts
 
+
 def score_tracking(tracking: Tracking, truth: Truth, contacts: Contacts | None = None) -> dict:
     """The tracker's scores against the truth (see the module docstring).
 

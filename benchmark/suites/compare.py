@@ -22,9 +22,9 @@ import pathlib
 
 from benchmark.atomic import check_file_out, write_text
 from benchmark.scores.aggregate import FEW_EPISODES, aggregate, paired_test
-from benchmark.scores.episode import WORST
-from benchmark.suites.evaluate import strict
+from benchmark.scores.metrics import WORST
 from benchmark.scores.units import labelled
+from benchmark.suites.evaluate import strict
 
 ALPHA = 0.05
 """The paired test's level: a method is better where p < ALPHA."""

@@ -235,7 +235,7 @@ def scores_document(suite: Suite, rows: list, gates, *, method: str, stages: dic
         seconds: Wall time of the whole evaluation.
     """
     from benchmark.scores.aggregate import aggregate_all
-    from benchmark.scores.episode import METRICS
+    from benchmark.scores.metrics import METRICS
     from benchmark.scores.verdict import check_gates
     from fsv.provenance import provenance
 
@@ -266,7 +266,7 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path, pictures=()) ->
     """Writes ``scores.json``, ``report.md`` and ``junit.xml`` (and ``pictures/``: the given files)
     into a temporary folder, then swaps it in."""
     from benchmark.scores.verdict import GateResult, junit_xml, report_markdown
-    from benchmark.scores.episode import METRICS
+    from benchmark.scores.metrics import METRICS
 
     results = [GateResult(**{**g, "ci": tuple(g["ci"]) if g["ci"] is not None else None}) for g in scores["gates"]]
     out = pathlib.Path(out)
@@ -299,7 +299,7 @@ def load_gates(path) -> tuple:
             non-empty list, an unknown or missing key, a value of the wrong type, a non-finite
             limit, an unknown metric, operator or statistic).
     """
-    from benchmark.scores.episode import METRICS
+    from benchmark.scores.metrics import METRICS
 
     what = 'a non-empty JSON list of {"metric", "op", "limit"[, "statistic"]}'
     try:

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from benchmark.commands.stage import Run, Stage, StageResult
 from benchmark.scores.aggregate import aggregate_all
-from benchmark.scores.episode import METRICS, score_episode
+from benchmark.scores.episode import score_episode
+from benchmark.scores.metrics import METRICS
 from benchmark.scores.units import UNITS
 from benchmark.scores.verdict import Gate, GateResult, check_gates, gate_rows
 from benchmark.suites import get_suite
