@@ -7,7 +7,6 @@ not load MuJoCo and the renderer.
 
 import importlib
 
-
 _EXPORTS = {
     "BenchmarkError": "benchmark.errors", "EpisodeFileError": "benchmark.errors", "RenderError": "benchmark.errors",
     "ScenarioError": "benchmark.errors", "SimulationError": "benchmark.errors",

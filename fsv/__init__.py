@@ -6,13 +6,13 @@ hand; it never imports the simulator, the renderer or the benchmark.
 
 from fsv.errors import FsvError, InputError, SolverError, TrackingError
 from fsv.grip import GripCalibration
+from fsv.method import CameraInput, Method, make_method
 from fsv.models import HandModel, ObjectModel
-from fsv.types import Calibration, Contacts, DepthVideo, Kinematics, Poses
 
 # The whole method: depth -> tracking -> contacts -> kinematics -> forces.
 from fsv.pipeline import Estimate, run_pipeline
-from fsv.method import CameraInput, Method, make_method
 from fsv.track.tracker import TrackInit
+from fsv.types import Calibration, Contacts, DepthVideo, Kinematics, Poses
 
 __all__ = [
     "Calibration",

@@ -18,8 +18,15 @@ from __future__ import annotations
 import numpy as np
 
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig
-from fsv.method import CameraInput, Estimate, GRAVITY, LearnedInternalForces, ReferenceTracker, StencilDifferentiator
-from fsv.method import make_method
+from fsv.method import (
+    GRAVITY,
+    CameraInput,
+    Estimate,
+    LearnedInternalForces,
+    ReferenceTracker,
+    StencilDifferentiator,
+    make_method,
+)
 from fsv.models import HandModel, ObjectModel
 from fsv.track.tracker import TrackerConfig, TrackInit
 from fsv.types import Calibration, Contacts, DepthVideo, Kinematics

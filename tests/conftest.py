@@ -78,8 +78,8 @@ def analytic_truth_factory():
 @pytest.fixture(scope="session")
 def lift_episode():
     """A 2.5 s lift (user 0, grasp 0, mass 0, seed 0) with its simulation statistics."""
-    from benchmark.world.simulate import run
     from benchmark.world.scenario import Scenario
+    from benchmark.world.simulate import run
 
     return run(Scenario(task="lift", duration_s=2.5))
 
@@ -87,8 +87,8 @@ def lift_episode():
 @pytest.fixture(scope="session")
 def episode_factory():
     """simulate(Scenario(**kw)), cached per keyword set for the session."""
-    from benchmark.world.simulate import simulate
     from benchmark.world.scenario import Scenario
+    from benchmark.world.simulate import simulate
 
     cache = {}
 
@@ -156,14 +156,14 @@ def tracked_lifts():
     ``fsv-bench --task lift --noise 0.01 --seed S`` with S in :data:`GATE_SEEDS`: the whole method
     from depth (tracker, algebraic kinematics, nominal forces, the shipped internal-force model with
     user 0's grip calibration)."""
-    from benchmark.scores.learned import score_episode
     from benchmark.camera.render import render
-    from benchmark.world.scenario import Scenario
-    from benchmark.scores.forces import score_forces
-    from benchmark.world.simulate import simulate
-    from benchmark.method.init import tracker_init
     from benchmark.method.grip_file import user_grip
+    from benchmark.method.init import tracker_init
+    from benchmark.scores.forces import score_forces
+    from benchmark.scores.learned import score_episode
     from benchmark.scores.tracking import score_tracking
+    from benchmark.world.scenario import Scenario
+    from benchmark.world.simulate import simulate
     from fsv import run_pipeline
     from fsv.learn import default_model
 

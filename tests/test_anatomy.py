@@ -4,8 +4,14 @@ import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
-from benchmark.world.anatomy import (DIGIT_LENGTH_SD, HAND_SIZE, TEMPLATE_HAND_BREADTH_M, TEMPLATE_HAND_LENGTH_M,
-                                     Anatomy, draw_anatomy)
+from benchmark.world.anatomy import (
+    DIGIT_LENGTH_SD,
+    HAND_SIZE,
+    TEMPLATE_HAND_BREADTH_M,
+    TEMPLATE_HAND_LENGTH_M,
+    Anatomy,
+    draw_anatomy,
+)
 from benchmark.world.hand import hand_model
 from fsv.hand import fingertip_centres, forward_kinematics_qpos
 

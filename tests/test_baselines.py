@@ -4,8 +4,14 @@ import numpy as np
 import pytest
 
 from fsv import Poses
-from fsv.method.baselines import (BASELINE_STAGE, BASELINES, GripLineForces, ZeroKinematics, at_rest,
-                                  first_frame_contacts)
+from fsv.method.baselines import (
+    BASELINE_STAGE,
+    BASELINES,
+    GripLineForces,
+    ZeroKinematics,
+    at_rest,
+    first_frame_contacts,
+)
 
 STAGE_GATES = {"tracker": ("box_pos_err_mm", "contact_err_mm_std", "contact_recall", "contact_precision"),
                "differentiator": ("acc_err_rms",), "forces": ("net_force_err_n_rms", "least_violation_frac"),

@@ -10,14 +10,14 @@ the materialised Jacobian, and a whole Gauss-Newton fit must follow the NumPy on
 
 import numpy as np
 import pytest
+from raycast import look_at_calibration
 
 from fsv import ObjectModel
 from fsv.linalg import dot, gram, mv, tmv, vm
 from fsv.rotation import cross, exp_so3
-from fsv.track.camera import CameraRays
 from fsv.track.box_kernels import _FAR_M, _box_depth, _box_normal_equations, _box_rays
+from fsv.track.camera import CameraRays
 from fsv.track.object import BoxTracker, predict_box_depth
-from raycast import look_at_calibration
 
 SIZE = np.array([0.171, 0.111, 0.060])
 HALF = SIZE / 2

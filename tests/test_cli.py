@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from benchmark.atomic import OUTPUT_MARKER, write_marker
-from benchmark.commands.cli import main
 from benchmark.camera.episode_file import load_episode
+from benchmark.commands.cli import main
 
 
 def test_run_writes_episode_and_summary(tmp_path, capsys):
@@ -94,8 +94,9 @@ def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, arg
 
 
 def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, capsys):
-    from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT
     from PIL import Image
+
+    from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT
 
     out = tmp_path / "run"
     assert main(["--duration", "1", "--noise", "0.005", "--quiet", "--no-gif", "--out", str(out)]) in (0, 1)  # verdict

@@ -7,11 +7,11 @@ import pyarrow as pa
 import pytest
 
 from benchmark.atomic import write_marker
+from benchmark.errors import DatasetError
 from benchmark.paper.dataset import DatasetSpec, generate, load_dataset
-from benchmark.world.scenario import episode_name
 from benchmark.paper.dataset.build import _with_meta
 from benchmark.paper.dataset.cli import parse_ints
-from benchmark.errors import DatasetError
+from benchmark.world.scenario import episode_name
 
 CALLS = []
 
@@ -243,8 +243,8 @@ def oracle_copy(learn_oracle_dataset, tmp_path):
 def test_four_flipped_bytes_in_an_episode_file_are_refused_naming_it(oracle_copy):
     import pyarrow.parquet as pq
 
-    from benchmark.paper.dataset import read_episode_file
     from benchmark.errors import DatasetFileError
+    from benchmark.paper.dataset import read_episode_file
 
     spec, out = oracle_copy
     path = out / "episodes" / "lift-u0-g0-m0-s1.parquet"
@@ -260,8 +260,8 @@ def test_four_flipped_bytes_in_an_episode_file_are_refused_naming_it(oracle_copy
 def test_a_flip_that_leaves_the_content_intact_is_seen_by_the_manifest(oracle_copy):
     """Some bytes (e.g. the magic number, column statistics) change nothing a reader gets: the
     content digest cannot see them there, the SHA-256 of the bytes in the manifest does."""
-    from benchmark.paper.dataset import read_episode_file
     from benchmark.errors import DatasetFileError
+    from benchmark.paper.dataset import read_episode_file
 
     spec, out = oracle_copy
     path = out / "episodes" / "lift-u0-g0-m0-s0.parquet"
@@ -301,8 +301,8 @@ def test_resume_rebuilds_a_truncated_episode_file_and_says_so(tmp_path, capsys):
 def test_an_episode_file_copied_over_another_is_detected_and_rebuilt(tmp_path, capsys):
     import shutil
 
-    from benchmark.paper.dataset import read_episode_file
     from benchmark.errors import DatasetFileError
+    from benchmark.paper.dataset import read_episode_file
 
     spec = _small(tmp_path)
     a, b = (tmp_path / "episodes" / f"lift-u0-g0-m0-s{s}.parquet" for s in (0, 2))

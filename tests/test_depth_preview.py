@@ -5,8 +5,8 @@ import pytest
 from matplotlib import colormaps
 from PIL import Image
 
-from benchmark.errors import BenchmarkError
 from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT, TURBO_SPAN, colorize, strip, write_preview
+from benchmark.errors import BenchmarkError
 
 
 def video(T=12, H=40, W=32):

@@ -11,14 +11,14 @@ import zipfile
 import h5py
 import numpy as np
 import pytest
+from test_evaluate import TINY
 
 from benchmark.commands.cli import main
-from benchmark.exchange import EstimatesFileError, load_estimate
+from benchmark.exchange import load_estimate
 from benchmark.exchange.estimates_file import FORMAT, force_bound_n
 from benchmark.suites import SUITES
 from fsv.errors import InputError
 from fsv.learn.model import load as load_model
-from test_evaluate import TINY
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 T, NAMES = 5, ("thumb", "index")

@@ -7,9 +7,9 @@ import pytest
 
 from benchmark.commands.cli import main
 from benchmark.paper.dataset.cli import parse_ints
-from benchmark.world.scenario import Scenario
 from benchmark.suites import SUITES, Gate, Suite
 from benchmark.world.assets import validate
+from benchmark.world.scenario import Scenario
 
 TINY = Suite(name="tiny", version=1, scenarios=(Scenario(task="lift", seed=21, duration_s=1.5),),
              gates=(Gate("box_pos_err_mm", "<=", 8.0), Gate("learned_rel_err_pct", "<=", 60.0)),
@@ -144,8 +144,8 @@ def test_two_worker_processes_give_the_same_scores_as_one(tmp_path):
 
 def test_a_replaced_differentiator_changes_the_kinematics_scores_and_is_labelled(tiny, tmp_path):
     """The example Savitzky-Golay differentiator, loaded by module:attribute, on an episode from the cache."""
-    from benchmark.suites.evaluate import evaluate_many
     from benchmark.method import MethodSpec
+    from benchmark.suites.evaluate import evaluate_many
 
     cache = tmp_path / "cache"
     ref, savgol = evaluate_many(TINY, [MethodSpec(), MethodSpec(differentiator="examples.savgol:SavitzkyGolay")],
@@ -221,8 +221,8 @@ def test_a_suite_with_another_grip_control_is_its_own_suite_named_after_it(tmp_p
 
 def test_the_paper_suites_hold_the_paper_protocols_episodes():
     """table1 and table2 are the episodes of the table1 and table2 commands' protocols (one source each)."""
-    from benchmark.reproduce import DATASETS, RESULTS
     from benchmark.paper.table1 import SIX_AXIS_TASKS
+    from benchmark.reproduce import DATASETS, RESULTS
 
     t1 = SUITES["table1"].scenarios
     assert {(sc.task, sc.seed) for sc in t1} == {(t, s) for t in SIX_AXIS_TASKS for s in (0, 1, 2)} and len(t1) == 18

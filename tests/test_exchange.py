@@ -5,11 +5,11 @@ import zipfile
 
 import numpy as np
 import pytest
+from test_evaluate import TINY
 
 from benchmark.commands.cli import main
 from benchmark.exchange import load_camera_input
 from benchmark.suites import SUITES
-from test_evaluate import TINY
 
 
 @pytest.fixture
@@ -20,8 +20,8 @@ def tiny(monkeypatch):
 
 @pytest.mark.parametrize("knowledge, protocol", [("exact", "calibrated"), ("lab", "blind")])
 def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys, knowledge, protocol):
-    from benchmark.suites.evaluate import evaluate
     from benchmark.method import MethodSpec, method_label
+    from benchmark.suites.evaluate import evaluate
     from examples.estimates_from_files import write_estimates
 
     cache, inputs, estimates = tmp_path / "cache", tmp_path / "inputs", tmp_path / "estimates"
@@ -57,9 +57,9 @@ def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys, 
 
 
 def test_camera_file_round_trips_the_inputs(tiny, tmp_path):
-    from benchmark.suites.evaluate import cached_episode
     from benchmark.exchange import save_camera_input
     from benchmark.method import camera_input
+    from benchmark.suites.evaluate import cached_episode
 
     ep, _ = cached_episode(TINY, TINY.scenarios[0], tmp_path / "cache")
     a = camera_input(ep, protocol="calibrated")

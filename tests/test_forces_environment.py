@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 from forces_oracle import box_model, oracle, random_grasp
+
 from fsv import Contacts, InputError, Kinematics
 from fsv.forces import ForceSettings, FrameStatus, decompose_forces, nominal_forces, table_contacts
 from fsv.forces.environment import UNIT_CORNERS

@@ -5,14 +5,14 @@ import types
 
 import numpy as np
 import pytest
+from pictures import assert_figure
 
-from benchmark.world.contact_error import contacts_from_truth
-from benchmark.world.motion import oracle_kinematics
 from benchmark.commands.stage import Run, complete
 from benchmark.commands.stages.forces import STAGE, add_arguments, estimate_inputs
 from benchmark.scores.forces import score_forces, true_net_wrench_instant
+from benchmark.world.contact_error import contacts_from_truth
+from benchmark.world.motion import oracle_kinematics
 from fsv.forces import FrameStatus, decompose_forces, nominal_forces, to_world_frame
-from pictures import assert_figure
 
 
 @pytest.fixture(scope="module")

@@ -3,10 +3,10 @@
 import clarabel
 import numpy as np
 import pytest
+from forces_oracle import box_model, kinematics_for, oracle, random_grasp
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from forces_oracle import box_model, kinematics_for, oracle, random_grasp
 from fsv import Contacts, InputError, Kinematics
 from fsv.forces import ForceSettings, FrameStatus, decompose_forces, nominal_forces, reconstruct_forces
 from fsv.forces import program as program_module

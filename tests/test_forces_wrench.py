@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from forces_oracle import box_model, random_rotation
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from forces_oracle import box_model, random_rotation
 from fsv import InputError, Kinematics
 from fsv.forces import GRAVITY, required_wrench, tangent_basis, to_object_frame, to_world_frame
 

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
+from benchmark.world.assets import build_world, users
 from benchmark.world.grasp_plan import plan_grasp
 from benchmark.world.grip import GripPolicy
 from benchmark.world.humanness import coupling_frames
 from benchmark.world.scenario import GRIP_CONTROLS, Scenario
-from benchmark.world.assets import build_world, users
 
 
 def _policy(user=0, **kw):
@@ -174,8 +174,8 @@ def test_table2_pair_grips_alike_and_a_careful_user_harder(episode_factory):
 def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
     """Every (user, grasp) has a stored plan whose inputs still match (else the world would fall back
     to a kernel-dependent solve); solving u0/g0 again lands on the stored solution."""
-    from benchmark.world.grasp_plan import STORED_DRAWN, _PlanProblem, stored_plans
     from benchmark.world.assets import grasps, users
+    from benchmark.world.grasp_plan import STORED_DRAWN, _PlanProblem, stored_plans
 
     stored = stored_plans()
     assert len(stored) == len(users()) * len(grasps()) + len(STORED_DRAWN)  # the named plans, the drawn choices

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
+from benchmark.world.assets import build_world
 from benchmark.world.hand import geom_name, hand_model
 from benchmark.world.scenario import Scenario
-from benchmark.world.assets import build_world
 from fsv import InputError
 from fsv.hand import capsule_endpoints, finger_of_segment, fingertip_centres, forward_kinematics_qpos
 from fsv.rotation import axis_angle_to_rot, quat_to_rot

@@ -7,10 +7,10 @@ import subprocess
 
 import numpy as np
 import pytest
+from test_evaluate import TINY
 
 from benchmark.commands.cli import main
 from benchmark.suites import SUITES
-from test_evaluate import TINY
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 NODE = shutil.which("node")

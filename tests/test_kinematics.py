@@ -15,8 +15,8 @@ from fsv.kinematics import (
     differentiate_poses,
     moments,
     sampling_period,
+    so3,
 )
-from fsv.kinematics import so3
 from fsv.rotation import quat_to_rot
 
 DT = 1 / 30

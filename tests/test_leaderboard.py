@@ -3,11 +3,11 @@
 import json
 
 import pytest
+from test_evaluate import TINY
 
 from benchmark.commands.cli import main
-from benchmark.suites.leaderboard import VARIANTS
 from benchmark.suites import SUITES
-from test_evaluate import TINY
+from benchmark.suites.leaderboard import VARIANTS
 
 
 @pytest.fixture

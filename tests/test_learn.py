@@ -153,8 +153,8 @@ def test_the_relative_loss_predicts_the_weighted_median_and_the_squared_loss_the
 
 def test_learned_forces_explain_the_motion_and_follow_the_predictions():
     from fsv import Contacts, Kinematics, ObjectModel
-    from fsv.forces import FrameStatus
     from fsv.features import grasp_features
+    from fsv.forces import FrameStatus
     from fsv.learn import learned_forces, smooth_over_time
 
     rng = np.random.default_rng(4)

@@ -1,7 +1,7 @@
 import numpy as np
 
-from benchmark.world.contact_error import contacts_from_truth
 from benchmark.scores.learned import score_episode
+from benchmark.world.contact_error import contacts_from_truth
 from benchmark.world.motion import oracle_kinematics
 from fsv.learn import default_model, learned_forces
 

@@ -3,7 +3,15 @@
 import json
 
 from benchmark.commands import learning_curve
-from benchmark.commands.learning_curve import COLUMNS, curve_markdown, main, model_file, people_of, train_model, train_models
+from benchmark.commands.learning_curve import (
+    COLUMNS,
+    curve_markdown,
+    main,
+    model_file,
+    people_of,
+    train_model,
+    train_models,
+)
 from benchmark.suites import SUITES
 
 

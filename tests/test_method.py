@@ -73,7 +73,6 @@ def test_a_minimal_tracker_output_and_an_oracle_are_labelled(inputs):
     ep, camera = inputs
     from benchmark.world.contact_error import contacts_from_truth
     from benchmark.world.motion import oracle_kinematics
-
     from fsv import Poses
 
     truth_box = TrackOutput(box=Poses(t=ep.truth.t, pos=ep.truth.box_pos, rot=ep.truth.box_rot),

@@ -8,8 +8,7 @@ import pytest
 from benchmark.world.anatomy import Anatomy
 from benchmark.world.assets import hand_model, users
 from benchmark.world.grasp_plan import plan_grasp
-from benchmark.world.people import (BASELINE_GRIP_N, FINGER_SHARE_MEAN, SAFETY_MARGIN, named_count, person,
-                                    person_record)
+from benchmark.world.people import BASELINE_GRIP_N, FINGER_SHARE_MEAN, SAFETY_MARGIN, named_count, person, person_record
 from benchmark.world.scenario import Scenario
 
 

@@ -2,12 +2,12 @@
 
 import numpy as np
 import pytest
+from raycast import look_at_calibration, render_depth
 
 from benchmark.world.hand import hand_model
 from fsv import Contacts, DepthVideo, InputError, Kinematics, ObjectModel, TrackInit, run_pipeline
-from fsv.track.hand import HandKinematics, HandState
 from fsv.rotation import angle_between, exp_so3
-from raycast import look_at_calibration, render_depth
+from fsv.track.hand import HandKinematics, HandState
 
 SIZE = np.array([0.171, 0.111, 0.060])
 BOX = ObjectModel(size_m=SIZE, mass_kg=0.4, inertia=ObjectModel.solid_box_inertia(SIZE, 0.4), friction=0.8)

@@ -10,7 +10,6 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-
 # The module: the attribute `benchmark.camera.render` is the function render() of the public API.
 R = importlib.import_module("benchmark.camera.render")
 C = importlib.import_module("benchmark.camera.camera")
@@ -220,8 +219,8 @@ def test_backprojected_box_pixels_lie_on_the_box_surface(world, pos, quat):
 
 
 def test_world_labels_mark_table_box_palm_and_each_finger():
-    from benchmark.world.scenario import Scenario
     from benchmark.world.assets import build_world
+    from benchmark.world.scenario import Scenario
 
     w = build_world(Scenario())
     labels = S.world_labels(w)
@@ -296,10 +295,11 @@ def test_labels_must_match_the_model(world):
 def synthetic_episode(noise_m=0.01, seed=0, duration_s=1.0):
     """An episode of the real world whose truth is an analytic box lift with a still hand above it."""
 
+    from conftest import make_analytic_truth
+
+    from benchmark.world.assets import build_world
     from benchmark.world.episode import Episode
     from benchmark.world.scenario import Scenario
-    from benchmark.world.assets import build_world
-    from conftest import make_analytic_truth
 
     # the analytic truth has four contact slots, not the hand's five digits: the hand drawn as its
     # primitives (no pulp to press)
@@ -361,8 +361,8 @@ def test_render_noise_has_the_scenario_std_on_valid_pixels():
 
 
 def test_render_rejects_a_sensor_with_another_noise():
-    from benchmark.errors import BenchmarkError
     from benchmark.camera.sensor import SensorModel
+    from benchmark.errors import BenchmarkError
 
     with pytest.raises(BenchmarkError, match="scenario's noise_m = 0.01"):
         R.render(synthetic_episode(0.01, 0), sensor=SensorModel(noise_m=0.02))

@@ -5,8 +5,8 @@ import argparse
 import pytest
 
 from benchmark import reproduce
-from benchmark.fingerprint import results_fingerprint
 from benchmark.commands.cli import main
+from benchmark.fingerprint import results_fingerprint
 
 
 def test_compare_values_tolerates_rounding_and_names_what_moved():

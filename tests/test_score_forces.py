@@ -3,14 +3,14 @@
 import dataclasses
 
 import numpy as np
+from forces_oracle import grasp_truth
+from pictures import assert_figure
 
-from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 from benchmark.commands.pictures.fig5 import plot_fig5
 from benchmark.scores.forces import score_forces, sensitivity, true_net_wrench, true_net_wrench_instant
-from forces_oracle import grasp_truth
+from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 from fsv import Kinematics
 from fsv.forces import FrameStatus, nominal_forces
-from pictures import assert_figure
 
 
 def _kin(truth):

@@ -4,8 +4,8 @@ import dataclasses
 
 import numpy as np
 
-from benchmark.world.motion import oracle_kinematics
 from benchmark.scores.episode import kinematics_errors
+from benchmark.world.motion import oracle_kinematics
 
 
 def test_the_true_kinematics_have_no_error_and_a_bias_shows(lift_episode):

@@ -35,10 +35,11 @@ def test_junit_has_one_case_per_gate_and_a_failure_naming_the_value():
 
 
 def test_the_report_gives_units_and_intervals_as_brackets():
+    from types import SimpleNamespace
+
     from benchmark.scores.metrics import METRICS
     from benchmark.scores.units import UNITS, labelled
     from benchmark.scores.verdict import GateResult, report_markdown
-    from types import SimpleNamespace
 
     assert set(UNITS) == set(METRICS)  # every metric has its unit
     suite = SimpleNamespace(name="s", version=1, description="d")

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from benchmark.errors import BenchmarkError
-from benchmark.camera.sensor import PRESETS, SensorModel, dequantise, quantise, sensor_preset
+from benchmark.camera.sensor import SensorModel, dequantise, quantise
 from benchmark.camera.sensor_kernels import _incidence_cos
+from benchmark.errors import BenchmarkError
 
 H, W = 240, 320
 K = np.array([[212.0, 0.0, 159.5], [0.0, 216.0, 119.5], [0.0, 0.0, 1.0]])

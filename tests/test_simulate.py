@@ -10,7 +10,7 @@ import pytest
 
 from benchmark.world.scenario import Scenario
 from benchmark.world.simulate import simulate, steps_per_frame
-from fsv.hand import forward_kinematics_qpos, fingertip_centres
+from fsv.hand import fingertip_centres, forward_kinematics_qpos
 
 
 def test_newton_euler_holds_at_every_frame(lift_episode):
@@ -62,8 +62,8 @@ def test_free_joint_conventions_on_a_tumbling_box():
     """A box thrown in the air: recorded omega is world-frame, acc is g, alpha obeys Euler's equations."""
     import mujoco
 
-    from benchmark.world.physics import _Recorder
     from benchmark.world.assets import build_world
+    from benchmark.world.physics import _Recorder
 
     w = build_world(Scenario(mass=2))
     m = w.model

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import trimesh
 
+from benchmark.world import skin as S
 from benchmark.world.anatomy import draw_anatomy
 from benchmark.world.assets import hand_model
 from benchmark.world.hand import hand_model as hand_of_anatomy
 from benchmark.world.scenario import Scenario
-from benchmark.world import skin as S
 
 
 @pytest.fixture(scope="module")

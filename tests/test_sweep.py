@@ -3,10 +3,10 @@
 import json
 
 import pytest
+from test_evaluate import TINY
 
 from benchmark.commands.cli import main
 from benchmark.suites import SUITES
-from test_evaluate import TINY
 
 
 @pytest.fixture

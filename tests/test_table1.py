@@ -2,16 +2,16 @@
 
 import numpy as np
 import pytest
+from pictures import assert_figure
 
+from benchmark.commands.table1 import write_outputs
 from benchmark.errors import ScenarioError
+from benchmark.paper.table1 import PAPER, Table1, error_stats, score_table1, tune
 from benchmark.world.motion import DECLARED, oracle_kinematics
 from benchmark.world.pose_error import tracker_like_poses
 from benchmark.world.scenario import Scenario
-from benchmark.commands.table1 import write_outputs
-from benchmark.paper.table1 import PAPER, Table1, error_stats, score_table1, tune
 from fsv import Kinematics, Poses
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig
-from pictures import assert_figure
 
 
 def _biased(truth, acc_bias_body, gyro_bias_body):
@@ -145,8 +145,8 @@ def test_cli_parser_offers_the_kinematics_choices():
 
 
 def test_pose_error_stats_recover_the_error_model(analytic_truth_factory):
-    from benchmark.world.pose_error import PoseErrorModel
     from benchmark.paper.table1 import pose_error_stats
+    from benchmark.world.pose_error import PoseErrorModel
 
     truth = analytic_truth_factory(duration_s=60.0)
     model = PoseErrorModel(pos_std_m=0.002, rot_std_rad=np.radians(2.0), corr_time_s=0.1)

@@ -64,7 +64,6 @@ def test_user_blind_prediction_averages_the_two_users_frame_by_frame():
     from benchmark.paper.table2 import user_blind
 
     def rows(user, frames, thumb, index, index_active):
-        n = len(frames)
         return pd.DataFrame(dict(task="lift", user=user, grasp=0, mass=1, seed=3, frame=frames,
                                  active_thumb=True, active_index=index_active, f_int_thumb=thumb, f_int_index=index))
 

@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from forces_oracle import grasp_truth
 
 from benchmark.errors import BenchmarkError
 from benchmark.world.tactile import tactile_normal_forces
-from forces_oracle import grasp_truth
 
 
 def test_readings_are_the_true_normal_forces_with_noise_range_and_gaps():

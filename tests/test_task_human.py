@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 from benchmark.world.tasks import TASKS, Motion
-from benchmark.world.tasks.human import (MIN_DWELL_S, MIN_JERK_PEAK_ACC, TRANSPORT_PEAK_ACC, Plan,
-                                         move_duration)
+from benchmark.world.tasks.human import MIN_DWELL_S, MIN_JERK_PEAK_ACC, TRANSPORT_PEAK_ACC, Plan, move_duration
 from benchmark.world.tasks.motion import min_jerk
 
 

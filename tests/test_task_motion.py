@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from benchmark.world.tasks import TASKS
-from benchmark.world.tasks.motion import Motion, Phases, min_jerk, timed
+from benchmark.world.tasks.motion import Motion, min_jerk, timed
 from fsv.hand import axis_angle_to_rot
 
 

@@ -2,18 +2,18 @@
 
 import numpy as np
 import pytest
+from raycast import look_at_calibration, render_depth
 
 from benchmark.world.hand import hand_model
 from fsv import InputError, ObjectModel
 from fsv.hand import forward_kinematics
 from fsv.linalg import rows_mt
+from fsv.rotation import exp_so3
 from fsv.track.camera import CameraRays
 from fsv.track.capsules import ray_capsules
 from fsv.track.hand import HandKinematics, HandState, HandTracker
 from fsv.track.hand_system import box_signed_distance, rigidity_rows
 from fsv.track.object import predict_box_depth
-from fsv.rotation import exp_so3
-from raycast import look_at_calibration, render_depth
 
 SIZE = np.array([0.171, 0.111, 0.060])
 BOX = ObjectModel(size_m=SIZE, mass_kg=0.4, inertia=ObjectModel.solid_box_inertia(SIZE, 0.4), friction=0.8)

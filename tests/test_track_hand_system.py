@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from raycast import look_at_calibration
 
 from benchmark.world.hand import hand_model
 from fsv import ObjectModel
@@ -12,7 +13,6 @@ from fsv.track.camera import CameraRays
 from fsv.track.capsules import closest_on_capsules, ray_capsules
 from fsv.track.hand import HandKinematics, HandState, HandTracker, HandTrackerConfig
 from fsv.track.hand_system import box_sdf, box_signed_distance, hand_normal_equations
-from raycast import look_at_calibration
 
 SIZE = np.array([0.171, 0.111, 0.060])
 BOX = ObjectModel(size_m=SIZE, mass_kg=0.4, inertia=ObjectModel.solid_box_inertia(SIZE, 0.4), friction=0.8)

@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
+from raycast import look_at_calibration, render_depth
 
 from fsv import InputError, ObjectModel
+from fsv.rotation import angle_between, exp_so3
 from fsv.track.camera import CameraRays
 from fsv.track.object import BoxTracker, BoxTrackerConfig, predict_box_depth, track_box
-from fsv.rotation import angle_between, exp_so3
 from fsv.types import DepthVideo
-from raycast import look_at_calibration, render_depth
 
 SIZE = np.array([0.171, 0.111, 0.060])
 CALIB = look_at_calibration([0.05, -0.45, 0.40], [0.0, 0.0, 0.05])

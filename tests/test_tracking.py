@@ -2,14 +2,14 @@
 
 import numpy as np
 import pytest
-from benchmark.world.contact_error import contacts_from_truth
-from benchmark.scores.forces import score_forces
-from benchmark.method.init import INIT_PERTURBATION, tracker_init
+
 from benchmark.commands.pictures.overlay import plot_overlay
+from benchmark.method.init import INIT_PERTURBATION, tracker_init
+from benchmark.scores.forces import score_forces
 from benchmark.scores.tracking import GATES, gate_report, score_tracking
+from benchmark.world.contact_error import contacts_from_truth
 from fsv import Poses
-from fsv.rotation import quat_to_rot
-from fsv.rotation import angle_between, log_so3
+from fsv.rotation import angle_between, log_so3, quat_to_rot
 from fsv.track.tracker import Tracking
 
 
@@ -114,9 +114,8 @@ def test_scores_of_a_perfect_tracker_are_zero_and_one(lift_episode):
 
 
 def test_a_camera_from_a_lab_calibration_widens_only_the_box_gates(lift_episode, rendered_lift_episode):
-    from benchmark.scores.tracking import CALIBRATED_GATES, gates_for
-
     from benchmark.method.knowledge import given
+    from benchmark.scores.tracking import CALIBRATED_GATES, gates_for
 
     told = {name: given(rendered_lift_episode, name)[3].camera_from_lab
             for name in ("exact", "lab", "lab-hand", "lab-box", "lab-camera", "lab:0.5")}

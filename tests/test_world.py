@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from benchmark.errors import ScenarioError
-from benchmark.world.scenario import Scenario
 from benchmark.world.assets import build_world, grasps, hand_model, masses, object_model, set_frame, users, validate
+from benchmark.world.scenario import Scenario
 from fsv.hand import capsule_endpoints, forward_kinematics_qpos
 
 

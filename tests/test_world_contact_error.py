@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
-
-from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
-from benchmark.errors import BenchmarkError
 from forces_oracle import grasp_truth
+
+from benchmark.errors import BenchmarkError
+from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 
 
 def test_contacts_from_truth_keep_points_normals_and_the_kinetic_direction():

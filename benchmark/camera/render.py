@@ -21,10 +21,10 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.camera.camera import Camera
-from benchmark.camera.views import camera_of
 from benchmark.camera.depth import DepthRenderer, HandSkin, pulp_presses
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
+from benchmark.camera.views import camera_of
 from benchmark.errors import BenchmarkError
 from benchmark.world.episode import Episode
 from fsv import DepthVideo

@@ -36,8 +36,8 @@ from benchmark.commands.stages import STAGES
 from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.method.protocol import check_people
 from benchmark.suites.evaluate import add_method_arguments, load_gates, spec_from_args
-from benchmark.world.assets import validate
 from benchmark.suites.splits import SPLITS
+from benchmark.world.assets import validate
 from benchmark.world.scenario import DEFAULT_GRIP_CONTROL, DEFAULT_HAND_SURFACE, Scenario, episode_name
 from benchmark.world.tasks import TASKS
 from fsv.errors import InputError

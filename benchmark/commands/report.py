@@ -14,9 +14,9 @@ import pathlib
 import numpy as np
 
 from benchmark.atomic import write_text
+from benchmark.world.episode import Episode
 from benchmark.world.grasp_plan import grasp_spec
 from benchmark.world.people import person_record
-from benchmark.world.episode import Episode
 
 
 def scenario_block(episode: Episode) -> dict:

@@ -191,8 +191,8 @@ def check_meta(path, meta: dict) -> None:
     oracle = meta.get("oracle", [])
     if not isinstance(oracle, list) or len(oracle) > len(ARRAYS):
         refuse(f'"oracle" must be a list of stage names, got {_shown(oracle)}')
-    items = [(f'"finger_names" entry', v) for v in names] + [('"oracle" entry', v) for v in oracle]
-    items += [(f'"stages" name', k) for k in meta.get("stages", {})]
+    items = [('"finger_names" entry', v) for v in names] + [('"oracle" entry', v) for v in oracle]
+    items += [('"stages" name', k) for k in meta.get("stages", {})]
     items += [(f'"stages" {str(k)[:40]!r}', v) for k, v in meta.get("stages", {}).items()]
     for what, value in items:
         if problem := _name_problem(value, what):

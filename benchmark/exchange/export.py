@@ -23,9 +23,8 @@ from benchmark.method.protocol import DEFAULT_PROTOCOL
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.options import add_suite_arguments
-
     from benchmark.suites.evaluate import add_knowledge_argument, add_protocol_argument
+    from benchmark.suites.options import add_suite_arguments
 
     add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz or .h5)", workers=False)
     add_knowledge_argument(p)
@@ -43,10 +42,10 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
     """Writes the camera inputs of every episode of ``suite`` into ``out`` (as ``<episode>.npz``, or
     ``.h5`` with ``container="hdf5"``), the hand, box and camera as ``knowledge`` says and the
     person's grip calibration under the ``calibrated`` protocol; returns ``suite.json``'s content."""
-    from benchmark.suites.evaluate import cached_episode, episode_cache
-    from benchmark.world.scenario import episode_name
     from benchmark.exchange import camera_file, estimates_file
     from benchmark.method.run import camera_input_and_knowledge
+    from benchmark.suites.evaluate import cached_episode, episode_cache
+    from benchmark.world.scenario import episode_name
     from fsv.provenance import provenance
 
     cache = episode_cache(cache)
@@ -86,10 +85,9 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
 
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
+    from benchmark.method.protocol import check_people
     from benchmark.suites.evaluate import check_cache_args
     from benchmark.suites.options import suite_of
-
-    from benchmark.method.protocol import check_people
 
     suite = suite_of(args)
     check_out(args.out)

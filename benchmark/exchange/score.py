@@ -18,9 +18,8 @@ import time
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.options import add_baseline_argument, add_suite_arguments
-
     from benchmark.suites.evaluate import add_knowledge_argument, add_protocol_argument
+    from benchmark.suites.options import add_baseline_argument, add_suite_arguments
 
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
     add_baseline_argument(p)
@@ -63,12 +62,12 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     from dataclasses import asdict
 
     from benchmark.exchange.estimates_file import check_identity, load_estimate, read_estimates
+    from benchmark.fingerprint import world_fingerprint
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
     from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
-    from benchmark.fingerprint import world_fingerprint
-    from benchmark.world.grasp_plan import grasp_spec
     from benchmark.scores.episode import score_episode
     from benchmark.suites.evaluate import cached_episode, episode_cache, scores_document
+    from benchmark.world.grasp_plan import grasp_spec
     from benchmark.world.scenario import episode_name
 
     protocol = check_protocol(protocol or DEFAULT_PROTOCOL)
@@ -120,10 +119,9 @@ def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowled
 
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
+    from benchmark.method.protocol import check_protocol
     from benchmark.suites.evaluate import check_cache_args, load_gates, print_verdict, write_outputs
     from benchmark.suites.options import suite_of
-
-    from benchmark.method.protocol import check_protocol
 
     suite = suite_of(args)
     gates = load_gates(args.gates) if args.gates else None

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
 from benchmark.method.protocol import DEFAULT_PROTOCOL
 from benchmark.method.spec import MethodSpec
@@ -36,8 +34,8 @@ def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str 
                                protocol: str = DEFAULT_PROTOCOL) -> tuple:
     """:func:`camera_input` and the :class:`benchmark.method.knowledge.Knowledge` record behind it."""
     from benchmark.method.init import tracker_init
-    from benchmark.method.protocol import person_grip
     from benchmark.method.knowledge import given, rigid_inverse
+    from benchmark.method.protocol import person_grip
     from fsv.linalg import mm, mv
     from fsv.method import CameraInput
 

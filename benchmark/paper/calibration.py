@@ -23,6 +23,7 @@ from benchmark.atomic import check_file_out
 from benchmark.method.grip_file import write_calibration
 from fsv.grip import GripCalibration, fit_grip
 
+
 def grip_calibrations(df) -> dict[int, GripCalibration]:
     """Every user's grip line, fitted to a dataset table's samples of that user.
 

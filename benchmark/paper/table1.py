@@ -27,6 +27,7 @@ from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses
 
 METHODS = ("central", "gaussian", "algebraic")
 from benchmark.suites.registry import TABLE1_TASKS as SIX_AXIS_TASKS  # noqa: E402  (one source: the table1 suite)
+
 """The paper's §4.1 protocol: motions emphasizing each translational and rotational axis."""
 POSES_LABEL = "true poses with tracker-like correlated errors (benchmark.world.pose_error)"
 PAPER = {

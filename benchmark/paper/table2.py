@@ -46,11 +46,11 @@ import numpy as np
 import pandas as pd
 
 from benchmark.atomic import check_out, save_figure, staging_folder, swap_folder, write_text
-from benchmark.paper.dataset.files import read_header
-from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset, training_set
-from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N
 from benchmark.errors import DatasetError
 from benchmark.limits import MAX_EPOCHS, MAX_MEMBERS, MAX_SEED, integer, number
+from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset, training_set
+from benchmark.paper.dataset.files import read_header
+from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N
 from fsv import ObjectModel
 from fsv.forces import FrameStatus, reconstruct_forces
 from fsv.learn import InternalForceModel, LearnConfig, relative_errors_pct, train

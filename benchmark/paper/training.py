@@ -24,9 +24,9 @@ import numpy as np
 from benchmark.atomic import check_file_out
 from benchmark.limits import MAX_EPOCHS, MAX_FOLDS, MAX_MEMBERS, MAX_SEED, integer
 from benchmark.method.grip_file import CalibrationError, read_calibration
-from benchmark.paper.dataset.files import read_header
 from benchmark.paper.dataset import finger_names_of, load_dataset, training_set
 from benchmark.paper.dataset.cli import parse_ints
+from benchmark.paper.dataset.files import read_header
 from benchmark.paper.table2 import TABLE2_MEMBERS, add_max_excess_argument
 from fsv.errors import InputError
 from fsv.learn import AMOUNT_LOSSES, LearnConfig, cross_validate, train

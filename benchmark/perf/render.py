@@ -81,10 +81,10 @@ def scene_frames(num: int):
     Returns:
         ``(world, set_frame, truth)`` with ``set_frame(data, k)`` posing frame k.
     """
+    from benchmark.world.assets import build_world, set_frame
     from benchmark.world.scenario import Scenario
     from benchmark.world.simulate import simulate
     from benchmark.world.tasks import TASKS
-    from benchmark.world.assets import build_world, set_frame
 
     sc = Scenario(duration_s=max((num - 1) / Scenario().fps, TASKS[Scenario().task].min_duration_s))
     truth = simulate(sc).truth
@@ -228,8 +228,8 @@ def _print_rates(rates: dict, scene: str) -> None:
 
 def _model_xml(world) -> str:
     """The MJCF text of a world (for a MuJoCo spec to which the camera is added)."""
-    from benchmark.world.scenario import Scenario
     from benchmark.world.assets import user_of, world_xml
+    from benchmark.world.scenario import Scenario
 
     sc = Scenario()
     return world_xml(sc.user, sc.mass, float(user_of(sc)["stiffness_nm_per_rad"]))

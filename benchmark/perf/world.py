@@ -19,10 +19,10 @@ import time
 import mujoco
 import numpy as np
 
+from benchmark.world.assets import build_world, set_frame
 from benchmark.world.scenario import Scenario
 from benchmark.world.simulate import run
 from benchmark.world.tasks import TASKS
-from benchmark.world.assets import build_world, set_frame
 
 
 def bare_steps(scenario: Scenario, episode, steps: int) -> float:

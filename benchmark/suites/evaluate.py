@@ -31,12 +31,21 @@ import sys
 import time
 from dataclasses import asdict
 
-from benchmark.atomic import check_cache, check_out, claim_folder, is_owned, remove_stale_temporaries, staging_folder, swap_folder
-from benchmark.scores.aggregate import FEW_EPISODES
+from benchmark.atomic import (
+    check_cache,
+    check_out,
+    claim_folder,
+    is_owned,
+    remove_stale_temporaries,
+    staging_folder,
+    swap_folder,
+)
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.limits import checked
+from benchmark.scores.aggregate import FEW_EPISODES
+from benchmark.suites import Gate, Suite
 from benchmark.world.scenario import Scenario, episode_name
-from benchmark.suites import Gate, Suite, get_suite
+
 
 class GateFailure(BenchmarkError):
     """At least one gate of the evaluated suite does not hold."""
@@ -265,8 +274,8 @@ def strict(obj):
 def write_outputs(scores: dict, suite: Suite, out: pathlib.Path, pictures=()) -> None:
     """Writes ``scores.json``, ``report.md`` and ``junit.xml`` (and ``pictures/``: the given files)
     into a temporary folder, then swaps it in."""
-    from benchmark.scores.verdict import GateResult, junit_xml, report_markdown
     from benchmark.scores.metrics import METRICS
+    from benchmark.scores.verdict import GateResult, junit_xml, report_markdown
 
     results = [GateResult(**{**g, "ci": tuple(g["ci"]) if g["ci"] is not None else None}) for g in scores["gates"]]
     out = pathlib.Path(out)

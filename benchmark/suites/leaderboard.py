@@ -53,8 +53,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> list:
     from benchmark.atomic import check_out
-    from benchmark.suites.evaluate import GateFailure, baselines_block, check_cache_args, evaluate_many, write_outputs
     from benchmark.scores.leaderboard import leaderboard_markdown
+    from benchmark.suites.evaluate import GateFailure, baselines_block, check_cache_args, evaluate_many, write_outputs
     from benchmark.suites.options import suite_of
 
     suite = suite_of(args)

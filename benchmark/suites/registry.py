@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from benchmark.world.scenario import Scenario
 from benchmark.suites.splits import split_scenarios
 from benchmark.suites.suite import Gate, Suite
+from benchmark.world.scenario import Scenario
 
 SMOKE = Suite(
     name="smoke",

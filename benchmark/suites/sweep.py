@@ -198,10 +198,10 @@ def _capped(v, lo, hi) -> tuple:
 
 def run(args: argparse.Namespace) -> dict:
     from benchmark.atomic import check_out
-    from benchmark.suites.evaluate import check_cache_args, evaluate, spec_from_args, strict
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
     from benchmark.method.protocol import DEFAULT_PROTOCOL
     from benchmark.suites import get_suite
+    from benchmark.suites.evaluate import check_cache_args, evaluate, spec_from_args, strict
     from fsv.provenance import provenance
 
     suite = get_suite(args.suite)

@@ -26,13 +26,13 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from benchmark.world.episode import Episode
 from benchmark.errors import SimulationError
+from benchmark.world.assets import World, box_spec, build_world, validate
+from benchmark.world.episode import Episode
 from benchmark.world.grip import Human
 from benchmark.world.scenario import Scenario
 from benchmark.world.tasks import TASKS, Motion
 from benchmark.world.truth import Truth
-from benchmark.world.assets import World, box_spec, build_world, validate
 from fsv.linalg import mv
 
 CONTROL_PERIOD_S = 0.004  # the synthetic human updates the finger torques at ~250 Hz

@@ -8,7 +8,6 @@ import numpy as np
 
 from benchmark.errors import ScenarioError
 
-
 MAX_NOISE_M = 0.1
 """Upper bound of the depth noise standard deviation [m] (10 cm: beyond it the box is not visible)."""
 MAX_DURATION_S = 120.0

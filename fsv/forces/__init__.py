@@ -9,7 +9,14 @@ Each returns a :class:`ForceSolution` with a :class:`FrameStatus` per frame.
 
 from fsv.forces.environment import TableContacts, table_contacts
 from fsv.forces.solution import FALLBACKS, SOLVED, ForceSolution, FrameStatus
-from fsv.forces.solve import BOUND_FACTOR, ForceSettings, decompose_forces, force_bound, nominal_forces, reconstruct_forces
+from fsv.forces.solve import (
+    BOUND_FACTOR,
+    ForceSettings,
+    decompose_forces,
+    force_bound,
+    nominal_forces,
+    reconstruct_forces,
+)
 from fsv.forces.wrench import GRAVITY, required_wrench, tangent_basis, to_object_frame, to_world_frame
 
 __all__ = [

@@ -51,11 +51,10 @@ from fsv._check import as_array, positive, same_length
 from fsv.errors import InputError
 from fsv.forces.environment import TableContacts, table_contacts
 from fsv.forces.program import OK, Layout, Program, Weights
-from fsv.forces.solution import FrameStatus, ForceSolution
+from fsv.forces.solution import ForceSolution, FrameStatus
 from fsv.forces.wrench import GRAVITY, required_wrench, tangent_basis, to_object_frame
 from fsv.models import ObjectModel
 from fsv.types import Contacts, Kinematics
-
 
 BOUND_FACTOR = 5.0
 """Safety factor of the physical bound on the nominal forces: how far above the grasp-mechanics

@@ -28,9 +28,9 @@ import numpy as np
 
 from fsv.errors import InputError
 from fsv.kinematics import so3
+from fsv.kinematics.stencils import AlgebraicConfig, CentralConfig, GaussianConfig
 from fsv.linalg import correlate_valid, mv
 from fsv.rotation import quat_to_rot
-from fsv.kinematics.stencils import AlgebraicConfig, CentralConfig, GaussianConfig
 from fsv.types import Kinematics, Poses
 
 _CONFIGS = (AlgebraicConfig, CentralConfig, GaussianConfig)

@@ -47,7 +47,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-
 from scipy import special
 
 from fsv.errors import InputError

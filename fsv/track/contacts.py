@@ -34,12 +34,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsv._check import positive
 from fsv.errors import InputError
 from fsv.linalg import vm
 from fsv.models import ObjectModel
 from fsv.track.hand_system import box_signed_distance
 from fsv.types import Contacts, Poses
-from fsv._check import positive
 
 
 @dataclass(frozen=True)

@@ -12,12 +12,11 @@ import numpy as np
 
 from fsv._check import as_array
 from fsv.errors import InputError
-from fsv.rotation import quat_to_rot
 from fsv.models import HandModel, ObjectModel
+from fsv.rotation import quat_to_rot, rot_to_quat
 from fsv.track.contacts import ContactConfig, detect_contacts
 from fsv.track.hand import HandState, HandTracker, HandTrackerConfig
 from fsv.track.object import BoxTracker, BoxTrackerConfig, predict_box_depth
-from fsv.rotation import rot_to_quat
 from fsv.types import Calibration, Contacts, DepthVideo, Poses
 
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.camera.episode_file import save_episode
 from benchmark.camera.depth import RASTERISER
+from benchmark.camera.episode_file import save_episode
 from benchmark.camera.render import render
-from benchmark.camera.views import view_of
 from benchmark.camera.scene import LABEL_BOX
+from benchmark.camera.views import view_of
 from benchmark.commands.pictures.depth_preview import preview_paths, write_preview
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 

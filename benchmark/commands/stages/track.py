@@ -13,11 +13,12 @@ from benchmark.commands.stage import Picture, Run, Stage, StageResult
 from benchmark.errors import ScenarioError
 from benchmark.limits import MAX_INIT_SCALE, number
 from benchmark.method import run_method
+from benchmark.method.init import INIT_PERTURBATION
 from benchmark.method.run import camera_input_and_knowledge
 from benchmark.scores.frames import tracking_in_true_world
-from benchmark.method.init import INIT_PERTURBATION
 from benchmark.scores.tracking import score_tracking
 from benchmark.world.contact_error import PAPER_CONTACT_ERROR_MM
+
 
 def add_arguments(parser) -> None:
     """Options of the track stage of ``fsv-bench``."""

@@ -62,8 +62,15 @@ as an empty table whose metadata holds the error, so it is neither lost nor retr
 """
 
 from benchmark.paper.dataset.build import build_episode, generate
-from benchmark.paper.dataset.files import (finger_names_of, frames_of, load_dataset, read_episode_file, read_manifest,
-                                           training_set, write_manifest)
+from benchmark.paper.dataset.files import (
+                                           finger_names_of,
+                                           frames_of,
+                                           load_dataset,
+                                           read_episode_file,
+                                           read_manifest,
+                                           training_set,
+                                           write_manifest,
+)
 from benchmark.paper.dataset.spec import CONTACTS, FORMAT, KINEMATICS, VERSION, DatasetSpec
 
 __all__ = ["CONTACTS", "FORMAT", "KINEMATICS", "VERSION", "DatasetSpec", "build_episode", "finger_names_of", "frames_of",

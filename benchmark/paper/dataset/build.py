@@ -29,7 +29,6 @@ from benchmark.paper.dataset.spec import (
     VERSION,
     DatasetSpec,
 )
-from benchmark.world.scenario import episode_name
 from benchmark.parallel import (
     RayUnavailable,
     check_ray_address,
@@ -40,10 +39,9 @@ from benchmark.scores.forces import true_normal_forces
 from benchmark.scores.samples import DATASET_FORCE_SETTINGS, sample_mask
 from benchmark.scores.samples import take_contacts as _take_con
 from benchmark.scores.samples import take_kinematics as _take_kin
-from benchmark.world.scenario import Scenario
+from benchmark.world.scenario import Scenario, episode_name
 from fsv import Contacts
 from fsv.features import grasp_features
-
 
 TRAINING_KNOWLEDGE = "exact"
 """What the tracker is told when a dataset is made: the simulation's own hand, box and camera (a

@@ -17,9 +17,9 @@ import pyarrow.parquet as pq
 from benchmark.atomic import claim_folder, remove_stale_temporaries, write_bytes, write_text
 from benchmark.errors import DatasetError, DatasetFileError
 from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec
-from benchmark.world.scenario import episode_name
 from benchmark.scores.samples import nominal_excess_n
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
+from benchmark.world.scenario import episode_name
 from fsv import Contacts, InputError, Kinematics
 from fsv.provenance import provenance
 

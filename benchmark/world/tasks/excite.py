@@ -12,8 +12,8 @@ import functools
 
 import numpy as np
 
-from benchmark.world.tasks.task import Task
 from benchmark.world.tasks.motion import Phases, timed
+from benchmark.world.tasks.task import Task
 
 AMPLITUDE_M = 0.04
 AMPLITUDE_RAD = 0.3

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.world.tasks.task import Task
 from benchmark.world.tasks.human import Plan
 from benchmark.world.tasks.motion import Phases
+from benchmark.world.tasks.task import Task
 
 # The box is put down this far into the table, so that the hand's compliance presses it on.
 PRESS_M = 0.002

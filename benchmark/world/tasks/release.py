@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.world.tasks.task import Task
 from benchmark.world.tasks.human import Plan
 from benchmark.world.tasks.motion import Phases
 from benchmark.world.tasks.place import PRESS_M
+from benchmark.world.tasks.task import Task
 
 
 def keyframes(phases: Phases, rng: np.random.Generator) -> list:

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.world.tasks.task import Task
 from benchmark.world.tasks.human import MIN_JERK_PEAK_ACC, SHAKE_FREQUENCY_HZ, SHAKE_PEAK_ACC, Plan
 from benchmark.world.tasks.motion import Phases
+from benchmark.world.tasks.task import Task
 
 CENTRE_M = 0.16
 """Height of the oscillation's centre above the start, [m]."""
