@@ -105,10 +105,20 @@ def exit_now(code: int = EXIT_INTERRUPTED) -> None:
         os._exit(code)
 
 
+def _unraisable(args) -> None:
+    """``sys.unraisablehook``: a KeyboardInterrupt raised where Python cannot propagate it (a hook it
+    runs around a fork, a finaliser) is dropped without a traceback once Ctrl-C came: the watchdog
+    ends the process within :data:`GRACE_S`. Anything else goes to the default hook."""
+    if issubclass(args.exc_type, KeyboardInterrupt) and _fired.is_set():
+        return
+    sys.__unraisablehook__(args)
+
+
 def install() -> None:
     """Installs the handler (main thread only; elsewhere, e.g. a test runner's thread, it does nothing)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, _handler)
+        sys.unraisablehook = _unraisable
 
 
 def interrupted() -> bool:

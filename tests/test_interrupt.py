@@ -152,3 +152,25 @@ def test_the_watchdog_kills_children_before_it_removes_the_staging_folders(tmp_p
     assert proc.wait(timeout=10) == 130
     time.sleep(2.5)  # past the moment the child would have written
     assert not stage.exists()  # measured before the fix: the child created it again with late.png
+
+
+def test_an_interrupt_python_cannot_raise_is_left_to_the_watchdog_without_a_traceback():
+    """Ctrl-C landing in a hook Python runs around a fork (logging's lock release, seen once under a
+    loaded machine) or in a finaliser cannot propagate: no "Exception ignored ... Traceback" on the
+    console, the watchdog still ends the process with 130; any other such error is still reported."""
+    script = (
+        "import time\n"
+        "from benchmark import interrupt\n"
+        "interrupt.install()\n"
+        "class Finaliser:\n"
+        "    def __init__(self, exc): self.exc = exc\n"
+        "    def __del__(self): raise self.exc\n"
+        "Finaliser(ValueError('reported'))\n"
+        "interrupt._fired.set()\n"
+        "Finaliser(KeyboardInterrupt())\n"
+        "time.sleep(0.1)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert run.stderr.count("Traceback") == 1 and "ValueError: reported" in run.stderr, run.stderr
+    assert "KeyboardInterrupt" not in run.stderr, run.stderr
