@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 import sys
 import threading
 import traceback
@@ -41,6 +42,7 @@ def _from_interrupt(error: BaseException | None) -> bool:
 
 
 def _child(fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # cancel() ends it, whatever handler the parent had (Ray's)
     try:
         fn(*args, **kwargs)
     except BaseException as e:

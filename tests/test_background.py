@@ -102,3 +102,20 @@ def test_a_child_stopped_by_ctrl_c_inside_an_import_exits_130_without_a_tracebac
 
 def _raise_value_error():
     raise ValueError("planted")
+
+
+def test_cancel_stops_a_child_whose_parent_handles_sigterm():
+    """A parent with a SIGTERM handler of its own (Ray's driver installs one) forks children that
+    would inherit it and sleep on through ``terminate``: the child restores the default first."""
+    import signal
+
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: None)
+    try:
+        bg = Background()
+        bg.process("sleeper", time.sleep, 60)
+        time.sleep(0.5)  # the child is asleep when the signal comes
+        t0 = time.perf_counter()
+        bg.cancel()
+        assert time.perf_counter() - t0 < 10
+    finally:
+        signal.signal(signal.SIGTERM, previous)
