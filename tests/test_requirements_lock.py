@@ -10,7 +10,7 @@ from packaging.version import Version
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 TEST_COMMAND = ("python3 -m venv .venv && .venv/bin/pip install -q -c requirements.lock torch==2.13.0 -e '.[test]' "
-                "&& .venv/bin/python -m pytest -q")
+                "&& .venv/bin/python -m pytest -q -n auto")
 
 
 def _toml(path):
