@@ -39,7 +39,7 @@ from typing import Callable
 
 import numpy as np
 
-from benchmark.atomic import atomic_path, staging_folder, swap_folder, write_text
+from benchmark.atomic import atomic_path, staging_folder, swap_folder, write_bytes, write_text
 from benchmark.errors import BenchmarkError
 from benchmark.fingerprint import results_fingerprint
 from benchmark.limits import MAX_WORKERS, integer
@@ -109,6 +109,8 @@ class Result:
         datasets: Names in :data:`DATASETS` it is made from.
         commands: Its ``fsv-bench`` (or ``python -m``) commands, ``{data}``/``{out}`` to be filled in.
         compare: ``(new, committed) -> [difference, ...]`` on the two paths.
+        docs_pictures: ``(file in the result, path under docs/)`` pairs: pictures the docs show,
+            copied there whenever the result is written, so the docs never show an older run.
     """
 
     name: str
@@ -116,6 +118,7 @@ class Result:
     datasets: tuple
     commands: tuple
     compare: Callable
+    docs_pictures: tuple = ()
 
 
 def _leaves(obj, prefix=""):
@@ -243,11 +246,16 @@ RESULTS = (
            compare=_compare_json("learning_curve.json")),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
-           compare=_compare_run),
+           compare=_compare_run,
+           docs_pictures=(("depth_preview.png", "depth_preview.png"),
+                          ("tracking_overlay.png", "pictures/lift-u0-g0-s0-tracking_overlay.png"),
+                          ("forces_fig5.png", "pictures/lift-u0-g0-s0-forces_fig5.png"))),
     Result(name="walkthrough-rotate", path="results/rotate-u2-g3-m0-s17", datasets=(),
            commands=(("fsv-bench", "--task", "rotate", "--user", "2", "--grasp", "3", "--seed", "17", "--noise", "0.01",
                       "--no-gif", "--out", "{out}"),),
-           compare=_compare_run),
+           compare=_compare_run,
+           docs_pictures=(("tracking_overlay.png", "pictures/rotate-u2-g3-s17-tracking_overlay.png"),
+                          ("forces_fig5.png", "pictures/rotate-u2-g3-s17-forces_fig5.png"))),
     Result(name="world", path="results/world", datasets=(),
            commands=(("python", "-m", "benchmark.commands.humanness", "--suite", "standard", "--quiet", "--out", "{out}"),),
            compare=_compare_json("humanness.json")),
@@ -392,6 +400,8 @@ def run(args: argparse.Namespace) -> list[str]:
             status = "unchanged" if not diffs else f"{len(diffs)} values moved"
             if args.write:
                 _replace(new, committed)
+                for picture, shown in r.docs_pictures:
+                    write_bytes(ROOT / "docs" / shown, (committed / picture).read_bytes())
                 record = recorded()  # read again: another reproduce of other results may have written since
                 record.setdefault("results", {})[r.name] = {"path": r.path, "commands": [" ".join(c) for c in r.commands],
                                              "datasets": {d: DATASETS[d] for d in r.datasets},
