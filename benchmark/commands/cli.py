@@ -119,7 +119,7 @@ class _Parser(argparse.ArgumentParser):
     ``benchmark.limits.number``)."""
 
     def error(self, message: str):
-        self.exit(2, f"fsv-bench: error: {message}\n")
+        self.exit(2, f"{self.prog}: error: {message}\n")
 
     def _get_values(self, action, arg_strings):
         for text in arg_strings:
