@@ -59,15 +59,13 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     ``knowledge`` is what the camera-input files told the method (``fsv-bench export --knowledge``):
     its camera calibration carries the estimates into the true world frame; ``protocol`` what they
     told it of the person (``--protocol``; recorded with every episode)."""
-    from dataclasses import asdict
 
     from benchmark.exchange.estimates_file import check_identity, load_estimate, read_estimates
     from benchmark.fingerprint import world_fingerprint
     from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
     from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
-    from benchmark.scores.episode import score_episode
+    from benchmark.scores.episode import episode_row
     from benchmark.suites.evaluate import cached_episode, episode_cache, scores_document
-    from benchmark.world.grasp_plan import grasp_spec
     from benchmark.world.scenario import episode_name
 
     protocol = check_protocol(protocol or DEFAULT_PROTOCOL)
@@ -95,10 +93,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
         if observer is not None:
             observer(episode, estimate, 0)
         known = given(episode, knowledge or DEFAULT_KNOWLEDGE)[3]
-        rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
-                     "grasp_family": grasp_spec(sc)["family"],
-                     **score_episode(episode, estimate, known.world_from_method), "knowledge": known.record(),
-                     "protocol": protocol, "seconds": time.perf_counter() - t1, "rendered": made})
+        rows.append(episode_row(episode, estimate, known, protocol, seconds=time.perf_counter() - t1, rendered=made))
     first = metas[suite.scenarios[0]]
     return scores_document(suite, rows, suite.gates if gates is None else gates,
                            method=str(first.get("method") or f"estimates from {folder}"),

@@ -22,9 +22,13 @@ the metric's :data:`benchmark.scores.metrics.WORST` value):
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
 
 from benchmark.scores.metrics import METRICS
+from benchmark.world.grasp_plan import grasp_spec
+from benchmark.world.scenario import episode_name
 
 
 def score_episode(episode, estimate, world_from_method=None) -> dict:
@@ -82,3 +86,23 @@ def learned_errors(episode, estimate) -> dict:
     block = score_learned(episode, estimate.forces, estimate.kinematics, estimate.contacts)
     return {"learned_rel_err_pct": block["rel_err_pct_mean"], "learned_mae_n": block["mae_n"],
             "learned_rel_err_pct_paper": block["paper_rule"]["rel_err_pct_mean"]}
+
+
+def episode_row(episode, estimate, known, protocol: str, *, seconds: float, rendered: bool) -> dict:
+    """One episode's row of a suite's scores (``scores.json``'s ``episodes``): which episode, its
+    metrics (:func:`score_episode`), what the method was told and how long it took.
+
+    Args:
+        episode: A rendered ``benchmark.Episode``.
+        estimate: The method's ``fsv.Estimate`` on it (run in process, or read from a file).
+        known: The ``benchmark.method.knowledge.Knowledge`` the method was given (its calibration
+            carries the estimate into the true world).
+        protocol: What the method was told of the person ("blind" or "calibrated").
+        seconds: Time the episode took, [s].
+        rendered: Whether the episode was made for this run (not read from the cache).
+    """
+    sc = episode.scenario
+    return {"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
+            "grasp_family": grasp_spec(sc)["family"],
+            **score_episode(episode, estimate, known.world_from_method),
+            "knowledge": known.record(), "protocol": protocol, "seconds": seconds, "rendered": rendered}

@@ -118,13 +118,11 @@ def _episode_rows(job) -> list:
     """
     from benchmark.method import run_method
     from benchmark.method.run import camera_input_and_knowledge
-    from benchmark.scores.episode import score_episode
-    from benchmark.world.grasp_plan import grasp_spec
+    from benchmark.scores.episode import episode_row
 
     suite, sc, cache, specs, init_scale, observer = job
     t0 = time.perf_counter()
     episode, made = cached_episode(suite, sc, cache)
-    family = grasp_spec(sc)["family"]
     given = {}  # (knowledge, protocol) -> (camera inputs, what the method was told)
     rows, tracked = [], {}
     for spec in specs:
@@ -138,13 +136,11 @@ def _episode_rows(job) -> list:
         estimate = run_method(spec, episode, inputs=inputs, tracking=shared)
         if key is not None:
             tracked.setdefault(key, estimate.tracking)
-        metrics = score_episode(episode, estimate, known.world_from_method)
+        row = episode_row(episode, estimate, known, spec.protocol, seconds=time.perf_counter() - (t0 if not rows else t1),
+                          rendered=made and not rows)
         if observer is not None:
             observer(episode, estimate, len(rows))
-        seconds = time.perf_counter() - (t0 if not rows else t1)
-        rows.append({"episode": episode_name(sc), "task": sc.task, "scenario": asdict(sc),
-                     "grasp_family": family, **metrics,
-                     "knowledge": known.record(), "protocol": spec.protocol, "seconds": seconds, "rendered": made and not rows})
+        rows.append(row)
     return rows
 
 
