@@ -239,3 +239,19 @@ def test_hdf5_files_round_trip_to_the_same_scores_as_npz(tiny, tmp_path, capsys)
     assert [{k: v for k, v in r.items() if k not in drop} for r in scores["hdf5"]["episodes"]] == \
            [{k: v for k, v in r.items() if k not in drop} for r in scores["npz"]["episodes"]]
     assert scores["hdf5"]["aggregate"] == scores["npz"]["aggregate"]
+
+
+def test_a_folder_of_hdf5_estimates_scored_as_npz_is_told_to_give_format_hdf5(tmp_path):
+    from benchmark.exchange.score import estimate_paths
+    from benchmark.suites import get_suite
+    from benchmark.world.scenario import episode_name
+
+    suite = get_suite("smoke")
+    for sc in suite.scenarios:
+        (tmp_path / f"{episode_name(sc)}.h5").write_bytes(b"")
+    with pytest.raises(ValueError, match=r"holds every episode's <episode>\.h5: give --format hdf5"):
+        estimate_paths(suite, tmp_path)
+    (tmp_path / f"{episode_name(suite.scenarios[0])}.h5").unlink()  # not every episode: no such hint
+    with pytest.raises(ValueError) as refused:
+        estimate_paths(suite, tmp_path)
+    assert "--format" not in str(refused.value)

@@ -47,8 +47,12 @@ def estimate_paths(suite, folder: pathlib.Path, container: str = "npz") -> dict:
     paths = {sc: folder / f"{episode_name(sc)}{suffix}" for sc in suite.scenarios}
     missing = [p.name for p in paths.values() if not p.is_file()]
     if missing:
+        others = [name for name, other in FORMATS.items() if other != suffix
+                  and all((folder / f"{episode_name(sc)}{other}").is_file() for sc in suite.scenarios)]
+        hint = f"; the folder holds every episode's <episode>{FORMATS[others[0]]}: give --format {others[0]}" if others else ""
         raise ValueError(f"--estimates {folder}: {len(missing)} of {len(paths)} episodes have no estimates file "
-                         f"(first: {missing[0]}); expected one <episode>{suffix} per episode of suite {suite.name}")
+                         f"(first: {missing[0]}); expected one <episode>{suffix} per episode of suite {suite.name}"
+                         + hint)
     return paths
 
 
