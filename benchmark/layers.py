@@ -20,7 +20,7 @@ FLOORS: tuple = (
     ("suites", ("benchmark.suites",)),
     ("paper", ("benchmark.paper",)),
     ("commands", ("benchmark.commands", "benchmark.exchange")),
-    ("reproduce", ("benchmark.reproduce", "benchmark.perf", "benchmark")),
+    ("reproduce", ("benchmark.reproduce", "benchmark.perf", "benchmark.commands.entry", "benchmark")),
 )
 """The floors from the ground up, each with the module prefixes it holds (the longest prefix wins):
 
@@ -34,8 +34,10 @@ FLOORS: tuple = (
 - ``suites``: registry, evaluation, comparison, sweep, leaderboard;
 - ``paper``: Table 1, Table 2, datasets, training, calibration: clients of the floors below;
 - ``commands``: the main command's stages, pictures, reports, the command line, file exchange;
-- ``reproduce``: regenerating every committed result; speed scripts; the package's front door
-  (``benchmark/__init__.py`` re-exports the world's and the camera's entry points).
+- ``reproduce``: regenerating every committed result; speed scripts; the console script
+  (``benchmark.commands.entry``, which runs ``reproduce`` and hands every other command to
+  ``benchmark.commands.cli``); the package's front door (``benchmark/__init__.py`` re-exports the
+  world's and the camera's entry points).
 """
 
 

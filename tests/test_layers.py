@@ -56,3 +56,14 @@ def test_the_floors_are_ordered_from_the_method_up():
     assert names[0] == "fsv" and names[-1] == "reproduce"
     assert names.index("world") < names.index("camera") < names.index("method") < names.index("scores") \
         < names.index("suites") < names.index("paper") < names.index("commands")
+
+
+def test_the_command_line_imports_every_sub_command_where_the_floors_can_see_it(graph):
+    """No sub-command is loaded by a string: the console script's and the command line's imports of
+    them are in the graph the floors and the cycles are checked on."""
+    from benchmark.commands import cli, entry
+
+    seen = {b for b, _ in graph["benchmark.commands.cli"]} | {b for b, _ in graph["benchmark.commands.entry"]}
+    modules = {name: entry.subcommand_module(name).__name__ for name in cli.ALL_SUBCOMMANDS}
+    assert not {name: m for name, m in modules.items() if m not in seen}
+    assert modules["reproduce"] == "benchmark.reproduce" and floor_of("benchmark.commands.entry") == "reproduce"

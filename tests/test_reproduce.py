@@ -5,7 +5,7 @@ import argparse
 import pytest
 
 from benchmark import reproduce
-from benchmark.commands.cli import main
+from benchmark.commands.entry import run
 from benchmark.fingerprint import results_fingerprint
 
 
@@ -59,7 +59,7 @@ def test_the_reference_run_regenerates_to_its_committed_values(tmp_path):
 
 
 def test_bad_result_names_exit_2_before_any_work(tmp_path, capsys):
-    assert main(["reproduce", "--only", "table3", "--data", str(tmp_path / "d")]) == 2
+    assert run(["reproduce", "--only", "table3", "--data", str(tmp_path / "d")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "table3" in err and "accepted: grip-calibration, shipped-model" in err
     assert not (tmp_path / "d").exists()

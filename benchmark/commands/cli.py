@@ -17,7 +17,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import hashlib
-import importlib
 import json
 import math
 import pathlib
@@ -43,12 +42,45 @@ from benchmark.world.tasks import TASKS
 from fsv.errors import InputError
 from fsv.provenance import provenance
 
-SUBCOMMANDS = {"generate": "benchmark.paper.dataset.cli", "calibrate": "benchmark.paper.calibration",
-               "train": "benchmark.paper.training", "table2": "benchmark.paper.table2",
-               "reproduce": "benchmark.reproduce", "eval": "benchmark.commands.eval",
-               "compare": "benchmark.suites.compare", "export": "benchmark.exchange.export",
-               "score": "benchmark.exchange.score", "leaderboard": "benchmark.suites.leaderboard",
-               "sweep": "benchmark.suites.sweep", "check": "benchmark.exchange.check"}
+SUBCOMMANDS = ("generate", "calibrate", "train", "table2", "eval", "compare", "export", "score", "leaderboard",
+               "sweep", "check")
+"""The sub-commands this module runs (:func:`subcommand_module`). ``fsv-bench reproduce``, which
+regenerates results by running these commands, sits a floor above and is run by
+:mod:`benchmark.commands.entry`."""
+
+ALL_SUBCOMMANDS = SUBCOMMANDS + ("reproduce",)
+"""Every sub-command of ``fsv-bench``, as its help lists them."""
+
+
+def subcommand_module(name: str):
+    """The module of ``fsv-bench <name>`` (one of :data:`SUBCOMMANDS`), imported when the sub-command
+    runs: each pulls in libraries the main command does not need (torch, pandas, h5py, Ray)."""
+    match name:
+        case "generate":
+            from benchmark.paper.dataset import cli as module
+        case "calibrate":
+            from benchmark.paper import calibration as module
+        case "train":
+            from benchmark.paper import training as module
+        case "table2":
+            from benchmark.paper import table2 as module
+        case "eval":
+            from benchmark.commands import eval as module
+        case "compare":
+            from benchmark.suites import compare as module
+        case "export":
+            from benchmark.exchange import export as module
+        case "score":
+            from benchmark.exchange import score as module
+        case "leaderboard":
+            from benchmark.suites import leaderboard as module
+        case "sweep":
+            from benchmark.suites import sweep as module
+        case "check":
+            from benchmark.exchange import check as module
+        case _:
+            raise KeyError(f"{name!r} is not a sub-command of this module; accepted: {', '.join(SUBCOMMANDS)}")
+    return module
 
 
 def _interrupted(e: BaseException) -> bool:
@@ -74,17 +106,19 @@ def exit_status(e: BaseException, prog: str, when_interrupted: str, bad_input: t
     raise e
 
 
-def subcommand_parser(name: str) -> tuple:
-    """``(module, parser)`` of ``fsv-bench <name>``: the sub-command's module and its parser."""
-    module = importlib.import_module(SUBCOMMANDS[name])
+def subcommand_parser(name: str, module=None) -> tuple:
+    """``(module, parser)`` of ``fsv-bench <name>``: the sub-command's module (``module``, or
+    :func:`subcommand_module`'s) and its parser."""
+    module = subcommand_module(name) if module is None else module
     p = _Parser(prog=f"fsv-bench {name}", description=plain(module.__doc__.strip().splitlines()[0]))
     module.add_arguments(p)
     return module, p
 
 
-def _subcommand(argv: list) -> int:
-    """Runs ``fsv-bench <subcommand> ...``; bad input exits 2, Ctrl-C 130 (re-run to resume)."""
-    module, p = subcommand_parser(argv[0])
+def run_subcommand(argv: list, module=None) -> int:
+    """Runs ``fsv-bench <subcommand> ...`` (with ``module``, the sub-command's module, or
+    :func:`subcommand_module`'s); bad input exits 2, Ctrl-C 130 (re-run to resume)."""
+    module, p = subcommand_parser(argv[0], module)
     args = p.parse_args(argv[1:])
     try:
         module.run(args)
@@ -136,7 +170,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="fsv-bench",
         description="Simulate a hand-box manipulation and score force sensing from vision.",
-        epilog="sub-commands: " + ", ".join(f"'fsv-bench {name} --help'" for name in SUBCOMMANDS)
+        epilog="sub-commands: " + ", ".join(f"'fsv-bench {name} --help'" for name in ALL_SUBCOMMANDS)
         + " (training data, internal-force networks, the paper's Table 2)",
     )
     p.add_argument("--task", default="lift", help=f"task name: {', '.join(TASKS)}")
@@ -281,7 +315,11 @@ def main(argv: list | None = None) -> int:
     """Entry point of ``fsv-bench``; returns the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv and argv[0] in SUBCOMMANDS:
-        return _subcommand(argv)
+        return run_subcommand(argv)
+    if argv and argv[0] in ALL_SUBCOMMANDS:  # a floor above this module: the console script runs it
+        print(f"fsv-bench: error: {argv[0]} is run by the console script (benchmark.commands.entry.run), "
+              f"not by benchmark.commands.cli.main", file=sys.stderr)
+        return 2
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -16,8 +16,6 @@ def main() -> int:
     """Runs ``fsv-bench`` with the process's arguments; returns the exit status."""
     interrupt.install()
     try:
-        from benchmark.commands.cli import main as run
-
         code = run()
     except BaseException as e:  # e.g. a C extension's import turns the interrupt into an ImportError
         if not interrupt.interrupted() or isinstance(e, SystemExit):
@@ -33,13 +31,43 @@ def main() -> int:
     return code
 
 
+def run(argv: list | None = None) -> int:
+    """``fsv-bench`` on ``argv`` (default: the process's arguments): ``reproduce``, which runs the other
+    commands, here on the top floor; everything else by :func:`benchmark.commands.cli.main`. Returns
+    the exit status."""
+    from benchmark.commands import cli  # after the handler: it imports MuJoCo, the renderer, the method
+
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] == "reproduce":
+        return cli.run_subcommand(argv, subcommand_module(argv[0]))
+    return cli.main(argv)
+
+
+def subcommand_module(name: str):
+    """The module of any sub-command of ``fsv-bench`` (:data:`benchmark.commands.cli.ALL_SUBCOMMANDS`)."""
+    from benchmark.commands import cli
+
+    if name == "reproduce":
+        from benchmark import reproduce  # torch, pandas and every command: only when asked for
+
+        return reproduce
+    return cli.subcommand_module(name)
+
+
+def subcommand_parser(name: str) -> tuple:
+    """``(module, parser)`` of any sub-command of ``fsv-bench``."""
+    from benchmark.commands import cli
+
+    return cli.subcommand_parser(name, subcommand_module(name))
+
+
 def main_command_done(argv: list) -> bool:
     """Whether ``argv`` ran the main command (not a sub-command, not ``--help``): it waits for its
     background work and renames its output folder into place before returning, so the interpreter's
     teardown (about 0.7 s of finalisers in the imported libraries) has nothing left to do for it."""
-    from benchmark.commands.cli import SUBCOMMANDS
+    from benchmark.commands.cli import ALL_SUBCOMMANDS
 
-    return not (argv and argv[0] in SUBCOMMANDS)
+    return not (argv and argv[0] in ALL_SUBCOMMANDS)
 
 
 BAD_INPUT = 2
