@@ -84,3 +84,23 @@ def test_a_bad_suite_is_one_line_and_status_2_before_any_work(tmp_path, capsys):
         atlas.main(["--suite", "nope", "--out", str(tmp_path / "atlas")])
     err = capsys.readouterr().err
     assert refused.value.code == 2 and err.count("\n") == 1 and "nope" in err and not (tmp_path / "atlas").exists()
+
+
+def test_run_as_a_script_its_episodes_go_to_worker_processes(tmp_path):
+    """``python -m benchmark.commands.atlas --workers 2`` (as ``fsv-bench reproduce`` runs it): the
+    job function is found by its module's name, not in ``__main__``, which a worker cannot unpickle."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import runpy, sys\n"
+            "from benchmark.suites import SUITES\n"
+            "from test_evaluate import TINY\n"
+            "SUITES['tiny'] = TINY\n"
+            f"sys.argv = ['atlas', '--suite', 'tiny', '--workers', '2', '--quiet', '--out', {str(tmp_path / 'a')!r}, "
+            f"'--cache', {str(tmp_path / 'c')!r}]\n"
+            "runpy.run_module('benchmark.commands.atlas', run_name='__main__')\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert run.returncode == 0, run.stderr
+    assert json.loads((tmp_path / "a" / "atlas.json").read_text())["tail"]["lab"]["episodes"] == 1

@@ -133,9 +133,11 @@ def _episode(job) -> dict:
 def atlas(suite, *, cache=None, workers: int = 1) -> dict:
     """Every episode of ``suite`` diagnosed (:func:`diagnose`) under lab and exact knowledge; those
     that fail a criterion under lab knowledge listed with their causes, and the suite's tail."""
+    from benchmark.commands.atlas import _episode as job  # by its module's name, also when run as __main__
+
     cache = episode_cache(cache)
     jobs = [(suite, sc, cache) for sc in suite.scenarios]
-    found = dict(run_jobs(_episode, jobs, workers=workers))
+    found = dict(run_jobs(job, jobs, workers=workers))
     episodes = []
     for i, sc in enumerate(suite.scenarios):
         lab, exact = found[i]["lab"], found[i]["exact"]
