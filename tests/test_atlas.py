@@ -15,7 +15,7 @@ from benchmark.suites.evaluate import cached_episode
 def _row(**changes):
     row = {"net_force_err_n_rms": 0.1, "least_violation_frac": 0.0, "learned_rel_err_pct": 20.0,
            "contact_precision": 0.99, "box_pos_err_mm": 4.0, "no_contact_frames": 0, "phantom_finger_frames": 0,
-           "phantom_digits": [], "least_violation_frames": 0}
+           "phantom_digits": [], "least_violation_frames": 0, "table_lost_frames": 0}
     return {**row, **changes}
 
 
@@ -34,6 +34,8 @@ def test_the_criteria_list_an_episode_beyond_any_limit_or_without_a_value():
     (_row(least_violation_frac=0.1, least_violation_frames=30), _row(least_violation_frac=0.1),
      [("forces", "no physical solution on 30 frames")]),
     (_row(learned_rel_err_pct=75.0), _row(learned_rel_err_pct=70.0), [("learn", "every stage before them passes")]),
+    (_row(net_force_err_n_rms=1.9, table_lost_frames=27), _row(), [("forces: table", "table lost: 27 frames"),
+                                                                   ("knowledge", "exact knowledge passes net_force")]),
     (_row(net_force_err_n_rms=0.8, box_pos_err_mm=12.0), _row(net_force_err_n_rms=0.8),
      [("track: box", "box 12.0 mm off")]),
     (_row(net_force_err_n_rms=0.8), _row(net_force_err_n_rms=0.9), [("?", "unexplained")]),
@@ -62,6 +64,26 @@ def test_lost_contacts_are_counted_where_the_truth_has_two_digits_or_more(monkey
     found = atlas.diagnose(episode, "lab")
     two = int((np.asarray(episode.truth.contact_active).sum(axis=1) >= 2).sum())
     assert two > 10 and found["no_contact_frames"] == two and found["phantom_finger_frames"] == 0
+
+
+def test_a_lost_table_is_counted_where_the_table_carries_the_box(monkeypatch, tmp_path):
+    """Nominal forces without any table force: every frame where the table pushes with more than half
+    the box's weight (the box standing on it before the lift) has lost the table."""
+    import benchmark.commands.atlas as module
+
+    episode, _ = cached_episode(TINY, TINY.scenarios[0], tmp_path)
+    real = module.run_method
+
+    def without_table(spec, ep, inputs=None):
+        est = real(spec, ep, inputs=inputs)
+        return dataclasses.replace(est, nominal=dataclasses.replace(est.nominal,
+                                                                    env_wrench=np.zeros_like(est.nominal.env_wrench)))
+
+    truth = episode.truth
+    standing = int((np.linalg.norm(truth.env_force, axis=1) > 0.5 * truth.mass * 9.81).sum())
+    assert standing > 10 and atlas.diagnose(episode, "exact")["table_lost_frames"] == 0  # told the true table
+    monkeypatch.setattr(module, "run_method", without_table)
+    assert atlas.diagnose(episode, "exact")["table_lost_frames"] == standing
 
 
 def test_the_command_writes_the_atlas_of_a_suite(monkeypatch, tmp_path, capsys):

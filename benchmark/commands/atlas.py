@@ -77,8 +77,8 @@ def diagnose(episode, knowledge: str) -> dict:
         ``no_contact_frames`` (frames where the method found no finger on the box while the truth
         has two or more), ``phantom_finger_frames`` (finger-frames in contact for a digit the truth
         never has on the box in this episode: a digit not in the grasp), ``phantom_digits`` (their
-        names) and ``least_violation_frames`` (frames of the nominal program solved by least
-        violation, failed or implausible).
+        names), ``least_violation_frames`` (frames of the nominal program solved by least
+        violation, failed or implausible) and ``table_lost_frames`` (:func:`_table_lost`).
     """
     spec = MethodSpec(knowledge=knowledge)
     inputs, known = camera_input_and_knowledge(episode, 1.0, spec.knowledge, spec.protocol)
@@ -92,13 +92,31 @@ def diagnose(episode, knowledge: str) -> dict:
             "no_contact_frames": int(((active.sum(axis=1) == 0) & (truth_active.sum(axis=1) >= 2)).sum()),
             "phantom_finger_frames": int(active[:, never].sum()),
             "phantom_digits": [n for n, k in zip(names, never) if k and active[:, names.index(n)].any()],
-            "least_violation_frames": int(np.isin(status, [int(s) for s in FALLBACKS]).sum())}
+            "least_violation_frames": int(np.isin(status, [int(s) for s in FALLBACKS]).sum()),
+            "table_lost_frames": _table_lost(episode.truth, estimate.nominal)}
+
+
+TABLE_SUPPORT = 0.5
+"""The table carries the box when it pushes with more than this share of the box's weight; an
+estimate without a table force above a tenth of that share on such a frame has lost the table."""
+
+
+def _table_lost(truth, nominal) -> int:
+    """Frames where the table carries the box (:data:`TABLE_SUPPORT`) and the nominal forces have no
+    table force: the table the method believes in is not where the box stands."""
+    if nominal is None:
+        return 0
+    weight = float(truth.mass * np.linalg.norm(truth.gravity))
+    carried = np.linalg.norm(np.asarray(truth.env_force), axis=1) > TABLE_SUPPORT * weight
+    estimated = np.linalg.norm(np.asarray(nominal.env_wrench)[:, :3], axis=1)
+    return int((carried & (estimated < 0.1 * TABLE_SUPPORT * weight)).sum())
 
 
 def causes(lab: dict, exact: dict) -> list:
     """``[(stage, cause), ...]`` of an episode's failures under lab knowledge, from the evidence of
     :func:`diagnose` (``lab``) and the same episode under exact knowledge (``exact``), most specific
-    first: contacts lost or invented (the tracker's contacts), programs without a physical solution
+    first: contacts lost or invented (the tracker's contacts), the table lost (the forces stage's
+    support of a box that stands on it), programs without a physical solution
     (the forces stage: friction or contacts that cannot carry the motion), the box's tracking, what
     only lab knowledge breaks, and the learned stage when nothing before it failed."""
     out = []
@@ -110,6 +128,9 @@ def causes(lab: dict, exact: dict) -> list:
                                         f"{lab['phantom_finger_frames']} finger-frames"))
     elif CRITERIA[3].fails(lab["contact_precision"]):
         out.append(("track: contacts", f"contacts invented: precision {lab['contact_precision']:.2f}"))
+    if lab["table_lost_frames"]:
+        out.append(("forces: table", f"table lost: {lab['table_lost_frames']} frames where the table carries the box "
+                                     "and the estimate has no table force"))
     if CRITERIA[1].fails(lab["least_violation_frac"]):
         out.append(("forces", f"no physical solution on {lab['least_violation_frames']} frames (friction cone or "
                               "contacts that cannot carry the motion)"))
