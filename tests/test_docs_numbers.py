@@ -118,3 +118,15 @@ def test_the_walkthroughs_numbers_are_the_committed_runs():
         assert quote.replace("-", "−") in text or quote in text, quote
     for run in (lift, rot):
         assert run["verdict"]["verdict"] == "pass" and len(run["verdict"]["gates"]) == 8
+
+
+def test_the_findings_quote_the_committed_failure_atlas():
+    doc = json.loads((ROOT / "results/failure_atlas/atlas.json").read_text())
+    text = (ROOT / "docs/findings.md").read_text()
+    for k in ("lab", "exact"):
+        t = doc["tail"][k]
+        row = (f"| {k} | {t['failing_episodes']} of 48 | {t['net_force_p90_n']:.3f} | {t['net_force_max_n']:.3f} | "
+               f"{t['no_contact_frames']} | {100 * t['least_violation_frac_mean']:.2f} % |")
+        assert row in text, row
+    lost = {k: sum(e[k]["table_lost_frames"] for e in doc["episodes"]) for k in ("lab", "exact")}
+    assert f"({lost['lab']} such frames over" in text and f"under lab knowledge,\n  {lost['exact']} under exact" in text
