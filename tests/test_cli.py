@@ -308,3 +308,18 @@ def test_the_learning_block_names_a_model_only_for_the_learned_stage_not_for_a_l
     main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(tmp_path / "ref")])
     learning = json.loads((tmp_path / "ref" / "summary.json").read_text())["learning"]
     assert learning["internal_model"] == "fsv/data/internal_forces_blind.npz" and not learning["model"]["grip_inputs"]
+
+
+def test_output_read_only_in_part_ends_the_command_without_a_traceback():
+    """``fsv-bench reproduce --list | true``: the reader closes the pipe before anything is written
+    (``| head -1`` does after its line); the command ends quietly, status 0."""
+    import os
+    import subprocess
+    import sys
+
+    run = subprocess.run(f"{sys.executable} -m benchmark.commands.entry reproduce --list | true; "
+                         "echo status ${PIPESTATUS[0]} >&2", shell=True, executable="/bin/bash",
+                         capture_output=True, text=True, timeout=120,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert "Traceback" not in run.stderr and "BrokenPipe" not in run.stderr, run.stderr
+    assert run.stderr.strip() == "status 0", run.stderr

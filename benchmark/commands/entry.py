@@ -7,6 +7,7 @@ status 130 within a second and writes nothing.
 
 from __future__ import annotations
 
+import os
 import sys
 
 from benchmark import interrupt
@@ -17,6 +18,10 @@ def main() -> int:
     interrupt.install()
     try:
         code = run()
+        sys.stdout.flush()  # here, where a closed pipe is caught, rather than at the interpreter's exit
+    except BrokenPipeError:  # the reader of the output went away (`fsv-bench reproduce --list | head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit's flush
+        return 0
     except BaseException as e:  # e.g. a C extension's import turns the interrupt into an ImportError
         if not interrupt.interrupted() or isinstance(e, SystemExit):
             raise
