@@ -54,12 +54,11 @@ class Criterion:
         return f"{self.metric} {self.op} {self.limit:g}"
 
 
-CRITERIA = (
-    Criterion("net_force_err_n_rms", ">", 0.5),
-    Criterion("least_violation_frac", ">", 0.02),
-    Criterion("learned_rel_err_pct", ">", 60.0),
-    Criterion("contact_precision", "<", 0.85),
-)
+NET_FORCE = Criterion("net_force_err_n_rms", ">", 0.5)
+LEAST_VIOLATION = Criterion("least_violation_frac", ">", 0.02)
+LEARNED = Criterion("learned_rel_err_pct", ">", 60.0)
+PRECISION = Criterion("contact_precision", "<", 0.85)
+CRITERIA = (NET_FORCE, LEAST_VIOLATION, LEARNED, PRECISION)
 """What puts an episode in the atlas (issue 45): a net force error above 0.5 N, more than 2 % of
 its frames solved by least violation, a learned-force error above 60 % (the smoke gate's bar), or
 a contact precision below 0.85 (the smoke gate's)."""
@@ -126,12 +125,12 @@ def causes(lab: dict, exact: dict) -> list:
     if lab["phantom_finger_frames"]:
         out.append(("track: contacts", f"contacts invented: {', '.join(lab['phantom_digits'])} (not in the grasp), "
                                         f"{lab['phantom_finger_frames']} finger-frames"))
-    elif CRITERIA[3].fails(lab["contact_precision"]):
+    elif PRECISION.fails(lab["contact_precision"]):
         out.append(("track: contacts", f"contacts invented: precision {lab['contact_precision']:.2f}"))
     if lab["table_lost_frames"]:
         out.append(("forces: table", f"table lost: {lab['table_lost_frames']} frames where the table carries the box "
                                      "and the estimate has no table force"))
-    if CRITERIA[1].fails(lab["least_violation_frac"]):
+    if LEAST_VIOLATION.fails(lab["least_violation_frac"]):
         out.append(("forces", f"no physical solution on {lab['least_violation_frames']} frames (friction cone or "
                               "contacts that cannot carry the motion)"))
     if lab["box_pos_err_mm"] is not None and lab["box_pos_err_mm"] > BOX_ERROR_MM:
@@ -139,7 +138,7 @@ def causes(lab: dict, exact: dict) -> list:
     only_lab = [c.metric for c in CRITERIA if c.fails(lab[c.metric]) and not c.fails(exact[c.metric])]
     if only_lab:
         out.append(("knowledge", "lab knowledge: exact knowledge passes " + ", ".join(only_lab)))
-    if not out and CRITERIA[2].fails(lab["learned_rel_err_pct"]):
+    if not out and LEARNED.fails(lab["learned_rel_err_pct"]):
         out.append(("learn", "learned forces: every stage before them passes"))
     return out or [("?", "unexplained by the evidence gathered here")]
 
