@@ -254,7 +254,7 @@ def write_archive(path, fmt: str, version: int, meta: dict, arrays: dict) -> pat
     return path
 
 
-def read_archive(path, fmt: str, version: int, *, kind: str, error: type, digests_required: bool = True,
+def read_archive(path, fmt: str, version: int | tuple, *, kind: str, error: type, digests_required: bool = True,
                  check_entry=None, arrays: bool = True) -> tuple:
     """Reads and checks a sealed archive, never reading more than the format allows.
 
@@ -267,7 +267,7 @@ def read_archive(path, fmt: str, version: int, *, kind: str, error: type, digest
     Args:
         path: The file.
         fmt: The expected ``format``.
-        version: The expected version.
+        version: The expected version, or a tuple of the versions this reader reads.
         kind: What the file is, for messages ("episode", "estimates", ...).
         error: The exception class raised.
         digests_required: Refuse a file without digests.
@@ -306,9 +306,10 @@ def read_archive(path, fmt: str, version: int, *, kind: str, error: type, digest
                 got = meta.get("format") if isinstance(meta, dict) else None
                 raise error(f"{path} is not an fsv-bench {kind} file (format {str(got)[:60]!r}, expected {fmt!r})")
             held = meta.get("version")
-            if type(held) is not int or held != version:
+            readable = (version,) if isinstance(version, int) else tuple(version)
+            if type(held) is not int or held not in readable:
                 raise error(f"{path} is {kind} format version {repr(held)[:60]}; this fsv-bench reads version "
-                            f"{version} (an integer)")
+                            f"{' or '.join(str(v) for v in readable)} (an integer)")
             digests = meta.get("array_sha256")
             if "meta_sha256" in meta or digests_required:
                 if meta.get("meta_sha256") != tree_sha256({k: v for k, v in meta.items() if k != "meta_sha256"}):

@@ -136,6 +136,18 @@ def check_grid(counts: dict, what: str = "episodes") -> int:
     return total
 
 
+def parsed(parse_text: Callable[[str], object]) -> Callable[[str], object]:
+    """An argparse type: ``parse_text(text)``; its ValueError becomes the option's one-line error."""
+
+    def parse(text: str):
+        try:
+            return parse_text(text)
+        except ValueError as e:
+            raise argparse.ArgumentTypeError(str(e)) from None
+
+    return parse
+
+
 def checked(check: Callable[[str], object]) -> Callable[[str], str]:
     """An argparse type: the text itself, once ``check(text)`` has not raised; its ValueError becomes
     the option's one-line error."""

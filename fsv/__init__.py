@@ -12,11 +12,13 @@ from fsv.models import HandModel, ObjectModel
 # The whole method: depth -> tracking -> contacts -> kinematics -> forces.
 from fsv.pipeline import Estimate, run_pipeline
 from fsv.track.tracker import TrackInit
-from fsv.types import Calibration, Contacts, DepthVideo, Kinematics, Poses
+from fsv.types import STREAMS, Calibration, ColourVideo, Contacts, DepthVideo, Kinematics, Poses
 
 __all__ = [
+    "STREAMS",
     "Calibration",
     "CameraInput",
+    "ColourVideo",
     "Contacts",
     "DepthVideo",
     "Estimate",

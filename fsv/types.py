@@ -46,6 +46,27 @@ class DepthVideo:
         return np.arange(self.num_frames) / self.fps
 
 
+STREAMS = ("depth", "colour")
+"""The camera's named streams, in the order files list them: the depth (always recorded) and the
+colour camera's (recorded when a method or ``--streams`` asks for it)."""
+
+
+def check_streams(names) -> tuple:
+    """``names`` (an iterable of stream names, or one comma-separated string) as a tuple in
+    :data:`STREAMS` order, ``depth`` always included.
+
+    Raises:
+        InputError: For a name not in :data:`STREAMS` (the message lists them).
+    """
+    if isinstance(names, str):
+        names = [n.strip() for n in names.split(",")]
+    names = [str(n) for n in names]
+    bad = [n for n in names if n not in STREAMS]
+    if bad:
+        raise InputError(f"stream {bad[0]!r}: accepted: {', '.join(STREAMS)} (comma-separated)")
+    return tuple(s for s in STREAMS if s == "depth" or s in names)
+
+
 @dataclass(frozen=True)
 class Calibration:
     """Pinhole camera calibration.
@@ -242,3 +263,52 @@ class Contacts:
 
     def __len__(self) -> int:
         return self.active.shape[0]
+
+
+@dataclass(frozen=True)
+class ColourVideo:
+    """The colour stream of an RGB-D camera: its own images, calibration and timestamps.
+
+    Attributes:
+        rgb: Images, shape (T, H, W, 3), uint8, sRGB-encoded (gamma applied, white-balanced), row 0
+            at the top, channels red, green, blue.
+        fps: Frame rate in [Hz].
+        calib: The colour camera's calibration (its own intrinsics, image size and pose in the
+            world; OpenCV convention, zero distortion), shape matching ``rgb``.
+        t_s: Timestamp of each frame, shape (T,), [s]: the middle of its exposure.
+        exposure_s: Exposure time in [s] (each frame integrates light over ``t_s[k] -+ exposure_s / 2``;
+            0: an instantaneous frame).
+    """
+
+    rgb: np.ndarray
+    fps: float
+    calib: Calibration
+    t_s: np.ndarray
+    exposure_s: float = 0.0
+
+    def __post_init__(self):
+        rgb = np.asarray(self.rgb)
+        if rgb.dtype != np.uint8:
+            raise InputError(f"ColourVideo.rgb must be uint8, got {rgb.dtype}")
+        if rgb.ndim != 4 or rgb.shape[3] != 3:
+            raise InputError(f"ColourVideo.rgb must have shape (T, H, W, 3), got {rgb.shape}")
+        if not isinstance(self.calib, Calibration):
+            raise InputError(f"ColourVideo.calib must be an fsv.Calibration, got {type(self.calib).__name__}")
+        if rgb.shape[1:3] != (self.calib.height, self.calib.width):
+            raise InputError(f"ColourVideo.rgb is {rgb.shape[2]}x{rgb.shape[1]}, its calibration says "
+                             f"{self.calib.width}x{self.calib.height}")
+        positive("ColourVideo.fps", self.fps, "a positive number of Hz")
+        t = as_array("ColourVideo.t_s", self.t_s, (rgb.shape[0],))
+        finite("ColourVideo.t_s", t)
+        if not (np.isfinite(self.exposure_s) and 0 <= self.exposure_s <= 1.0 / self.fps):
+            raise InputError(f"ColourVideo.exposure_s must lie in [0, 1/fps = {1.0 / self.fps:g}] s, got {self.exposure_s!r}")
+        rgb = rgb.copy() if rgb.flags.writeable else rgb
+        rgb.setflags(write=False)
+        object.__setattr__(self, "rgb", rgb)
+        object.__setattr__(self, "t_s", t)
+        object.__setattr__(self, "fps", float(self.fps))
+        object.__setattr__(self, "exposure_s", float(self.exposure_s))
+
+    @property
+    def num_frames(self) -> int:
+        return self.rgb.shape[0]

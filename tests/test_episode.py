@@ -83,7 +83,7 @@ def _rewrite_meta(path, dest, **changes):
 
 def test_other_version_and_format(saved, tmp_path):
     _, path = saved
-    with pytest.raises(EpisodeFileError, match=f"version 99.*reads version {VERSION}"):
+    with pytest.raises(EpisodeFileError, match=f"version 99.*reads version 2 or {VERSION}"):
         load_episode(_rewrite_meta(path, tmp_path / "v99.npz", version=99))
     with pytest.raises(EpisodeFileError, match="not an fsv-bench episode"):
         load_episode(_rewrite_meta(path, tmp_path / "fmt.npz", format="something-else"))

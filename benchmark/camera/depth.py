@@ -16,7 +16,7 @@ import numpy as np
 from benchmark.camera.camera import Camera
 from benchmark.camera.scene import LABEL_PALM, body_pose0, geom_trimesh
 from benchmark.errors import BenchmarkError
-from benchmark.world.skin import PULP_EXPONENT_PER_MM, PULP_REACH, PULP_STIFFNESS_N_PER_MM, Skin
+from benchmark.world.skin import PULP_EXPONENT_PER_MM, PULP_REACH, PULP_STIFFNESS_N_PER_MM, Skin, skin_of
 
 RASTERISER = "fsv-bench cpu raster v1"
 """The name of the rasteriser, recorded with every rendered episode (its bits are pinned by
@@ -86,6 +86,12 @@ class HandSkin:
     segment_body: np.ndarray
     box_body: int
     box_half: np.ndarray
+
+
+def hand_skin(world) -> HandSkin:
+    """The skin of a :class:`benchmark.world.assets.World`'s hand, as the renderer draws it."""
+    return HandSkin(skin=skin_of(world.hand), segment_body=np.asarray(world.segment_body, dtype=np.int64),
+                    box_body=int(world.box_body), box_half=np.asarray(world.obj.half_extents, dtype=np.float64))
 
 
 def pulp_presses(truth) -> tuple[np.ndarray, np.ndarray]:

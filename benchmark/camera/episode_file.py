@@ -14,7 +14,7 @@ from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.world.episode import Episode
 from benchmark.world.scenario import Scenario
 from benchmark.world.truth import Truth
-from fsv import Calibration, DepthVideo, FsvError, HandModel, ObjectModel
+from fsv import Calibration, ColourVideo, DepthVideo, FsvError, HandModel, ObjectModel
 
 # --- Rendered part of an episode in the episode file (depth, calibration, labels) -------------
 
@@ -89,30 +89,65 @@ def depth_from_arrays(arrays) -> tuple[DepthVideo | None, Calibration | None, np
     return depth, calib, labels
 
 
+def colour_arrays(episode: Episode) -> dict[str, np.ndarray]:
+    """The colour stream of an episode as named arrays: {} when it has none; otherwise ``rgb``
+    (T, H, W, 3) uint8 (stored as it is: lossless), ``fps``, ``t_s`` (T,), ``exposure_s``, the
+    colour camera's ``calib_K``, ``calib_T_world_cam``, ``calib_size`` and its ``labels`` (T, H, W) uint8."""
+    c = episode.colour
+    if c is None:
+        return {}
+    out = {"rgb": c.rgb, "fps": np.float64(c.fps), "t_s": c.t_s, "exposure_s": np.float64(c.exposure_s),
+           "calib_K": c.calib.K, "calib_T_world_cam": c.calib.T_world_cam,
+           "calib_size": np.array([c.calib.width, c.calib.height], dtype=np.int64)}
+    if episode.colour_labels is not None:
+        out["labels"] = np.asarray(episode.colour_labels, dtype=np.uint8)
+    return out
+
+
+def colour_from_arrays(arrays) -> tuple:
+    """Inverse of :func:`colour_arrays`: ``(ColourVideo, labels or None)``."""
+    width, height = (int(v) for v in arrays["calib_size"])
+    calib = Calibration(K=arrays["calib_K"], T_world_cam=arrays["calib_T_world_cam"], width=width, height=height)
+    colour = ColourVideo(rgb=arrays["rgb"], fps=float(arrays["fps"]), calib=calib, t_s=arrays["t_s"],
+                         exposure_s=float(arrays["exposure_s"]))
+    labels = np.asarray(arrays["labels"], dtype=np.uint8) if "labels" in arrays else None
+    return colour, labels
+
+
 # --- the episode file -------------------------------------------------------------------------
 
 FORMAT = "fsv-bench-episode"
-VERSION = 2
+VERSION = 3
+READS = (2, 3)
+"""The versions :func:`load_episode` reads: version 2 is version 3 without the colour and annotation sections."""
 FORMAT_DOC = """\
 An episode file is a NumPy ``.npz`` archive (zip, deflate-compressed) holding only plain arrays
 (no pickles). Entry ``meta.json`` is a uint8 array of UTF-8 JSON:
 
-    {"format": "fsv-bench-episode", "version": 2, "scenario": {Scenario fields},
+    {"format": "fsv-bench-episode", "version": 3, "scenario": {Scenario fields},
      "sections": [names of the sections present], "<section>": {scalars of that section},
      "array_sha256": {"<section>/<field>": SHA-256 of that array}, "meta_sha256": SHA-256}
 
-Array entries are named ``<section>/<field>``. Sections of version 2:
+Array entries are named ``<section>/<field>``. Sections of version 3:
 
     truth/*    every array field of benchmark.world.truth.Truth (scalars ``mass`` in the JSON)
     object/*   fsv.ObjectModel arrays (size_m, inertia); mass_kg and frictions in the JSON
     hand/*     fsv.HandModel arrays; segment, joint and finger names in the JSON
     render/*   after rendering only: the arrays of :func:`depth_arrays` (uint16 depth counts and
                their quantum, fps, calibration, labels)
+    colour/*   when the colour stream was rendered: the arrays of :func:`colour_arrays` (uint8
+               sRGB images stored losslessly, fps, timestamps, exposure, the colour camera's
+               calibration and label images); the colour sensor's preset name in the JSON
+    annotations/*  after rendering: the per-frame labels of
+               :class:`benchmark.camera.annotations.Annotations` (keypoints, BOP box poses,
+               contacts in each stream's camera frame)
+
+Version 2 (read too) has no ``colour`` or ``annotations`` section.
 
 ``array_sha256`` holds :func:`fsv.digest.array_sha256` of every array entry (over its name, dtype,
 shape and bytes) and ``meta_sha256`` is :func:`fsv.digest.tree_sha256` of the JSON without
 ``meta_sha256``: a reader recomputes both and refuses the file if one differs, or if an array is
-missing or not listed. A reader must refuse another format or version (version 1 had no digests).
+missing or not listed. A reader must refuse another format or a version it does not read (version 1 had no digests).
 Writers replace the file atomically and use fixed zip timestamps, so the same episode always gives
 the same bytes.
 """
@@ -165,6 +200,9 @@ def _sections(ep: Episode) -> dict:
     rendered = depth_arrays(ep)
     if rendered:
         out["render"] = (rendered, {})
+    colour = colour_arrays(ep)
+    if colour:
+        out["colour"] = (colour, {})
     return out
 
 
@@ -209,7 +247,7 @@ def load_episode(path, *, scenario: Scenario | None = None, identity: dict | Non
             another scenario or identity than expected.
     """
     path = pathlib.Path(path)
-    meta, arrays = read_archive(path, FORMAT, VERSION, kind="episode", error=EpisodeFileError)
+    meta, arrays = read_archive(path, FORMAT, READS, kind="episode", error=EpisodeFileError)
     if scenario is not None and meta.get("scenario") != dataclasses.asdict(scenario):
         raise EpisodeFileError(f"{path} holds the episode of scenario {meta.get('scenario')}, not of "
                                f"{dataclasses.asdict(scenario)} (a renamed or copied file)")
@@ -224,6 +262,9 @@ def load_episode(path, *, scenario: Scenario | None = None, identity: dict | Non
         if "render" in meta["sections"]:
             depth, calib, labels = depth_from_arrays(arrays["render"])
             ep = replace(ep, depth=depth, calib=calib, labels=labels)
+        if "colour" in meta["sections"]:
+            colour, colour_labels = colour_from_arrays(arrays["colour"])
+            ep = ep.with_colour(colour, colour_labels)
     except (KeyError, TypeError, BenchmarkError, FsvError) as e:
         raise EpisodeFileError(f"{path} has missing or inconsistent episode data: {e}") from e
     return ep

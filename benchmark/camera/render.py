@@ -21,13 +21,15 @@ from __future__ import annotations
 import numpy as np
 
 from benchmark.camera.camera import Camera
-from benchmark.camera.depth import DepthRenderer, HandSkin, pulp_presses
+from benchmark.camera.colour import render_colour
+from benchmark.camera.depth import DepthRenderer, HandSkin, hand_skin, pulp_presses  # noqa: F401 (re-exported)
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from benchmark.camera.views import camera_of
 from benchmark.errors import BenchmarkError
 from benchmark.world.episode import Episode
 from fsv import DepthVideo
+from fsv.types import check_streams
 
 
 def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: np.ndarray, sensor, rng,
@@ -68,16 +70,14 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
     return depth, label_images
 
 
-def hand_skin(world) -> HandSkin:
-    """The skin of a :class:`benchmark.world.assets.World`'s hand, as the renderer draws it."""
-    from benchmark.world.skin import skin_of
+def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camera | None = None,
+           streams: tuple = ("depth",)) -> Episode:
+    """Renders the streams the scenario's RGB-D camera would record of a simulated episode.
 
-    return HandSkin(skin=skin_of(world.hand), segment_body=np.asarray(world.segment_body, dtype=np.int64),
-                    box_body=int(world.box_body), box_half=np.asarray(world.obj.half_extents, dtype=np.float64))
-
-
-def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camera | None = None) -> Episode:
-    """Renders the depth video the scenario's depth camera would record of a simulated episode.
+    The depth is always rendered (once: an episode that has it keeps it); the colour when
+    ``streams`` names it (:func:`benchmark.camera.colour.render_colour`, from its own random
+    stream, so rendering it later, onto a cached depth episode, gives the same bits as rendering
+    both at once).
 
     Args:
         episode: A simulated episode (its truth gives the box and hand pose per frame).
@@ -87,6 +87,8 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
         camera: The camera; default the scenario's view's (:func:`benchmark.camera.views.camera_of`:
             ``sim_assets/camera.yaml``'s for view 0).
 
+        streams: The streams to render (names of :data:`fsv.types.STREAMS`; the depth always).
+
     Returns:
         The episode with ``depth`` (T frames at the scenario's fps, T = len(truth.t)),
         ``calib`` and the truth-side ``labels`` (T, H, W) uint8 (never handed to `fsv`).
@@ -95,6 +97,16 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
         ("capsules"), the person's skin ("skin", :mod:`benchmark.world.skin`) or that skin with
         rigid pulps ("skin-rigid").
     """
+    streams = check_streams(streams)
+    if episode.depth is None:
+        episode = _render_depth(episode, sensor, camera)
+    if "colour" in streams and episode.colour is None:
+        frames = render_colour(episode, camera=camera)
+        episode = episode.with_colour(frames.video, frames.labels)
+    return episode
+
+
+def _render_depth(episode: Episode, sensor: SensorModel | None, camera: Camera | None) -> Episode:
     from benchmark.world.assets import build_world, set_frame
 
     sc = episode.scenario

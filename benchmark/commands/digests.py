@@ -15,8 +15,8 @@ import numpy as np
 WALL_CLOCK = frozenset({"solve_time_s"})
 """Array fields that measure time, not results: left out of the digests."""
 
-STAGES = ("truth", "depth", "tracking", "kinematics", "nominal_forces", "final_forces")
-"""The digested outputs, in pipeline order."""
+STAGES = ("truth", "depth", "colour", "tracking", "kinematics", "nominal_forces", "final_forces")
+"""The digested outputs, in pipeline order (``colour`` only in runs that rendered it)."""
 
 
 def digest(*records) -> str | None:
@@ -44,9 +44,11 @@ def stage_digests(episode, estimate) -> dict:
         estimate: The method's ``fsv.method.Estimate`` on it.
     """
     tracking = estimate.tracking
+    colour = {} if episode.colour is None else {"colour": digest(episode.colour, episode.colour.calib)}
     return {
         "truth": digest(episode.truth),
         "depth": digest(episode.depth),
+        **colour,
         "tracking": digest(getattr(tracking, "box", None), getattr(tracking, "contacts", None)),
         "kinematics": digest(estimate.kinematics),
         "nominal_forces": digest(estimate.nominal),

@@ -13,7 +13,9 @@ from benchmark.archive import read_archive, write_archive
 from benchmark.errors import BenchmarkError
 
 FORMAT = "fsv-bench-camera"
-VERSION = 1
+VERSION = 2
+READS = (1, 2)
+"""The versions :func:`load_camera_input` reads: version 1 is version 2 with the depth stream only."""
 FORMAT_DOC = """\
 A camera-input file is a sealed NumPy ``.npz`` archive (:mod:`benchmark.archive`): arrays named
 ``<section>/<field>`` and a ``meta.json`` entry (uint8 array of UTF-8 JSON). Units SI; world frame
@@ -25,6 +27,14 @@ with the table top at z = 0 and z up; rotations are 3x3 matrices (world_R_object
     camera/calib_K            (3, 3)    float64  OpenCV intrinsics [[fx, 0, cx], [0, fy, cy], [0, 0, 1]]
     camera/calib_T_world_cam  (4, 4)    float64  camera pose in the world (OpenCV camera frame: x right, y down, z forward)
     camera/calib_size         (2,)      int64    width, height
+    colour/rgb                (T, H, W, 3) uint8 the colour stream, if recorded (``--streams depth,colour`` or a
+                                        method that reads it): sRGB-encoded images, row 0 at the top, R, G, B
+    colour/fps                ()        float64  its frame rate
+    colour/t_s                (T,)      float64  each frame's timestamp (the middle of its exposure), [s]
+    colour/exposure_s         ()        float64  its exposure time, [s]
+    colour/calib_K            (3, 3)    float64  the colour camera's own intrinsics (OpenCV, zero distortion)
+    colour/calib_T_world_cam  (4, 4)    float64  the colour camera's pose in the world
+    colour/calib_size         (2,)      int64    its width, height
     init/box_pos              (3,)      float64  first-frame box centre (coarse), [m]
     init/box_rot              (3, 3)    float64  first-frame world_R_box (coarse)
     init/palm_pos             (3,)      float64  first-frame palm origin (coarse), [m]
@@ -39,13 +49,14 @@ with the table top at z = 0 and z up; rotations are 3x3 matrices (world_R_object
     grip/gain                 ()        float64  measured in a recording of their own with force sensors;
     grip/samples              ()        int64    absent if the user has none
 
-``meta.json``: ``{"format": "fsv-bench-camera", "version": 1, "episode": NAME, "suite": {"name",
-"version"}, "world": the world's fingerprint, "frames": T, "object": {"mass_kg", "friction", "table_friction"}, "hand":
+``meta.json``: ``{"format": "fsv-bench-camera", "version": 2, "episode": NAME, "suite": {"name",
+"version"}, "world": the world's fingerprint, "frames": T, "streams": ["depth"] or ["depth", "colour"], "object": {"mass_kg", "friction", "table_friction"}, "hand":
 {"segment_names", "joint_names", "finger_names"}, "rng_seed": [ints], "array_sha256": {...},
 "meta_sha256": ...}``. ``rng_seed`` is the entropy of the generator the benchmark hands an in-process
 method (``numpy.random.default_rng(numpy.random.SeedSequence(rng_seed))``); a method that uses it
 reproduces its in-process estimates from files. Nothing in the file is truth beyond the coarse,
-perturbed first-frame initialisation.
+perturbed first-frame initialisation. Version 1 (still read) had no ``colour`` section and no
+``streams`` entry. The camera streams are described once, for every file, in docs/camera.md.
 """
 
 
@@ -76,10 +87,16 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list, know
     i = inputs.init
     arrays.update({"init/box_pos": i.box_pos, "init/box_rot": i.box_rot, "init/palm_pos": i.palm_pos,
                    "init/palm_rot": i.palm_rot, "init/joints": i.joints, "init/gravity": inputs.gravity})
+    if inputs.colour is not None:
+        co = inputs.colour
+        arrays.update({"colour/rgb": co.rgb, "colour/fps": np.float64(co.fps), "colour/t_s": co.t_s,
+                       "colour/exposure_s": np.float64(co.exposure_s), "colour/calib_K": co.calib.K,
+                       "colour/calib_T_world_cam": co.calib.T_world_cam,
+                       "colour/calib_size": np.array([co.calib.width, co.calib.height], dtype=np.int64)})
     from benchmark.fingerprint import world_fingerprint
 
     meta = {"episode": episode, "suite": {"name": suite.name, "version": suite.version}, "world": world_fingerprint(),
-            "frames": inputs.num_frames, "rng_seed": [int(v) for v in rng_seed]}
+            "frames": inputs.num_frames, "streams": list(inputs.streams), "rng_seed": [int(v) for v in rng_seed]}
     if knowledge is not None:
         meta["knowledge"] = knowledge
     if inputs.grip is not None:
@@ -100,13 +117,13 @@ def load_camera_input(path) -> tuple:
     Raises:
         CameraFileError: If it is missing, damaged, or of another format or version.
     """
-    from benchmark.camera.episode_file import depth_from_arrays, models_from_sections
+    from benchmark.camera.episode_file import colour_from_arrays, depth_from_arrays, models_from_sections
     from fsv import FsvError
     from fsv.grip import GripCalibration
     from fsv.method import CameraInput
     from fsv.track.tracker import TrackInit
 
-    meta, s = read_archive(path, FORMAT, VERSION, kind="camera-input", error=CameraFileError)
+    meta, s = read_archive(path, FORMAT, READS, kind="camera-input", error=CameraFileError)
     try:
         depth, calib, _ = depth_from_arrays(s["camera"])
         om, hm = models_from_sections(meta, s)
@@ -116,8 +133,9 @@ def load_camera_input(path) -> tuple:
         g = s.get("grip")
         grip = None if g is None else GripCalibration(baseline_n=float(g["baseline_n"]), gain=float(g["gain"]),
                                                       samples=int(g["samples"]))
+        colour = colour_from_arrays(s["colour"])[0] if "colour" in s else None
         inputs = CameraInput(depth=depth, calib=calib, object_model=om, hand_model=hm, init=init, gravity=i["gravity"],
-                             grip=grip)
+                             grip=grip, colour=colour)
     except (KeyError, TypeError, FsvError, BenchmarkError) as e:
         raise CameraFileError(f"{path} has missing or inconsistent camera-input data: {e}") from e
     return inputs, meta

@@ -1,10 +1,10 @@
 """``fsv-bench export``: a suite's camera inputs as files, for a method in any language.
 
-    fsv-bench export --suite smoke --out DIR [--knowledge exact|lab] [--cache DIR] [--quiet]
+    fsv-bench export --suite smoke --out DIR [--streams depth,colour] [--knowledge exact|lab] [--cache DIR] [--quiet]
 
 Writes ``DIR/suite.json`` (the suite, its episodes, the formats' versions, provenance) and one
-camera-input file per episode, ``DIR/<episode>.npz`` (:mod:`benchmark.exchange.camera_file`): depth,
-calibration, object and hand models (as ``--knowledge`` says, with the measurements' precision in
+camera-input file per episode, ``DIR/<episode>.npz`` (:mod:`benchmark.exchange.camera_file`): the
+streams asked for (depth always; colour with ``--streams depth,colour``), each with its calibration, object and hand models (as ``--knowledge`` says, with the measurements' precision in
 the meta), the coarse first-frame initialisation, and no truth. Episodes
 come from the same cache as ``fsv-bench eval``. The folder is written into a temporary one and moved
 into place when complete. Score the method's estimates with ``fsv-bench score``.
@@ -24,9 +24,10 @@ from benchmark.method.protocol import DEFAULT_PROTOCOL
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.evaluate import add_knowledge_argument, add_protocol_argument
-    from benchmark.suites.options import add_suite_arguments
+    from benchmark.suites.options import add_streams_argument, add_suite_arguments
 
     add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz or .h5)", workers=False)
+    add_streams_argument(p)
     add_knowledge_argument(p)
     add_protocol_argument(p)
     p.add_argument("--format", choices=FORMATS, default="npz",
@@ -38,10 +39,11 @@ FORMATS = {"npz": ".npz", "hdf5": ".h5"}
 
 
 def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True, container: str = "npz",
-                 knowledge: str = DEFAULT_KNOWLEDGE, protocol: str = DEFAULT_PROTOCOL) -> dict:
+                 knowledge: str = DEFAULT_KNOWLEDGE, protocol: str = DEFAULT_PROTOCOL, streams: tuple = ("depth",)) -> dict:
     """Writes the camera inputs of every episode of ``suite`` into ``out`` (as ``<episode>.npz``, or
-    ``.h5`` with ``container="hdf5"``), the hand, box and camera as ``knowledge`` says and the
-    person's grip calibration under the ``calibrated`` protocol; returns ``suite.json``'s content."""
+    ``.h5`` with ``container="hdf5"``): the ``streams`` (:data:`fsv.types.STREAMS`), the hand, box
+    and camera as ``knowledge`` says and the person's grip calibration under the ``calibrated``
+    protocol; returns ``suite.json``'s content."""
     from benchmark.exchange import camera_file, estimates_file
     from benchmark.method.run import camera_input_and_knowledge
     from benchmark.suites.evaluate import cached_episode, episode_cache
@@ -60,7 +62,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
 
             scenarios = tqdm(scenarios, desc=f"export {suite.name}", unit="episode", leave=False)
         for sc in scenarios:
-            episode, _ = cached_episode(suite, sc, cache)
+            episode, _ = cached_episode(suite, sc, cache, streams)
             name = episode_name(sc)
             inputs, known = camera_input_and_knowledge(episode, knowledge=knowledge, protocol=protocol)
             camera_file.save_camera_input(inputs, tmp / f"{name}{suffix}", episode=name, suite=suite,
@@ -68,7 +70,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
             episodes.append({"episode": name, "file": f"{name}{suffix}", "frames": inputs.num_frames,
                              "task": sc.task})
         index = {"suite": {"name": suite.name, "version": suite.version, "description": suite.description},
-                 "knowledge": knowledge, "protocol": protocol, "episodes": episodes,
+                 "knowledge": knowledge, "protocol": protocol, "streams": list(streams), "episodes": episodes,
                  "formats": {"camera": [camera_file.FORMAT, camera_file.VERSION],
                              "estimates": [estimates_file.FORMAT, estimates_file.VERSION]},
                  "estimates": f"write <episode>{suffix} per episode into one folder; fsv-bench score --suite "
@@ -94,7 +96,7 @@ def run(args: argparse.Namespace) -> dict:
     check_cache_args(args)
     check_people((sc.user for sc in suite.scenarios), args.protocol)
     index = export_suite(suite, args.out, cache=args.cache, progress=not args.quiet, container=args.format,
-                         knowledge=args.knowledge, protocol=args.protocol)
+                         knowledge=args.knowledge, protocol=args.protocol, streams=args.streams)
     print(f"fsv-bench export: suite {suite.name} v{suite.version}, {len(index['episodes'])} camera-input files "
-          f"in {args.out}/ (format {index['formats']['camera'][0]} v{index['formats']['camera'][1]})")
+          f"({', '.join(args.streams)}) in {args.out}/ (format {index['formats']['camera'][0]} v{index['formats']['camera'][1]})")
     return index

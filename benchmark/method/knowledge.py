@@ -15,7 +15,11 @@ the camera's true calibration): a labelled ablation, like the oracles. What ``la
 - **the camera**: intrinsics from a checkerboard calibration (:data:`FOCAL_SD_REL`,
   :data:`PRINCIPAL_SD_PX`) and the camera's pose in the world from a board laid on the table
   (:data:`EXTRINSIC_ROT_SD_RAD`, :data:`EXTRINSIC_POS_SD_M`), which also gives the method the
-  direction of gravity (vertical in its world).
+  direction of gravity (vertical in its world). The colour camera, when the method reads it: its
+  intrinsics from its own checkerboard calibration (the same error sizes, drawn from the scenario's
+  ``"knowledge-colour"`` stream, so the depth's errors do not move) and its offset from the depth
+  camera as the maker's calibration gives it (exact: a stated choice), so its pose is the depth
+  camera's calibrated pose carried by that offset.
 
 The sizes are choices, stated here and in docs/scenarios.md. ``lab-hand``, ``lab-box`` and
 ``lab-camera`` apply one source's errors alone (the same draws as ``lab``), to measure what each costs.
@@ -277,3 +281,32 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
         math.degrees(norm(drot)), norm(dpos),
         mm(T, rigid_inverse(T_given)) if on["camera"] else np.eye(4))
     return (hand_of(generic) if on["hand"] else episode.hand_model), om_given, calib_given, knowledge
+
+
+def given_colour(episode, name: str, known: "Knowledge"):
+    """The colour stream as the method is told it under knowledge ``name``, or None without colour.
+
+    Under ``exact`` (or a ``lab`` variant without the camera's errors) the episode's own stream;
+    otherwise its intrinsics carry a checkerboard calibration's errors (:data:`FOCAL_SD_REL`,
+    :data:`PRINCIPAL_SD_PX`, from the ``"knowledge-colour"`` stream) and its pose is expressed in
+    the method's world (``known.world_from_method``): the depth-to-colour offset is exact.
+    """
+    from fsv import Calibration, ColourVideo
+
+    colour = episode.colour
+    if colour is None:
+        return None
+    check_knowledge(name)
+    if parse_knowledge(name)[0] == "exact" or not _sources(name)["camera"]:
+        return colour
+    rng = episode.scenario.rng("knowledge-colour")
+    scale = _error_scales(name)["camera"]
+    df = FOCAL_SD_REL * rng.standard_normal(2) * scale
+    dc = PRINCIPAL_SD_PX * rng.standard_normal(2) * scale
+    c = colour.calib
+    K = np.asarray(c.K, dtype=float).copy()
+    K[0, 0], K[1, 1] = K[0, 0] * (1 + df[0]), K[1, 1] * (1 + df[1])
+    K[0, 2], K[1, 2] = K[0, 2] + dc[0], K[1, 2] + dc[1]
+    T = mm(rigid_inverse(known.world_from_method), np.asarray(c.T_world_cam, dtype=float))
+    calib = Calibration(K=K, T_world_cam=T, width=c.width, height=c.height)
+    return ColourVideo(rgb=colour.rgb, fps=colour.fps, calib=calib, t_s=colour.t_s, exposure_s=colour.exposure_s)

@@ -34,7 +34,7 @@ def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str 
                                protocol: str = DEFAULT_PROTOCOL) -> tuple:
     """:func:`camera_input` and the :class:`benchmark.method.knowledge.Knowledge` record behind it."""
     from benchmark.method.init import tracker_init
-    from benchmark.method.knowledge import given, rigid_inverse
+    from benchmark.method.knowledge import given, given_colour, rigid_inverse
     from benchmark.method.protocol import person_grip
     from fsv.linalg import mm, mv
     from fsv.method import CameraInput
@@ -47,7 +47,8 @@ def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str 
         init = TrackInit(box_pos=mv(R, init.box_pos) + t, box_rot=mm(R, init.box_rot),
                          palm_pos=mv(R, init.palm_pos) + t, palm_rot=mm(R, init.palm_rot), joints=init.joints)
     inputs = CameraInput(depth=episode.depth, calib=calib, object_model=obj, hand_model=hand, init=init,
-                         gravity=episode.truth.gravity, grip=person_grip(episode.scenario.user, protocol))
+                         gravity=episode.truth.gravity, grip=person_grip(episode.scenario.user, protocol),
+                         colour=given_colour(episode, knowledge, known))
     return inputs, known
 
 

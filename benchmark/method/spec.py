@@ -76,6 +76,13 @@ class MethodSpec:
         return None
 
     @property
+    def streams(self) -> tuple:
+        """The camera streams the method reads (:func:`fsv.method.method_streams`)."""
+        from fsv.method import method_streams
+
+        return method_streams(self.build())
+
+    @property
     def stage_specs(self) -> dict:
         return {"tracker": self.tracker, "differentiator": self.differentiator, "forces": self.forces,
                 "internal": self.internal}

@@ -45,6 +45,7 @@ from benchmark.limits import checked
 from benchmark.scores.aggregate import FEW_EPISODES
 from benchmark.suites import Gate, Suite
 from benchmark.world.scenario import Scenario, episode_name
+from fsv.types import check_streams
 
 
 class GateFailure(BenchmarkError):
@@ -87,8 +88,13 @@ def episode_key(suite: Suite, scenario: Scenario) -> str:
     return hashlib.sha256(json.dumps(episode_identity(suite, scenario), sort_keys=True).encode()).hexdigest()[:20]
 
 
-def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
+def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path, streams: tuple = ("depth",)):
     """The rendered episode from the cache, simulated and rendered (and cached) if missing or damaged.
+
+    Args:
+        streams: The streams it must hold (:data:`fsv.types.STREAMS`): a cached episode without one
+            of them gets it rendered and is cached again (each stream has its own random stream,
+            so the bits are those of rendering all at once).
 
     Returns:
         ``(episode, rendered)``: ``rendered`` is True when it had to be made.
@@ -103,10 +109,15 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path):
     identity = episode_identity(suite, scenario)
     if path.exists():
         try:
-            return load_episode(path, scenario=scenario, identity=identity), False
+            episode = load_episode(path, scenario=scenario, identity=identity)
+            if set(streams) <= set(episode.streams):
+                return episode, False
+            episode = render(episode, streams=streams)  # the missing streams, added to the cached ones
+            save_episode(episode, path, identity=identity)
+            return episode, True
         except EpisodeFileError as e:
             print(f"fsv-bench eval: rebuilding a damaged or foreign cached episode: {e}", file=sys.stderr)
-    episode = render(simulate(scenario))
+    episode = render(simulate(scenario), streams=streams)
     save_episode(episode, path, identity=identity)
     return episode, True
 
@@ -120,9 +131,9 @@ def _episode_rows(job) -> list:
     from benchmark.method.run import camera_input_and_knowledge
     from benchmark.scores.episode import episode_row
 
-    suite, sc, cache, specs, init_scale, observer = job
+    suite, sc, cache, specs, init_scale, observer, streams = job
     t0 = time.perf_counter()
-    episode, made = cached_episode(suite, sc, cache)
+    episode, made = cached_episode(suite, sc, cache, streams)
     given = {}  # (knowledge, protocol) -> (camera inputs, what the method was told)
     rows, tracked = [], {}
     for spec in specs:
@@ -145,7 +156,8 @@ def _episode_rows(job) -> list:
 
 
 def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-             workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None, observer=None) -> dict:
+             workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None, observer=None,
+             streams: tuple = ("depth",)) -> dict:
     """Scores one method (default: the reference) on every episode of ``suite``.
 
     Episodes run in ``workers`` local processes (1: in this process); the scores do not depend on it.
@@ -157,11 +169,13 @@ def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None 
     from benchmark.method import MethodSpec
 
     return evaluate_many(suite, [spec or MethodSpec()], gates=gates, cache=cache, progress=progress,
-                         workers=workers, init_scale=init_scale, ray_address=ray_address, observer=observer)[0]
+                         workers=workers, init_scale=init_scale, ray_address=ray_address, observer=observer,
+                         streams=streams)[0]
 
 
 def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None = None, progress: bool = True,
-                  workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None, observer=None) -> list:
+                  workers: int = 1, init_scale: float = 1.0, ray_address: str | None = None, observer=None,
+                  streams: tuple = ("depth",)) -> list:
     """Scores several methods on every episode of ``suite``, each episode rendered (or read) once.
 
     Episodes run in this process, ``workers`` local processes, or as tasks on the Ray cluster at
@@ -169,7 +183,9 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
     ``init_scale`` scales the seeded first-frame perturbation handed to the methods
     (``benchmark.method.init.INIT_PERTURBATION``; 1 = the suites' protocol). ``observer``, a
     picklable callable ``(episode, estimate, method index)``, sees every method's estimate on every
-    episode where it is made (e.g. to draw pictures; a floor above provides it).
+    episode where it is made (e.g. to draw pictures; a floor above provides it). The episodes are
+    rendered with the streams the methods read (their ``streams``) and ``streams`` (more, e.g. the
+    colour for a depth-only method, ``--streams``); the methods are handed every stream rendered.
 
     Returns:
         One ``scores.json`` content per method, in the order of ``specs``.
@@ -187,7 +203,8 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
         from tqdm import tqdm
 
         bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
-    jobs = [(suite, sc, cache, specs, init_scale, observer) for sc in suite.scenarios]
+    streams = check_streams([*streams, *(s for spec in specs for s in spec.streams)])
+    jobs = [(suite, sc, cache, specs, init_scale, observer, streams) for sc in suite.scenarios]
     from benchmark.parallel import run_jobs
 
     per_episode = [None] * len(jobs)
@@ -340,10 +357,11 @@ def load_gates(path) -> tuple:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.options import add_baseline_argument, add_suite_arguments
+    from benchmark.suites.options import add_baseline_argument, add_streams_argument, add_suite_arguments
 
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)")
     add_baseline_argument(p)
+    add_streams_argument(p)
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--ray-address", default=None,
                    help="run the episodes as tasks on this Ray cluster ('auto', host:port or ray://host:port; needs the ray extra)")
@@ -435,7 +453,7 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
         check_ray_address(args.ray_address)
     extra = {} if args.no_baselines else baseline_specs(spec.knowledge, spec.protocol)
     documents = evaluate_many(suite, [spec, *extra.values()], gates=gates, cache=args.cache, progress=not args.quiet,
-                              workers=args.workers, ray_address=args.ray_address,
+                              workers=args.workers, ray_address=args.ray_address, streams=getattr(args, "streams", ("depth",)),
                               observer=None if observer is None else _first_method_only(observer))
     scores = documents[0]
     if extra:

@@ -7,8 +7,9 @@ from __future__ import annotations
 import argparse
 import pathlib
 
-from benchmark.limits import MAX_WORKERS, check_grid, folder, integer
+from benchmark.limits import MAX_WORKERS, check_grid, folder, integer, parsed
 from benchmark.suites.registry import SUITES
+from fsv.types import STREAMS, check_streams
 
 
 def add_suite_arguments(p: argparse.ArgumentParser, *, out_help: str, sensor: bool = True, workers: bool = True) -> None:
@@ -49,3 +50,10 @@ def suite_of(args: argparse.Namespace):
                       getattr(args, "grip_control", None))
     check_grid({f"--suite {args.suite}": len(suite.scenarios)})
     return suite
+
+
+def add_streams_argument(p) -> None:
+    """``--streams depth,colour``: the camera streams to render and hand over, beyond what the method reads."""
+    p.add_argument("--streams", default=("depth",), metavar=",".join(STREAMS), type=parsed(check_streams),
+                   help="camera streams to record, comma-separated, beyond those the method declares it reads: "
+                        f"{', '.join(STREAMS)} (the depth always); default depth")

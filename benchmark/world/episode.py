@@ -11,7 +11,7 @@ import numpy as np
 
 from benchmark.world.scenario import Scenario
 from benchmark.world.truth import Truth
-from fsv import Calibration, DepthVideo, HandModel, ObjectModel
+from fsv import Calibration, ColourVideo, DepthVideo, HandModel, ObjectModel
 
 
 @dataclass(frozen=True)
@@ -27,6 +27,12 @@ class Episode:
         calib: Camera calibration, or None before rendering.
         labels: Truth-side label image per frame, (T, H, W) uint8 (0 none, 1 table, 2 box,
             10 + k finger k's segments, 9 palm), or None; never handed to `fsv`.
+        colour: The colour stream (its own calibration and timestamps), or None when it was not
+            rendered (only a method or ``--streams`` that asks for it renders it).
+        colour_labels: The colour camera's label images (T, H, W) uint8, as ``labels``, or None.
+        annotations: The per-frame labels of learned methods (keypoints, box pose in BOP's
+            convention, contacts in each stream's camera frame:
+            :class:`benchmark.camera.annotations.Annotations`), or None; never handed to `fsv`.
     """
 
     scenario: Scenario
@@ -36,6 +42,17 @@ class Episode:
     depth: DepthVideo | None = None
     calib: Calibration | None = None
     labels: np.ndarray | None = None
+    colour: ColourVideo | None = None
+    colour_labels: np.ndarray | None = None
+    annotations: object = None
+
+    @property
+    def streams(self) -> tuple:
+        """The names of the rendered streams (:data:`fsv.types.STREAMS` order)."""
+        return (("depth",) if self.depth is not None else ()) + (("colour",) if self.colour is not None else ())
 
     def with_depth(self, depth: DepthVideo, calib: Calibration, labels: np.ndarray | None) -> "Episode":
         return replace(self, depth=depth, calib=calib, labels=labels)
+
+    def with_colour(self, colour: ColourVideo, labels: np.ndarray) -> "Episode":
+        return replace(self, colour=colour, colour_labels=labels)

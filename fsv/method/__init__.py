@@ -7,7 +7,7 @@ an internal-force stage (each the reference's unless replaced); calling the meth
 
 from fsv.method.estimate import Estimate, TrackOutput
 from fsv.method.inputs import GRAVITY, CameraInput
-from fsv.method.method import Method, make_method
+from fsv.method.method import Method, make_method, method_streams
 from fsv.method.reference import LearnedInternalForces, NominalForces, ReferenceTracker, StencilDifferentiator
 from fsv.method.stages import ORACLE, STAGES, Differentiator, ForceEstimator, InternalForces, Tracker, stage_label
 
@@ -28,5 +28,6 @@ __all__ = [
     "TrackOutput",
     "Tracker",
     "make_method",
+    "method_streams",
     "stage_label",
 ]

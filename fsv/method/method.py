@@ -17,7 +17,7 @@ from fsv.method.estimate import Estimate
 from fsv.method.inputs import CameraInput
 from fsv.method.reference import LearnedInternalForces, NominalForces, ReferenceTracker, StencilDifferentiator
 from fsv.method.stages import ORACLE, accepts_grip, stage_label
-from fsv.types import Contacts, Kinematics, Poses
+from fsv.types import Contacts, Kinematics, Poses, check_streams
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,11 @@ class Method:
     forces: object
     internal: object
     labels: dict
+
+    @property
+    def streams(self) -> tuple:
+        """The camera streams the method reads: its tracker's (the only stage that sees images)."""
+        return method_streams(self.tracker)
 
     @property
     def name(self) -> str:
@@ -135,6 +140,17 @@ def _check_output(stage: str, label: str, output, attribute: str, kind, T: int) 
         got = type(value).__name__ if not isinstance(value, kind) else f"{len(value)} frames"
         raise InputError(f"the {stage} stage {label!r} must return an object whose .{attribute} is an "
                          f"{kind.__module__}.{kind.__name__} of {T} frames, got {got}")
+
+
+def method_streams(method) -> tuple:
+    """The camera streams a method (or a tracker) declares it reads: its ``streams`` attribute, a
+    tuple of names of :data:`fsv.types.STREAMS` (``("depth",)`` when it declares none). The
+    benchmark renders those and no more, so a depth-only method pays nothing for colour.
+
+    Raises:
+        InputError: For a declared name that is not a stream.
+    """
+    return check_streams(getattr(method, "streams", ("depth",)))
 
 
 def make_method(*, tracker=None, differentiator=None, forces=None, internal=None) -> Method:

@@ -11,16 +11,20 @@ from benchmark.camera.scene import LABEL_BOX
 from benchmark.camera.views import view_of
 from benchmark.commands.pictures.depth_preview import preview_paths, write_preview
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
+from benchmark.suites.options import add_streams_argument
+from fsv.types import check_streams
 
 
 def add_arguments(parser) -> None:
     """Options of the render stage of ``fsv-bench``."""
     parser.add_argument("--no-gif", action="store_true", help="write the PNG depth preview but no animated GIF")
+    add_streams_argument(parser)
 
 
 def run(record: Run, options) -> StageResult:
-    """Renders the run's episode; the depth preview is drawn beside the next stages."""
-    episode = render(record.episode)
+    """Renders the run's episode (the streams ``--streams`` asks for and those the method reads);
+    the depth preview is drawn beside the next stages."""
+    episode = render(record.episode, streams=check_streams([*options["streams"], *record.method_spec.streams]))
     depth = episode.depth
     gif = not options["no_gif"]
     paths = preview_paths(record.out, gif=gif)
@@ -46,4 +50,4 @@ def run(record: Run, options) -> StageResult:
     return StageResult(blocks=(("render", block),), lines=(line,), pictures=pictures, episode=episode)
 
 
-STAGE = Stage(name="render", run=run, options=("no_gif",), add_arguments=add_arguments)
+STAGE = Stage(name="render", run=run, options=("no_gif", "streams"), add_arguments=add_arguments)
