@@ -116,3 +116,19 @@ def test_an_internal_force_stage_that_takes_grip_is_given_the_persons_calibratio
     assert np.all(np.isfinite(c.internal_pred))
     with pytest.raises(InputError, match="CameraInput.grip must be None or an fsv.grip.GripCalibration, got tuple"):
         dataclasses.replace(camera, grip=(1.0, 2.0))
+
+
+def test_a_method_declares_the_streams_its_tracker_reads():
+    from fsv.method import method_streams
+
+    class ColourTracker:
+        streams = ("colour",)
+
+    class BadTracker:
+        streams = ("infrared",)
+
+    assert make_method().streams == ("depth",)
+    assert make_method(tracker=ColourTracker()).streams == ("depth", "colour")
+    assert method_streams(lambda inputs, rng: None) == ("depth",)
+    with pytest.raises(InputError, match="'infrared'"):
+        method_streams(BadTracker())

@@ -72,3 +72,35 @@ def test_object_model_inertia_of_paper_box():
     assert m.inertia[2, 2] == pytest.approx(0.45 / 12 * (0.171**2 + 0.111**2))
     with pytest.raises(InputError, match="mass_kg"):
         ObjectModel(size_m=[1, 1, 1], mass_kg=0, inertia=np.eye(3), friction=0.5)
+
+
+def _colour_calib(width=4, height=3):
+    return Calibration(K=np.array([[300.0, 0, 1.5], [0, 300.0, 1.0], [0, 0, 1]]), T_world_cam=np.eye(4),
+                       width=width, height=height)
+
+
+def test_colour_video_holds_uint8_images_of_its_calibrations_size():
+    from fsv import ColourVideo
+
+    rgb = np.arange(2 * 3 * 4 * 3, dtype=np.uint8).reshape(2, 3, 4, 3)
+    v = ColourVideo(rgb=rgb, fps=30, calib=_colour_calib(), t_s=[0.0, 1 / 30], exposure_s=0.01)
+    assert v.num_frames == 2 and not v.rgb.flags.writeable and v.rgb[1, 2, 3, 2] == rgb[1, 2, 3, 2]
+    with pytest.raises(InputError, match="uint8"):
+        ColourVideo(rgb=rgb.astype(np.float32), fps=30, calib=_colour_calib(), t_s=[0.0, 1 / 30])
+    with pytest.raises(InputError, match="its calibration says 5x3"):
+        ColourVideo(rgb=rgb, fps=30, calib=_colour_calib(width=5), t_s=[0.0, 1 / 30])
+    with pytest.raises(InputError, match="t_s must have shape"):
+        ColourVideo(rgb=rgb, fps=30, calib=_colour_calib(), t_s=[0.0])
+    with pytest.raises(InputError, match="exposure_s must lie in"):  # longer than a frame period
+        ColourVideo(rgb=rgb, fps=30, calib=_colour_calib(), t_s=[0.0, 1 / 30], exposure_s=0.04)
+
+
+def test_stream_names_are_checked_and_ordered_with_the_depth_always_in():
+    from fsv.types import STREAMS, check_streams
+
+    assert STREAMS == ("depth", "colour")
+    assert check_streams("colour") == ("depth", "colour")
+    assert check_streams(["colour", "depth"]) == ("depth", "colour")
+    assert check_streams("depth") == ("depth",)
+    with pytest.raises(InputError, match="stream 'rgb': accepted: depth, colour"):
+        check_streams("depth,rgb")

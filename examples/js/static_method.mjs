@@ -7,7 +7,8 @@
 //   fsv-bench score --suite smoke --estimates runs/estimates --out runs/scores
 //
 // It prints one line per episode: the name, the frames and the sum of the depth in metres (a check
-// that the depth was read as the benchmark wrote it).
+// that the depth was read as the benchmark wrote it), and, where the file holds the colour stream
+// (`fsv-bench export --streams depth,colour`), its size and the mean of each of its channels.
 
 import { mkdirSync, readFileSync } from "node:fs";
 import { join } from "node:path";
@@ -46,5 +47,13 @@ for (const ep of suite.episodes) {
     format: "fsv-bench-estimates", version: 1, episode: meta.episode, suite: meta.suite, world: meta.world,
     finger_names: meta.hand.finger_names, method: "static box (Node.js example)", stages: { tracker: "static box" },
   });
-  console.log(`${meta.episode} ${T} ${depthSum.toFixed(6)}`);
+  let colour = "";
+  const rgb = arrays["colour/rgb"];
+  if (rgb) {  // (T, H, W, 3) uint8, sRGB; its own calibration in colour/calib_*
+    const sums = [0, 0, 0];
+    for (let i = 0; i < rgb.data.length; i++) sums[i % 3] += rgb.data[i];
+    const n = rgb.data.length / 3;
+    colour = ` colour ${rgb.shape[2]}x${rgb.shape[1]} ${sums.map((s) => (s / n).toFixed(4)).join(" ")}`;
+  }
+  console.log(`${meta.episode} ${T} ${depthSum.toFixed(6)}${colour}`);
 }
