@@ -11,6 +11,8 @@ from benchmark.camera.annotations import (
     OCCLUDED_BY_HAND,
     OCCLUDED_BY_TABLE,
     OFF_IMAGE,
+    SEGMENTATION_CLASSES,
+    VISIBILITY_CODES,
     VISIBLE,
     bop_pose,
     bop_scene_gt,
@@ -237,6 +239,8 @@ def test_visibility_codes_on_a_synthetic_frame():
 
 
 def test_segmentation_classes():
+    assert SEGMENTATION_CLASSES == {0: "background", 1: "table", 2: "box", 3: "hand"}
+    assert sorted(VISIBILITY_CODES) == [VISIBLE, OCCLUDED_BY_BOX, OCCLUDED_BY_HAND, OFF_IMAGE, OCCLUDED_BY_TABLE]
     labels = np.array([[0, 1, 2, 9], [10, 11, 12, 14]], np.uint8)
     assert segmentation(labels).tolist() == [[0, 1, 2, 3], [3, 3, 3, 3]]
     with pytest.raises(BenchmarkError, match="label 5 has no class"):

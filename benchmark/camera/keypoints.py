@@ -58,8 +58,7 @@ MANO_TO_OPENPOSE = np.argsort(OPENPOSE_TO_MANO)
 KEYPOINT_FINGER = np.array([-1] + [k for k in range(len(DIGITS)) for _ in range(4)], dtype=np.int64)
 """Digit of each keypoint (its index in :data:`DIGITS`, thumb first), -1 for the wrist, (21,)."""
 
-KEYPOINT_ON_PALM = np.zeros(21, dtype=bool)
-KEYPOINT_ON_PALM[[0, 1, 5, 9, 13, 17]] = True
+KEYPOINT_ON_PALM = np.isin(np.arange(21), [0, 1, 5, 9, 13, 17])
 """Keypoints inside the palm's skin as well as (or instead of) their digit's: the wrist and each
 digit's base joint (thumb CMC under the thenar eminence, the fingers' MCPs at the metacarpal heads), (21,)."""
 
