@@ -9,6 +9,7 @@ from dataclasses import fields, replace
 import numpy as np
 
 from benchmark.archive import read_archive, write_archive
+from benchmark.camera.labelling import Annotations
 from benchmark.camera.sensor import dequantise
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.world.episode import Episode
@@ -203,6 +204,8 @@ def _sections(ep: Episode) -> dict:
     colour = colour_arrays(ep)
     if colour:
         out["colour"] = (colour, {})
+    if ep.annotations is not None:
+        out["annotations"] = (ep.annotations.arrays(), {})
     return out
 
 
@@ -265,6 +268,8 @@ def load_episode(path, *, scenario: Scenario | None = None, identity: dict | Non
         if "colour" in meta["sections"]:
             colour, colour_labels = colour_from_arrays(arrays["colour"])
             ep = ep.with_colour(colour, colour_labels)
+        if "annotations" in meta["sections"]:
+            ep = ep.with_annotations(Annotations.from_arrays(arrays["annotations"]))
     except (KeyError, TypeError, BenchmarkError, FsvError) as e:
         raise EpisodeFileError(f"{path} has missing or inconsistent episode data: {e}") from e
     return ep

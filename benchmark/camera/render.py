@@ -23,6 +23,7 @@ import numpy as np
 from benchmark.camera.camera import Camera
 from benchmark.camera.colour import render_colour
 from benchmark.camera.depth import DepthRenderer, HandSkin, hand_skin, pulp_presses  # noqa: F401 (re-exported)
+from benchmark.camera.labelling import Annotations, Labeller
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from benchmark.camera.views import camera_of
@@ -33,7 +34,7 @@ from fsv.types import check_streams
 
 
 def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: np.ndarray, sensor, rng,
-                 skin: HandSkin | None = None, pulps: tuple | None = None):
+                 skin: HandSkin | None = None, pulps: tuple | None = None, observe=None):
     """Renders and measures a depth video of a MuJoCo model.
 
     Args:
@@ -48,6 +49,8 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
         skin: Draw the hand as this skin instead of its primitives (None: the primitives).
         pulps: With a skin, ``(centre, push)`` per frame and finger, each (T, K, 3), world frame
             (:func:`benchmark.camera.depth.pulp_presses`); None presses no pulp.
+        observe: Called as ``observe(k, exact_depth, labels)`` with each frame's exact depth (H, W)
+            float32 and labels (before the sensor; e.g. :meth:`benchmark.camera.labelling.Labeller.see`).
 
     Returns:
         ``(depth, label_images)``: measured depth (T, H, W) float32 metres (0 = no measurement)
@@ -66,6 +69,8 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
         set_frame(data, k)
         centre, push = (None, None) if pulps is None else (pulps[0][k], pulps[1][k])
         exact, label_images[k] = renderer.render(data.xpos, data.xmat, centre, push)
+        if observe is not None:
+            observe(k, exact, label_images[k])
         depth[k] = sensor.measure(exact, camera.K, rng)
     return depth, label_images
 
@@ -127,8 +132,11 @@ def _render_depth(episode: Episode, sensor: SensorModel | None, camera: Camera |
     if sc.hand_surface != "capsules":
         skin = hand_skin(world)
         pulps = pulp_presses(truth) if sc.hand_surface == "skin" else None
+    labeller = Labeller(world, truth, camera.calibration())
     depth, labels = render_video(
         world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth"),
-        skin=skin, pulps=pulps,
+        skin=skin, pulps=pulps, observe=labeller.see,
     )
-    return episode.with_depth(DepthVideo(depth_m=depth, fps=sc.fps), camera.calibration(), labels)
+    episode = episode.with_depth(DepthVideo(depth_m=depth, fps=sc.fps), camera.calibration(), labels)
+    return episode.with_annotations(Annotations(keypoints_world=labeller.keypoints_world,
+                                                streams={"depth": labeller.labels()}))

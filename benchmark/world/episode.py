@@ -56,3 +56,6 @@ class Episode:
 
     def with_colour(self, colour: ColourVideo, labels: np.ndarray) -> "Episode":
         return replace(self, colour=colour, colour_labels=labels)
+
+    def with_annotations(self, annotations) -> "Episode":
+        return replace(self, annotations=annotations)
