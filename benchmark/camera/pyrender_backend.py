@@ -29,8 +29,8 @@ Shading: pyrender's own shader is physically based (metallic-roughness, with its
 fall-off and tone), not the design's Lambert equation, so it is not used. Instead pyrender renders
 two things exactly: (1) a segmentation pass whose per-node colour encodes the node's index (which
 gives the label and the body of every pixel, and the depth), and (2) a flat pass whose vertex
-colours encode each vertex's outward unit normal in its node's frame ((n + 1) / 2, 8 bits a
-component: a normal is off by at most 0.4 degrees). Both passes sample each pixel once at its centre
+colours encode each vertex's outward unit normal in its node's frame ((128 + 127 n) / 255, 8 bits
+a component: a normal is off by at most 0.4 degrees, axis-aligned ones are exact). Both passes sample each pixel once at its centre
 (4x multisampling, which pyrender turns on for non-segmentation passes, is kept off, see
 :func:`_single_sample`). The radiance is then the design note's equation in numpy (colour-design.md):
 
@@ -50,12 +50,18 @@ import contextlib
 import os
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from benchmark.camera.camera import GL_FROM_CV, Camera
 from benchmark.camera.depth import DepthRenderer, HandSkin, _geometry, pulp_presses
-from benchmark.camera.scene import LABEL_PALM
+from benchmark.camera.render import hand_skin
+from benchmark.camera.scene import LABEL_PALM, world_labels
+from benchmark.camera.sensor import sensor_preset
+from benchmark.camera.views import camera_of
 from benchmark.errors import BenchmarkError
+from benchmark.world.assets import build_world, set_frame
+from fsv import DepthVideo
 
 RENDERER = "pyrender"
 """The renderer's name as the command line gives it (``--renderer pyrender``)."""
@@ -195,8 +201,14 @@ def _flat(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarr
 
 
 def _encode_normals(normals: np.ndarray) -> np.ndarray:
-    """Vertex colours (V, 4) float32 carrying unit normals as (n + 1) / 2, alpha 1."""
-    return np.concatenate([(normals + 1.0) / 2.0, np.ones((len(normals), 1))], axis=1).astype(np.float32)
+    """Vertex colours (V, 4) float32 carrying unit normals as (128 + 127 n) / 255, alpha 1 (0 and
+    +-1 are exact 8-bit values; :func:`_decode_normals` inverts it)."""
+    return np.concatenate([(128.0 + 127.0 * normals) / 255.0, np.ones((len(normals), 1))], axis=1).astype(np.float32)
+
+
+def _decode_normals(colour: np.ndarray) -> np.ndarray:
+    """Normals (..., 3) float64, not normalised, from 8-bit colours (..., 3) of :func:`_encode_normals`."""
+    return (colour.astype(np.float64) - 128.0) / 127.0
 
 
 class PyrenderRenderer:
@@ -273,13 +285,7 @@ class PyrenderRenderer:
     @property
     def name(self) -> str:
         """``"pyrender <version> (<GL vendor> <GL renderer>, OpenGL <version>)"`` of this renderer's context."""
-        from OpenGL import GL
-
-        from pyrender import __version__
-
-        self._offscreen._platform.make_current()
-        s = [GL.glGetString(k).decode() for k in (GL.GL_VENDOR, GL.GL_RENDERER, GL.GL_VERSION)]
-        return f"{RENDERER} {__version__} ({s[0]} {s[1]}, OpenGL {s[2]})"
+        return _name(self._pyrender, self._offscreen)
 
     def close(self) -> None:
         """Frees the GL context."""
@@ -347,14 +353,14 @@ class PyrenderRenderer:
         colour, depth = self._offscreen.render(self.scene, pyrender.RenderFlags.SEG, seg_node_map=seg)
         node = colour[..., 0].astype(np.int64) | (colour[..., 1].astype(np.int64) << 8) | (colour[..., 2].astype(np.int64) << 16)
         node = node - 1  # -1: nothing
-        lut = np.asarray([0, *self._node_label][1:] + [0], dtype=np.uint8)  # index -1 -> 0
+        lut = np.asarray(self._node_label + [0], dtype=np.uint8)  # node -1 (nothing) -> label 0
         labels = lut[node]
         depth = np.where(node >= 0, depth, 0.0).astype(np.float32)
         if self.shading is None:
             return depth, labels
         with _single_sample(pyrender):
             encoded, _ = self._offscreen.render(self.scene, pyrender.RenderFlags.FLAT)
-        local = encoded.astype(np.float64) * (2.0 / 255.0) - 1.0
+        local = _decode_normals(encoded)
         R = self._R_world[np.asarray(self._node_body + [0])[node]]  # (H, W, 3, 3); body -1: the camera
         world = (R[..., 0] * local[..., 0, None] + R[..., 1] * local[..., 1, None] + R[..., 2] * local[..., 2, None])
         length = np.sqrt((world * world).sum(axis=-1))
@@ -367,14 +373,18 @@ def renderer_name() -> str:
     """``"pyrender <version> (<GL vendor> <GL renderer>, OpenGL <version>)"`` of a context on this
     machine, for provenance (opens and closes a small offscreen context)."""
     pyrender = _import_pyrender()
-    from OpenGL import GL
-
     r = pyrender.OffscreenRenderer(8, 8)
     try:
-        r._platform.make_current()
-        s = [GL.glGetString(k).decode() for k in (GL.GL_VENDOR, GL.GL_RENDERER, GL.GL_VERSION)]
+        return _name(pyrender, r)
     finally:
         r.delete()
+
+
+def _name(pyrender, offscreen) -> str:
+    from OpenGL import GL
+
+    offscreen._platform.make_current()
+    s = [GL.glGetString(k).decode() for k in (GL.GL_VENDOR, GL.GL_RENDERER, GL.GL_VERSION)]
     return f"{RENDERER} {pyrender.__version__} ({s[0]} {s[1]}, OpenGL {s[2]})"
 
 
@@ -391,15 +401,6 @@ def render_pyrender(episode, *, sensor=None, camera: Camera | None = None):
         The episode with ``depth``, ``calib`` and ``labels`` (T, H, W) uint8, as ``render`` gives
         them; the depth differs from ``render``'s in the last bits and on silhouette pixels.
     """
-    from benchmark.camera.render import hand_skin
-    from benchmark.camera.scene import world_labels
-    from benchmark.camera.sensor import sensor_preset
-    from benchmark.camera.views import camera_of
-    from benchmark.world.assets import build_world, set_frame
-    from fsv import DepthVideo
-
-    import mujoco
-
     sc = episode.scenario
     sensor = sensor_preset(sc.sensor, sc.noise_m) if sensor is None else sensor
     if sensor.noise_m != sc.noise_m:
