@@ -187,6 +187,22 @@ def test_the_skins_normals_face_the_camera(gl, episode_factory):
             assert hand.sum() > 1000 and np.mean(facing < 0) > 0.999, (k, np.mean(facing < 0))
 
 
+def test_closing_one_renderer_leaves_the_others_context_alive(gl, episode_factory):
+    """pyrender's own delete terminates the process's shared EGL display (every context on it);
+    closing a PyrenderRenderer destroys its own context only."""
+    ep, world, _, _ = scene(episode_factory, "capsules")
+    camera, labels = camera_of(0), world_labels(world)
+    first = P.PyrenderRenderer(world.model, camera, labels)
+    with P.PyrenderRenderer(world.model, camera, labels) as second:
+        _, _, (a, b) = next(frames(ep, world, None, None, [first, second]))
+    _, _, (c,) = next(frames(ep, world, None, None, [first]))
+    first.close()
+    np.testing.assert_array_equal(c[0], a[0])
+    np.testing.assert_array_equal(b[1], a[1])
+    with pytest.raises(BenchmarkError, match="closed"):
+        next(frames(ep, world, None, None, [first]))
+
+
 def test_shading_is_validated():
     with pytest.raises(BenchmarkError, match="albedo of label 2"):
         P.Shading(**{**SHADING, "albedo": {2: (1.5, 0, 0)}})

@@ -288,10 +288,16 @@ class PyrenderRenderer:
         return _name(self._pyrender, self._offscreen)
 
     def close(self) -> None:
-        """Frees the GL context."""
-        if self._offscreen is not None:
-            self._offscreen.delete()
+        """Frees the GL context (other GL contexts of the process, MuJoCo's too, live on)."""
+        if getattr(self, "_offscreen", None) is not None:
+            _release(self._offscreen)
             self._offscreen = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
 
     def __enter__(self):
         return self
@@ -377,7 +383,27 @@ def renderer_name() -> str:
     try:
         return _name(pyrender, r)
     finally:
-        r.delete()
+        _release(r)
+
+
+def _release(offscreen) -> None:
+    """Frees an OffscreenRenderer's GL objects and context. pyrender's own ``delete`` also calls
+    ``eglTerminate`` on the EGL display, which every EGL context of the process shares (another
+    renderer's, MuJoCo's): that would kill them all, so an EGL context is destroyed alone."""
+    platform = offscreen._platform
+    if platform is None:
+        return
+    platform.make_current()
+    offscreen._renderer.delete()
+    if getattr(platform, "_egl_display", None) is not None:
+        from OpenGL.EGL import EGL_NO_CONTEXT, EGL_NO_SURFACE, eglDestroyContext, eglMakeCurrent
+
+        eglMakeCurrent(platform._egl_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT)
+        eglDestroyContext(platform._egl_display, platform._egl_context)
+        platform._egl_context = platform._egl_display = None
+    else:
+        platform.delete_context()
+    offscreen._renderer = offscreen._platform = None  # its __del__ then finds nothing to delete
 
 
 def _name(pyrender, offscreen) -> str:
