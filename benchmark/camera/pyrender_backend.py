@@ -1,5 +1,5 @@
 """pyrender as a second renderer of the depth camera's scene: the oracle of the CPU rasteriser in
-the tests, and an optional fast path (``--renderer pyrender``).
+the tests, and an optional path through OpenGL (``--renderer pyrender``, :func:`render_pyrender`).
 
 The scene is the one :class:`benchmark.camera.depth.DepthRenderer` draws (its
 :func:`~benchmark.camera.depth._geometry` and, with a skin, its posed skin), drawn by pyrender on
@@ -9,6 +9,11 @@ depth of tessellated surfaces in float32 into a 24-bit depth buffer, against thi
 per-pixel ray casts in float64. They agree to a few micrometres on surfaces and differ on a few
 silhouette pixels (``tests/test_pyrender_backend.py`` states the measured values); they are NOT the
 same bits on every machine, which is why the CPU rasteriser stays the default renderer.
+
+Speed: on Mesa's llvmpipe (2-core AMD EPYC) pyrender draws 39 frames/s of the capsule hand
+(16k triangles a capsule) and 102 of the skinned hand at 320 x 240 (20 and 55 at 640 x 480; the
+shaded render, two passes, 7-40), where the CPU rasteriser draws 450-2250: it is a fast path only
+where a GPU draws it, and the per-frame read-back and skin upload still cost milliseconds there.
 
 What differs from the CPU renderer by construction:
 
