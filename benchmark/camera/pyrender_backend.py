@@ -19,7 +19,7 @@ What differs from the CPU renderer by construction:
 
 - capsules and spheres (the hand's primitives) are tessellated (:data:`CAPSULE_COUNT`): the
   facets lie inside the true surface by at most :data:`CAPSULE_FACET_ERROR` of the radius
-  (6.0e-4 r: 5.4 um for the 9 mm finger capsules), so the hand's depth is deeper by up to that;
+  (6.1e-4 r: 4.2-7.5 um for the hand's radii of 7-12.5 mm), so the hand's depth is deeper by up to that;
 - the depth is read back from a 24-bit buffer (znear 0.05 m, zfar 10 m: one step is 4.3e-7 m
   at 0.6 m) and linearised by pyrender in float32.
 
@@ -76,9 +76,10 @@ CAPSULE_COUNT = (64, 128)
 longitude steps around), ``trimesh.creation.capsule``'s ``count``: steps of pi/64 and 2 pi/128,
 both 2.8 degrees, 16k triangles a capsule."""
 
-CAPSULE_FACET_ERROR = 6.0e-4
-"""Largest distance of a capsule's facet inside the true surface, as a fraction of its radius:
-1 - cos(a/2) cos(b/2) for angular steps a = pi/64 and b = 2 pi/128 (5.99e-4)."""
+CAPSULE_FACET_ERROR = 6.1e-4
+"""Largest distance of a capsule's facet inside the true surface, as a fraction of its radius: the
+middle of a facet's diagonal, which spans angle sqrt(a^2 + b^2) for angular steps a = b = pi/64,
+lies 1 - cos(sqrt(2) pi / 128) = 6.02e-4 inside (sampled on the mesh: 6.02e-4)."""
 
 HALF_PIXEL = 0.5
 """Added to (cx, cy) for pyrender's projection: OpenGL's pixel centres are at half-integers."""
