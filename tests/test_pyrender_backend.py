@@ -17,8 +17,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from benchmark.camera.depth import DepthRenderer, _geometry, pulp_presses
-from benchmark.camera.render import hand_skin
+from benchmark.camera.depth import DepthRenderer, _geometry, hand_skin, pulp_presses
 from benchmark.camera.scene import LABEL_BOX, LABEL_PALM, LABEL_TABLE, world_labels
 from benchmark.camera.views import camera_of
 from benchmark.errors import BenchmarkError

@@ -59,8 +59,7 @@ import mujoco
 import numpy as np
 
 from benchmark.camera.camera import GL_FROM_CV, Camera
-from benchmark.camera.depth import DepthRenderer, HandSkin, _geometry, pulp_presses
-from benchmark.camera.render import hand_skin
+from benchmark.camera.depth import DepthRenderer, HandSkin, _geometry, hand_skin, pulp_presses
 from benchmark.camera.scene import LABEL_PALM, world_labels
 from benchmark.camera.sensor import sensor_preset
 from benchmark.camera.views import camera_of
