@@ -19,7 +19,8 @@ steps between neighbouring swatches, so the tone stays recognisable), clipped to
 **Box** (per scenario, the "appearance" stream): a printed cardboard box. Its board is kraft
 (sRGB c19a6b) or white-coated (sRGB e9e4da) with probability 1/2, its lightness jittered by
 1 + 0.05 N(0, 1); each face (+x, -x, +y, -y, +z, -z, in the box's frame) carries ink of one
-colour (linear RGB, each channel uniform in [0.02, 0.35]: printing inks darker than the board) in
+colour (a subtractive ink on the board: the board's albedo times a factor per channel uniform in
+[0.05, 0.6], :data:`INK_FACTOR`) in
 square cells of 4-12 mm of which a fraction 0.1-0.4 is inked (a hashed pattern, like printed
 text and logos), and a stripe across the face (along either face axis, its centre within 0.6 of
 the half size from the middle and its half width 0.05-0.2 of the face's size).
@@ -73,6 +74,8 @@ FILL_ELEVATION_DEG = (20.0, 60.0)
 KEY_INTENSITY = (0.45, 0.75)
 FILL_INTENSITY = (0.1, 0.3)
 AMBIENT = (0.15, 0.3)
+INK_FACTOR = (0.05, 0.6)
+"""Range of the ink's per-channel factor on the board's albedo."""
 BOX_CELL_M = (0.004, 0.012)
 BOX_INK_FRACTION = (0.1, 0.4)
 TABLE_ALONG_M = (0.04, 0.15)
@@ -245,7 +248,7 @@ def appearance_of(scenario) -> Appearance:
     user, the rest from its "appearance" stream.
 
     Draw order of the stream: the board (material uniform, lightness normal); per face in order
-    +x, -x, +y, -y, +z, -z: ink (3 uniforms), cell size, inked fraction, stripe axis (integer),
+    +x, -x, +y, -y, +z, -z: ink factor (3 uniforms), cell size, inked fraction, stripe axis (integer),
     stripe centre, stripe half width, hash seed (integer); the table: base mix, grain darkness,
     grain angle, scale along, scale across, seed; the wall: grey, tint (3 uniforms); the lights:
     whether there are two, key (elevation, azimuth, kelvin, intensity), ambient level, fill
@@ -257,7 +260,7 @@ def appearance_of(scenario) -> Appearance:
     board = np.clip(board * (1.0 + 0.05 * float(rng.standard_normal())), 0.0, 1.0)
     ink, par = np.empty((6, 3)), np.empty((6, 6))
     for f in range(6):
-        ink[f] = rng.uniform(0.02, 0.35, 3)
+        ink[f] = board * rng.uniform(*INK_FACTOR, 3)
         cell = float(rng.uniform(*BOX_CELL_M))
         frac = float(rng.uniform(*BOX_INK_FRACTION))
         axis = float(rng.integers(0, 2))
