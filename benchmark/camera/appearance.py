@@ -27,8 +27,10 @@ the half size from the middle and its half width 0.05-0.2 of the face's size).
 
 **Table** (per scenario): a wood or laminate top, base colour between sRGB d9b98c (light) and
 8a623e (dark), grain colour the base times 0.6-0.85, in world xy: value noise (integer hashes,
-bilinear) stretched along a drawn grain direction, 4-15 cm along and 1.5-6 mm across the grain,
-with an octave four times finer (0.35 of the weight).
+bilinear) stretched along a drawn grain direction, 4-15 cm along and 3-8 mm across the grain,
+with an octave twice as fine (0.35 of the weight). Textures are point-sampled at the pixel's ray
+(no filtering): the finest scales are chosen at or above a pixel at the box's distance (1 mm is
+about 1 px of the 640 x 480 colour camera at 0.55 m); farther away they alias.
 
 **Far wall**: a constant radiance (the background where the rays hit nothing), a painted wall's
 grey 0.15-0.45 (linear) with a tint of +-5 % per channel.
@@ -79,7 +81,7 @@ INK_FACTOR = (0.05, 0.6)
 BOX_CELL_M = (0.004, 0.012)
 BOX_INK_FRACTION = (0.1, 0.4)
 TABLE_ALONG_M = (0.04, 0.15)
-TABLE_ACROSS_M = (0.0015, 0.006)
+TABLE_ACROSS_M = (0.003, 0.008)
 
 _KRAFT, _WHITE_BOARD = "c19a6b", "e9e4da"
 _TABLE_LIGHT, _TABLE_DARK = "d9b98c", "8a623e"

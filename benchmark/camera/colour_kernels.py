@@ -364,7 +364,7 @@ def shade(zbuf, lbuf, nbuf, ibuf, n_static, static_rad, fx, fy, cx, cy, light_di
                     across = wy * table_par[0] - wx * table_par[1]
                     seed = int(table_par[4])
                     g1 = value_noise(along / table_par[2], across / table_par[3], seed)
-                    g2 = value_noise(4.0 * along / table_par[2], 4.0 * across / table_par[3], seed + 1)
+                    g2 = value_noise(2.0 * along / table_par[2], 2.0 * across / table_par[3], seed + 1)
                     g = 0.65 * g1 + 0.35 * g2
                     for c in range(3):
                         alb[c] = table_base[c] + g * (table_grain[c] - table_base[c])
