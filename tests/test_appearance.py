@@ -83,3 +83,12 @@ def test_ablations_switch_each_source_off_alone():
     for bad in (0, 11, True, 2.5):
         with pytest.raises(BenchmarkError, match="Monk"):
             a.ablated(skin_tone=bad)
+
+
+def test_people_of_each_tone_can_be_picked():
+    for tone in (1, 5, 10):
+        users = A.people_with_tone(tone, 3, start=5)
+        assert len(users) == 3 and min(users) >= 5 and users == sorted(users)
+        assert all(A.appearance_of(Scenario(user=u)).skin_tone == tone for u in users)
+    with pytest.raises(BenchmarkError, match="Monk"):
+        A.people_with_tone(0)

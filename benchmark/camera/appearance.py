@@ -245,6 +245,25 @@ def skin_of(user: int) -> tuple[int, np.ndarray]:
     return tone, albedo
 
 
+def people_with_tone(tone: int, count: int = 1, start: int = 0) -> list[int]:
+    """The first ``count`` user indices from ``start`` up whose drawn Monk tone is ``tone`` (for
+    pictures and ablations across skin tones).
+
+    Raises:
+        BenchmarkError: For a tone outside 1..10, count < 1 or start < 0.
+    """
+    if isinstance(tone, bool) or not isinstance(tone, (int, np.integer)) or not 1 <= tone <= len(MONK_SRGB):
+        raise BenchmarkError(f"tone must be a Monk Skin Tone index 1..{len(MONK_SRGB)}, got {tone!r}")
+    if int(count) < 1 or int(start) < 0:
+        raise BenchmarkError(f"count must be >= 1 and start >= 0, got {count!r}, {start!r}")
+    found, user = [], int(start)
+    while len(found) < int(count):
+        if skin_of(user)[0] == tone:
+            found.append(user)
+        user += 1
+    return found
+
+
 def appearance_of(scenario) -> Appearance:
     """The appearance of a scenario (:class:`benchmark.world.scenario.Scenario`): the skin from its
     user, the rest from its "appearance" stream.

@@ -23,6 +23,11 @@ between 1 and the sensor's ``max_samples`` (a still frame costs one render). The
 as at t_k in every sub-render. The labels and the depth of a frame are the middle sub-render's
 (noise-free, at t_k).
 
+Speed: the leading triangles welded to the world (the table) are drawn and shaded once per camera
+(their pixels' depth, labels, normals and radiance kept); every sub-render starts from those
+buffers and draws the moving geometry in the depth renderer's order, so the bits are those of a
+full render, and only the pixels a moving primitive covers are shaded again.
+
 The states within the exposure come from the caller's ``set_state(data, k, s)``; the truth holds
 frames only at t_k, and :func:`interpolated_state` interpolates it (what :func:`render_colour` does).
 """
