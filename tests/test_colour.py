@@ -24,8 +24,7 @@ from benchmark.camera.colour import (  # noqa: E402
     render_colour_video,
 )
 from benchmark.camera.colour_sensor import colour_camera, colour_preset, encode  # noqa: E402
-from benchmark.camera.depth import DepthRenderer, pulp_presses  # noqa: E402
-from benchmark.camera.render import hand_skin  # noqa: E402
+from benchmark.camera.depth import DepthRenderer, hand_skin, pulp_presses  # noqa: E402
 from benchmark.camera.scene import LABEL_BOX, LABEL_TABLE, world_labels  # noqa: E402
 from benchmark.camera.views import camera_of  # noqa: E402
 from benchmark.errors import BenchmarkError  # noqa: E402
@@ -163,6 +162,9 @@ def test_ideal_sensor_is_noise_and_blur_free(lift):
     ep, world = lift
     frames = render_colour(ep, sensor=colour_preset("ideal"))
     assert np.all(frames.samples == 1) and frames.exposure_s == 0.0
+    video = frames.video  # what fsv receives
+    assert video.rgb.shape == (len(ep.truth.t), 480, 640, 3) and video.calib == frames.calib
+    np.testing.assert_allclose(video.t_s, ep.truth.t, atol=1e-12)
     camera = colour_camera(camera_of(0), colour_preset("ideal"))
     r = ColourRenderer(world.model, camera, world_labels(world), appearance_of(LIFT), skin=hand_skin(world))
     centre, push = pulp_presses(ep.truth)
@@ -213,8 +215,8 @@ def test_a_moving_box_edge_spreads_over_its_motion_during_the_exposure():
 
 def test_register_to_depth_puts_the_box_colour_on_the_depth_box_pixels(lift):
     ep, world = lift
-    frames = render_colour(ep)
     depth_cam = camera_of(0)
+    frames = render_colour(ep, camera=depth_cam)
     data = mujoco.MjData(world.model)
     r = DepthRenderer(world.model, depth_cam, world_labels(world), skin=hand_skin(world))
     centre, push = pulp_presses(ep.truth)

@@ -43,10 +43,10 @@ from benchmark.camera import colour_kernels as ck
 from benchmark.camera import raster_kernels as rk
 from benchmark.camera.camera import Camera
 from benchmark.camera.colour_sensor import ColourSensor, colour_camera, colour_preset
-from benchmark.camera.depth import DepthRenderer, HandSkin, pulp_presses
+from benchmark.camera.depth import DepthRenderer, HandSkin, hand_skin, pulp_presses
 from benchmark.camera.scene import LABEL_BOX
 from benchmark.errors import BenchmarkError
-from fsv import Calibration
+from fsv import Calibration, ColourVideo
 
 
 @dataclass(frozen=True)
@@ -61,6 +61,7 @@ class ColourFrames:
         fps: Frame rate [Hz]; frame k at t_k = k / fps.
         exposure_s: Exposure time [s].
         samples: Sub-renders per frame, (T,) int64.
+        t_s: Each frame's time, the middle of its exposure, (T,) [s] (k / fps).
     """
 
     rgb: np.ndarray
@@ -70,6 +71,12 @@ class ColourFrames:
     fps: float
     exposure_s: float
     samples: np.ndarray
+    t_s: np.ndarray
+
+    @property
+    def video(self) -> ColourVideo:
+        """The colour stream as `fsv` receives it (:class:`fsv.ColourVideo`)."""
+        return ColourVideo(rgb=self.rgb, fps=self.fps, calib=self.calib, t_s=self.t_s, exposure_s=self.exposure_s)
 
 
 def _mat3_mul(A, B) -> np.ndarray:
@@ -368,7 +375,7 @@ def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, la
         sensor.measure(radiance, rng, appearance.lighting, out=rgb[k])
     e = float(sensor.exposure_s)
     return ColourFrames(rgb=rgb, labels=label_images, depth=depth, calib=camera.calibration(), fps=float(fps),
-                        exposure_s=e, samples=samples)
+                        exposure_s=e, samples=samples, t_s=np.arange(T) / float(fps))
 
 
 def _nlerp(q0: np.ndarray, q1: np.ndarray, f: float) -> np.ndarray:
@@ -441,13 +448,16 @@ def register_to_depth(rgb: np.ndarray, colour_calib: Calibration, depth_m: np.nd
     return out
 
 
-def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=None) -> ColourFrames:
+def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=None,
+                  camera: Camera | None = None) -> ColourFrames:
     """Renders the colour video of a simulated episode, beside its scenario's depth camera.
 
     Args:
         episode: A simulated :class:`benchmark.world.episode.Episode`.
         sensor: The colour sensor; default :func:`colour_preset` of the scenario's sensor.
         appearance: Default :func:`benchmark.camera.appearance.appearance_of` of the scenario.
+        camera: The depth camera the colour camera sits beside (:func:`colour_camera`); default
+            the scenario's view's (:func:`benchmark.camera.views.camera_of`).
 
     Returns:
         The :class:`ColourFrames` (T = len(truth.t) frames at the scenario's fps). The noise comes
@@ -455,7 +465,6 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
         says, as for the depth (:func:`benchmark.camera.render.render`).
     """
     from benchmark.camera.appearance import appearance_of
-    from benchmark.camera.render import hand_skin
     from benchmark.camera.scene import world_labels
     from benchmark.camera.views import camera_of
     from benchmark.world.assets import build_world, set_frame
@@ -463,7 +472,7 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
     sc = episode.scenario
     sensor = colour_preset(sc.sensor) if sensor is None else sensor
     appearance = appearance_of(sc) if appearance is None else appearance
-    camera = colour_camera(camera_of(sc.view), sensor)
+    colour_cam = colour_camera(camera_of(sc.view) if camera is None else camera, sensor)
     world = build_world(sc)
     truth = episode.truth
 
@@ -475,6 +484,6 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
     if sc.hand_surface != "capsules":
         skin = hand_skin(world)
         pulps = pulp_presses(truth) if sc.hand_surface == "skin" else None
-    return render_colour_video(world.model, set_state, len(truth.t), camera=camera, labels=world_labels(world),
+    return render_colour_video(world.model, set_state, len(truth.t), camera=colour_cam, labels=world_labels(world),
                                appearance=appearance, sensor=sensor, fps=sc.fps, rng=sc.rng("colour"), skin=skin,
                                pulps=pulps)

@@ -32,8 +32,7 @@ def main(argv=None) -> dict:
     from benchmark.camera.camera import load_camera
     from benchmark.camera.colour import ColourRenderer, interpolated_state
     from benchmark.camera.colour_sensor import colour_camera, colour_preset
-    from benchmark.camera.depth import DepthRenderer, pulp_presses
-    from benchmark.camera.render import hand_skin
+    from benchmark.camera.depth import DepthRenderer, hand_skin, pulp_presses
     from benchmark.camera.scene import world_labels
     from benchmark.camera.sensor import sensor_preset
     from benchmark.perf.render import _rates, scene_frames
