@@ -217,7 +217,13 @@ def _container(path: pathlib.Path):
     return _HDF5Entries(path) if path.suffix == HDF5_SUFFIX else _ZipEntries(path)
 
 
-def write_archive(path, fmt: str, version: int, meta: dict, arrays: dict) -> pathlib.Path:
+FAST_DEFLATE_LEVEL = 1
+"""Deflate's level for the entries a writer names ``fast`` (large noisy images, e.g. a colour
+video: level 6, the default, takes four times as long for 4 % less; measured on a 2 s colour stream,
+56 MB: 33.2 MB in 0.63 s at level 1, 32.1 MB in 2.5 s at level 6)."""
+
+
+def write_archive(path, fmt: str, version: int, meta: dict, arrays: dict, fast: frozenset = frozenset()) -> pathlib.Path:
     """Writes a sealed archive, replacing ``path`` atomically.
 
     Args:
@@ -226,6 +232,8 @@ def write_archive(path, fmt: str, version: int, meta: dict, arrays: dict) -> pat
         version: The format's version.
         meta: JSON-able entries of ``meta.json`` besides format, version and digests.
         arrays: ``{"<section>/<field>": array}``.
+        fast: Entries deflated at :data:`FAST_DEFLATE_LEVEL` instead of the default level (the
+            same format: any reader inflates them alike).
 
     Returns:
         The path written.
@@ -249,6 +257,9 @@ def write_archive(path, fmt: str, version: int, meta: dict, arrays: dict) -> pat
         for name, value in entries.items():
             info = zipfile.ZipInfo(name + ".npy", date_time=(1980, 1, 1, 0, 0, 0))  # fixed: same bytes
             info.compress_type = zipfile.ZIP_DEFLATED
+            if name in fast:  # the attribute is compress_level from Python 3.13, _compresslevel before
+                setattr(info, "compress_level" if hasattr(info, "compress_level") else "_compresslevel",
+                        FAST_DEFLATE_LEVEL)
             with z.open(info, "w", force_zip64=True) as out:
                 np.lib.format.write_array(out, np.asanyarray(value), allow_pickle=False)
     return path

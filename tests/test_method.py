@@ -124,7 +124,10 @@ def test_a_method_declares_the_streams_its_tracker_reads():
     class ColourTracker:
         streams = ("colour",)
 
-    class BadTracker:
+        def __call__(self, inputs, rng):
+            raise AssertionError("not run")
+
+    class BadTracker(ColourTracker):
         streams = ("infrared",)
 
     assert make_method().streams == ("depth",)

@@ -56,7 +56,6 @@ class ColourFrames:
     Attributes:
         rgb: sRGB images, (T, H, W, 3) uint8.
         labels: Label images of the middle sub-render (at t_k, noise-free), (T, H, W) uint8.
-        depth: Exact depth along the colour camera's axis at t_k, (T, H, W) float32 [m] (0: nothing).
         calib: The colour camera's calibration.
         fps: Frame rate [Hz]; frame k at t_k = k / fps.
         exposure_s: Exposure time [s].
@@ -66,7 +65,6 @@ class ColourFrames:
 
     rgb: np.ndarray
     labels: np.ndarray
-    depth: np.ndarray
     calib: Calibration
     fps: float
     exposure_s: float
@@ -332,7 +330,7 @@ def samples_for(shift_px: float, sensor: ColourSensor) -> int:
 
 def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, labels: np.ndarray, appearance,
                         sensor: ColourSensor, fps: float, rng: np.random.Generator | None,
-                        skin: HandSkin | None = None, pulps: tuple | None = None) -> ColourFrames:
+                        skin: HandSkin | None = None, pulps: tuple | None = None, observe=None) -> ColourFrames:
     """Renders, blurs and measures a colour video of a MuJoCo model.
 
     Args:
@@ -347,6 +345,8 @@ def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, la
         fps: Frame rate [Hz].
         rng: Generator of the sensor noise (the scenario's "colour" stream; None without noise).
         skin, pulps: As :func:`benchmark.camera.render.render_video`.
+        observe: Called as ``observe(k, exact_depth, labels)`` per frame with the middle
+            sub-render's exact depth (H, W) float32 [m] and labels (nothing keeps a video of depth).
 
     Returns:
         The :class:`ColourFrames`.
@@ -365,16 +365,16 @@ def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, la
     H, W = camera.height, camera.width
     rgb = np.empty((T, H, W, 3), dtype=np.uint8)
     label_images = np.empty((T, H, W), dtype=np.uint8)
-    depth = np.empty((T, H, W), dtype=np.float32)
     samples = np.empty(T, dtype=np.int64)
     renderer = ColourRenderer(model, camera, labels, appearance, skin=skin)
     for k in range(T):
         centre, push = (None, None) if pulps is None else (pulps[0][k], pulps[1][k])
-        radiance, depth[k], label_images[k], samples[k] = renderer.render_exposure(set_state, data, k, sensor, centre,
-                                                                                   push)
+        radiance, depth, label_images[k], samples[k] = renderer.render_exposure(set_state, data, k, sensor, centre, push)
+        if observe is not None:
+            observe(k, depth, label_images[k])
         sensor.measure(radiance, rng, appearance.lighting, out=rgb[k])
     e = float(sensor.exposure_s)
-    return ColourFrames(rgb=rgb, labels=label_images, depth=depth, calib=camera.calibration(), fps=float(fps),
+    return ColourFrames(rgb=rgb, labels=label_images, calib=camera.calibration(), fps=float(fps),
                         exposure_s=e, samples=samples, t_s=np.arange(T) / float(fps))
 
 
@@ -449,7 +449,7 @@ def register_to_depth(rgb: np.ndarray, colour_calib: Calibration, depth_m: np.nd
 
 
 def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=None,
-                  camera: Camera | None = None) -> ColourFrames:
+                  camera: Camera | None = None, observe=None) -> ColourFrames:
     """Renders the colour video of a simulated episode, beside its scenario's depth camera.
 
     Args:
@@ -458,6 +458,9 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
         appearance: Default :func:`benchmark.camera.appearance.appearance_of` of the scenario.
         camera: The depth camera the colour camera sits beside (:func:`colour_camera`); default
             the scenario's view's (:func:`benchmark.camera.views.camera_of`).
+        observe: Called as ``observe(k, exact_depth, labels)`` with each frame's exact depth along
+            the colour camera's axis at t_k, (H, W) float32 [m] (0: nothing), and its labels (e.g.
+            :meth:`benchmark.camera.labelling.Labeller.see`).
 
     Returns:
         The :class:`ColourFrames` (T = len(truth.t) frames at the scenario's fps). The noise comes
@@ -486,4 +489,4 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
         pulps = pulp_presses(truth) if sc.hand_surface == "skin" else None
     return render_colour_video(world.model, set_state, len(truth.t), camera=colour_cam, labels=world_labels(world),
                                appearance=appearance, sensor=sensor, fps=sc.fps, rng=sc.rng("colour"), skin=skin,
-                               pulps=pulps)
+                               pulps=pulps, observe=observe)

@@ -22,6 +22,7 @@ import numpy as np
 
 from benchmark.camera.camera import Camera
 from benchmark.camera.colour import render_colour
+from benchmark.camera.colour_sensor import colour_camera, colour_preset
 from benchmark.camera.depth import DepthRenderer, HandSkin, hand_skin, pulp_presses  # noqa: F401 (re-exported)
 from benchmark.camera.labelling import Annotations, Labeller
 from benchmark.camera.scene import world_labels
@@ -106,8 +107,18 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
     if episode.depth is None:
         episode = _render_depth(episode, sensor, camera)
     if "colour" in streams and episode.colour is None:
-        frames = render_colour(episode, camera=camera)
+        labeller = None
+        if episode.annotations is not None:  # the colour's labels beside the depth's
+            from benchmark.world.assets import build_world
+
+            colour_calib = colour_camera(camera_of(episode.scenario.view) if camera is None else camera,
+                                         colour_preset(episode.scenario.sensor)).calibration()
+            labeller = Labeller(build_world(episode.scenario), episode.truth, colour_calib,
+                                keypoints=episode.annotations.keypoints_world)
+        frames = render_colour(episode, camera=camera, observe=None if labeller is None else labeller.see)
         episode = episode.with_colour(frames.video, frames.labels)
+        if labeller is not None:
+            episode = episode.with_annotations(episode.annotations.with_stream("colour", labeller.labels()))
     return episode
 
 

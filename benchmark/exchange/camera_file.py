@@ -105,7 +105,7 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list, know
     for name, (arrs, scalars) in model_sections(inputs.object_model, inputs.hand_model).items():
         meta[name] = scalars
         arrays.update({f"{name}/{k}": v for k, v in arrs.items()})
-    return write_archive(path, FORMAT, VERSION, meta, arrays)
+    return write_archive(path, FORMAT, VERSION, meta, arrays, fast=frozenset({"colour/rgb"}))
 
 
 def load_camera_input(path) -> tuple:
