@@ -20,14 +20,14 @@ import functools
 import hashlib
 import importlib.resources
 import json
+import math
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from scipy.optimize import least_squares
 
 from benchmark.errors import ScenarioError, SimulationError
-from benchmark.world import physics
+from benchmark.world import bounded_lsq, physics
 from benchmark.world.assets import build_world, grasps, user_of
 from benchmark.world.grasp_families import draw_candidate
 from benchmark.world.scenario import Scenario
@@ -79,7 +79,7 @@ class GraspPlan:
 
 
 def _pitch_quat(pitch: float) -> np.ndarray:
-    return np.array([np.cos(pitch / 2), np.sin(pitch / 2), 0.0, 0.0])
+    return np.array([math.cos(pitch / 2), math.sin(pitch / 2), 0.0, 0.0])  # scalar libm, not a SIMD ufunc
 
 
 PLANS_FILE = "grasp_plans.json"  # in sim_assets: the solved plans, so every machine builds the same world
@@ -165,17 +165,19 @@ class _PlanProblem:
         return np.concatenate([r_tip, r_post, r_pitch, r_col])
 
     def solve(self) -> np.ndarray:
-        """Fits the plan from scratch (scipy's least squares: its last digits depend on the BLAS kernel)."""
+        """Fits the plan from scratch (:func:`benchmark.world.bounded_lsq.solve`: no BLAS, the same bits
+        on every CPU and BLAS kernel)."""
         half = self.world.obj.half_extents
         x0 = np.concatenate([[0.0, half[2] + 0.03, 0.3], self.prior])  # palm y, z (object frame), pitch; joints
-        bounds = (np.concatenate([[-0.1, half[2], -0.6], self.lo]), np.concatenate([[0.1, 0.15, 1.2], self.hi]))
+        lb, ub = np.concatenate([[-0.1, half[2], -0.6], self.lo]), np.concatenate([[0.1, 0.15, 1.2], self.hi])
         x_scale = np.concatenate([[0.01, 0.01, 0.1], np.full(len(self.prior), 0.1)])
-        return least_squares(self.residual, x0, bounds=bounds, x_scale=x_scale, max_nfev=400).x
+        return bounded_lsq.solve(self.residual, x0, lb, ub, x_scale, max_nfev=400).x
 
     def plan(self, x: np.ndarray) -> GraspPlan:
         hand = self.world.hand
         self.pose(x)
-        tip_err = float(np.max(np.linalg.norm(self.d.site_xpos[self.world.tip_site] - self.target, axis=1)[self.active]))
+        e = (self.d.site_xpos[self.world.tip_site] - self.target)[self.active]
+        tip_err = float(np.max(np.sqrt(e[:, 0] * e[:, 0] + e[:, 1] * e[:, 1] + e[:, 2] * e[:, 2])))
         gap = float(np.min(self.distances() - self.clearance + _CLEARANCE_M))
         q_grasp = x[3:].copy()
         # Pre-shape: open every flexion of the active digits by 0.5 rad (pads swing away from the faces).
