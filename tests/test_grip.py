@@ -191,6 +191,6 @@ def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
     x = np.array(stored[f"{problem.user_name}/{problem.grasp_name}"]["x"])
     fresh = problem.solve()
     # measured: 1.3e-4 rad apart (both solvers stop at a relative cost decrease of 1e-8 in a flat valley),
-    # the same cost to 1e-8; 26 of 33 stored plans re-solve within 2e-3 rad, 7 into another minimum
+    # costs 2e-8 apart; 26 of 33 stored plans re-solve within 2e-3 rad, 7 into another minimum
     np.testing.assert_allclose(fresh, x, atol=1e-3)
     assert half_sum_squares(problem.residual(fresh)) == pytest.approx(half_sum_squares(problem.residual(x)), rel=1e-6)
