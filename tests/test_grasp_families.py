@@ -75,16 +75,19 @@ def test_every_person_of_the_suites_gets_a_grasp_that_holds():
 
 def test_every_suites_and_the_training_sets_drawn_grasps_are_stored():
     """The stored plans are the world's definition of these people's grasps (never solved again at
-    run time): every suite's and the training set's drawn pairs are stored, and their inputs current."""
-    from benchmark.reproduce import DATASETS
+    run time): every suite's and the training sets' (the shipped model's, the learning curve's) drawn
+    pairs are stored, and their inputs current."""
+    from benchmark.reproduce import CURVE_PEOPLE, DATASETS
     from benchmark.suites import SUITES
     from benchmark.world.grasp_plan import STORED_DRAWN, _drawn, _PlanProblem, stored_plans
 
     named = len(__import__("benchmark.world.assets", fromlist=["grasps"]).grasps())
     needed = {(sc.user, sc.grasp) for s in SUITES.values() for sc in s.scenarios if sc.grasp >= named}
-    train = dict(zip(DATASETS["train"][::2], DATASETS["train"][1::2]))
-    assert train["--users"] == "0-39" and train["--design"] == "people"
-    needed |= {(u, u) for u in range(1000, 1040)}
+    for name in ("train", "train-curve", "calibration-train-curve"):  # the training split's people: 1000 + position
+        args = dict(zip(DATASETS[name][::2], DATASETS[name][1::2]))
+        assert args["--split"] == "train" and args["--design"] == "people" and args["--users"] in ("0-39", "0-79")
+    assert CURVE_PEOPLE == 80
+    needed |= {(u, u) for u in range(1000, 1000 + CURVE_PEOPLE)}
     assert needed <= set(STORED_DRAWN)
     stored = stored_plans()
     assert all(f"drawn/{u}/{g}" in stored for u, g in STORED_DRAWN)
