@@ -73,22 +73,96 @@ def test_every_person_of_the_suites_gets_a_grasp_that_holds():
     assert feasible(plan) and plan.tip_error_m > 0.010
 
 
-def test_every_suites_and_the_training_sets_drawn_grasps_are_stored_and_replay():
-    from benchmark.reproduce import DATASETS
+def test_every_suites_and_the_training_sets_drawn_grasps_are_stored():
+    """The stored plans are the world's definition of these people's grasps (never solved again at
+    run time): every suite's and the training sets' (the shipped model's, the learning curve's) drawn
+    pairs are stored, and their inputs current."""
+    from benchmark.reproduce import CURVE_PEOPLE, DATASETS
     from benchmark.suites import SUITES
-    from benchmark.world.grasp_plan import STORED_DRAWN, _drawn, _search, stored_plans
+    from benchmark.world.grasp_plan import STORED_DRAWN, _drawn, _PlanProblem, stored_plans
 
     named = len(__import__("benchmark.world.assets", fromlist=["grasps"]).grasps())
     needed = {(sc.user, sc.grasp) for s in SUITES.values() for sc in s.scenarios if sc.grasp >= named}
-    train = dict(zip(DATASETS["train"][::2], DATASETS["train"][1::2]))
-    assert train["--users"] == "0-39" and train["--design"] == "people"
-    needed |= {(u, u) for u in range(1000, 1040)}
+    for name in ("train", "train-curve", "calibration-train-curve"):  # the training split's people: 1000 + position
+        args = dict(zip(DATASETS[name][::2], DATASETS[name][1::2]))
+        assert args["--split"] == "train" and args["--design"] == "people" and args["--users"] in ("0-39", "0-79")
+    assert CURVE_PEOPLE == 80
+    needed |= {(u, u) for u in range(1000, 1000 + CURVE_PEOPLE)}
     assert needed <= set(STORED_DRAWN)
     stored = stored_plans()
     assert all(f"drawn/{u}/{g}" in stored for u, g in STORED_DRAWN)
-    # the stored choice is the one the search makes here; its plan agrees with the solver's to 1e-5
-    # (the solver's last digits depend on the BLAS kernel: that is why the choices are stored)
-    entry = stored["drawn/500/500"]
-    spec, _, _, x = _search(500, 500)
-    assert spec == entry["spec"] and np.max(np.abs(np.array(entry["x"]) - x)) < 1e-5
-    assert _drawn(500, 500)[0] == entry["spec"]
+    for u, g in STORED_DRAWN[::9]:  # a current fingerprint: the stored choice and plan are used as they are
+        entry = stored[f"drawn/{u}/{g}"]
+        assert _PlanProblem(u, entry["spec"]).fingerprint == entry["fingerprint"]
+    spec, plan = _drawn(500, 500)
+    assert spec == stored["drawn/500/500"]["spec"]
+    np.testing.assert_array_equal(plan.q_grasp, np.array(stored["drawn/500/500"]["x"])[3:])
+
+
+_KERNEL_SCRIPT = """
+import hashlib, json, sys
+import numpy as np
+from benchmark.world import bounded_lsq
+from benchmark.world.assets import build_world, grasps
+from benchmark.world.grasp_families import draw_candidate
+from benchmark.world.grasp_plan import _PlanProblem, stored_plans
+from benchmark.world.scenario import Scenario
+
+solved, plans = hashlib.sha256(), []
+for user, grasp in ((17, 0), (17, 17), (230, 9)):  # people and grasps not in grasp_plans.json
+    if grasp < len(grasps()):
+        spec = grasps()[grasp]
+    else:
+        world = build_world(Scenario(user=user))
+        rng = np.random.default_rng(np.random.SeedSequence([grasp, *b"grasp"]))
+        spec = draw_candidate(rng, grasp, world.hand, world.obj.half_extents)
+    problem = _PlanProblem(user, spec)
+    assert f"{problem.user_name}/{problem.grasp_name}" not in stored_plans()
+    x = problem.solve()
+    plan = problem.plan(np.round(x, 9))
+    for a in (x, plan.palm_quat, plan.q_open, [plan.tip_error_m, plan.clearance_m]):
+        solved.update(np.ascontiguousarray(a, dtype=float).tobytes())
+r = bounded_lsq.solve(lambda x: np.array([10 * (x[1] - x[0] * x[0]), 1 - x[0]]), [-1.2, 1.0],
+                      np.full(2, -2.0), np.array([0.5, 2.0]), np.ones(2))
+solved.update(r.x.tobytes())
+a = np.random.default_rng(0).standard_normal((74, 23))
+try:
+    import threadpoolctl
+    arch = sorted({i.get("architecture") for i in threadpoolctl.threadpool_info() if i.get("internal_api") == "openblas"})
+except ImportError:
+    arch = None
+print(json.dumps({"solved": solved.hexdigest(), "blas": hashlib.sha256((a.T @ a).tobytes()).hexdigest(), "arch": arch}))
+"""
+_KERNEL_FLAGS = {"Sandybridge": {"avx"}, "Haswell": {"avx2", "fma"}, "SkylakeX": {"avx512f", "avx512bw", "avx512vl"}}
+
+
+def test_unstored_plans_are_solved_to_the_same_bits_under_every_openblas_kernel():
+    """The planner's solver calls no BLAS: three unstored plans (and a small bounded problem) solve
+    to one digest under OPENBLAS_CORETYPE=Sandybridge, Haswell and SkylakeX, whose own products
+    differ (the control: ``a.T @ a``)."""
+    import json
+    import os
+    import pathlib
+    import subprocess
+    import sys
+
+    flags = set()
+    if pathlib.Path("/proc/cpuinfo").is_file():
+        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("flags"):
+                flags = set(line.split(":", 1)[1].split())
+                break
+    kernels = [k for k, need in _KERNEL_FLAGS.items() if need <= flags]
+    if len(kernels) < 2:
+        pytest.skip(f"this CPU runs fewer than two of the kernels {sorted(_KERNEL_FLAGS)}")
+    root = pathlib.Path(__file__).resolve().parent.parent
+    out = {}
+    for k in kernels:
+        env = dict(os.environ, OPENBLAS_CORETYPE=k, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]))
+        done = subprocess.run([sys.executable, "-c", _KERNEL_SCRIPT], env=env, cwd=root, capture_output=True,
+                              text=True, timeout=120)
+        assert done.returncode == 0, done.stderr[-2000:]
+        out[k] = json.loads(done.stdout.strip().splitlines()[-1])
+        assert out[k]["arch"] in (None, [k]), f"OPENBLAS_CORETYPE={k} ran {out[k]['arch']}"  # NumPy's and SciPy's
+    assert len({o["blas"] for o in out.values()}) > 1, "the kernels' products agree: this test cannot see BLAS"
+    assert len({o["solved"] for o in out.values()}) == 1, {k: o["solved"][:16] for k, o in out.items()}

@@ -172,8 +172,9 @@ def test_table2_pair_grips_alike_and_a_careful_user_harder(episode_factory):
 
 
 def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
-    """Every (user, grasp) has a stored plan whose inputs still match (else the world would fall back
-    to a kernel-dependent solve); solving u0/g0 again lands on the stored solution."""
+    """Every (user, grasp) has a stored plan whose inputs still match (the stored plans define the
+    world; a plan not stored is solved at run time); solving u0/g0 again (the BLAS-free solver, not
+    scipy's that stored it) lands in the stored solution's minimum."""
     from benchmark.world.assets import grasps, users
     from benchmark.world.grasp_plan import STORED_DRAWN, _PlanProblem, stored_plans
 
@@ -184,7 +185,12 @@ def test_stored_grasp_plans_are_current_and_match_a_fresh_solve():
             problem = _PlanProblem(u, grasps()[g])
             entry = stored[f"{problem.user_name}/{problem.grasp_name}"]
             assert entry["fingerprint"] == problem.fingerprint, f"stale plan for user {u}, grasp {g}: run python -m benchmark.world.grasp_plan --write-plans"
+    from benchmark.world.bounded_lsq import half_sum_squares
+
     problem = _PlanProblem(0, grasps()[0])
     x = np.array(stored[f"{problem.user_name}/{problem.grasp_name}"]["x"])
-    # kernels move the solve by <= 3e-6 rad (measured: Haswell vs Sandybridge on the 20 plans)
-    np.testing.assert_allclose(problem.solve(), x, atol=1e-5)
+    fresh = problem.solve()
+    # measured: 1.3e-4 rad apart (both solvers stop at a relative cost decrease of 1e-8 in a flat valley),
+    # costs 2e-8 apart; 26 of 33 stored plans re-solve within 2e-3 rad, 7 into another minimum
+    np.testing.assert_allclose(fresh, x, atol=1e-3)
+    assert half_sum_squares(problem.residual(fresh)) == pytest.approx(half_sum_squares(problem.residual(x)), rel=1e-6)
