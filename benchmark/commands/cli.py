@@ -255,16 +255,19 @@ def default_out(parser: argparse.ArgumentParser, args: argparse.Namespace) -> pa
     return pathlib.Path("runs") / name
 
 
-def check_same_options(out: pathlib.Path, options: dict, force: bool) -> None:
+def check_same_options(out: pathlib.Path, options: dict, force: bool, defaults: dict | None = None) -> None:
     """Refuses (ValueError, one line) to replace a run folder of fsv-bench's whose ``options.json``
     differs from ``options``, or that has none (a run of an earlier fsv-bench or another command),
-    unless ``force``. A new or empty folder, or one of the same options, is replaced silently."""
+    unless ``force``. A new or empty folder, or one of the same options, is replaced silently; an
+    option the file does not record (one added since) counts at its value in ``defaults``."""
     if force or not out.is_dir() or out.is_symlink() or not any(out.iterdir()):
         return
     try:
         recorded = json.loads((out / OPTIONS_FILE).read_text()).get("options")
     except (OSError, ValueError, AttributeError):
         recorded = None
+    if isinstance(recorded, dict) and defaults:
+        recorded = {**{k: v for k, v in defaults.items() if k in options}, **recorded}
     if recorded == options:
         return
     if recorded is None:
@@ -277,7 +280,9 @@ def check_same_options(out: pathlib.Path, options: dict, force: bool) -> None:
 
 
 def _plain(value):
-    """An option's value as JSON has it (a path as its text)."""
+    """An option's value as JSON has it (a path as its text, a tuple as a list)."""
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
     return str(value) if isinstance(value, pathlib.PurePath) else value
 
 
@@ -331,7 +336,8 @@ def main(argv: list | None = None) -> int:
         out = args.out or default_out(parser, args)
         check_out(out)
         options = run_options(parser, args)
-        check_same_options(out, options, args.force)
+        defaults = argparse.Namespace(**{a.dest: a.default for a in parser._actions})
+        check_same_options(out, options, args.force, run_options(parser, defaults))
     except (ScenarioError, InputError, ValueError) as e:
         print(f"fsv-bench: error: {e}", file=sys.stderr)
         return 2
