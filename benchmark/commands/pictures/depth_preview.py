@@ -122,6 +122,36 @@ def preview_paths(out_dir, gif: bool = True) -> list[pathlib.Path]:
     return [out_dir / "depth_preview.png"] + ([out_dir / "depth.gif"] if gif else [])
 
 
+def write_colour_preview(rgb: np.ndarray, fps: float, out_dir, num: int = 6) -> pathlib.Path:
+    """Writes ``colour_preview.png``: a strip of ``num`` evenly spaced colour frames at half size,
+    each stamped with its time (the colour stream as recorded: sRGB, not retouched).
+
+    Args:
+        rgb: Colour video, shape (T, H, W, 3), uint8.
+        fps: Its frame rate, [Hz].
+        out_dir: Directory (created if missing).
+
+    Returns:
+        The path written.
+    """
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 4 or rgb.shape[0] == 0 or rgb.shape[3] != 3 or rgb.dtype != np.uint8:
+        raise BenchmarkError(f"a colour video (T, H, W, 3) uint8 with T >= 1 is needed, got {rgb.shape} {rgb.dtype}")
+    from PIL import Image
+
+    out_dir = pathlib.Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    idx = np.unique(np.linspace(0, rgb.shape[0] - 1, min(num, rgb.shape[0])).round().astype(int))
+    frames = [_stamp(rgb[k, ::2, ::2], f"{k / fps:.2f} s") for k in idx]
+    gap = np.full((frames[0].shape[0], 4, 3), 255, dtype=np.uint8)
+    out = [frames[0]]
+    for f in frames[1:]:
+        out += [gap, f]
+    path = out_dir / "colour_preview.png"
+    _atomic(path, lambda p: Image.fromarray(np.concatenate(out, axis=1)).save(p, format="PNG", optimize=True))
+    return path
+
+
 COLOUR_BAR_HEIGHT = 40
 """Height in pixels of the colour bar under the PNG strip."""
 
