@@ -96,6 +96,10 @@ def test_a_method_that_reads_colour_is_scored_through_files(colour_inputs, monke
     assert main(["score", "--suite", "tiny", "--estimates", str(est), "--out", str(colour_inputs / "s"),
                  "--cache", str(colour_inputs / "c"), "--quiet"]) in (0, 1)
     scores = json.loads((colour_inputs / "s" / "scores.json").read_text())
+    name = scores["episodes"][0]["episode"]
+    from benchmark.exchange.check import check
+
+    assert check(est / f"{name}.npz", colour_inputs / "in" / f"{name}.npz").endswith("(streams: depth, colour)")
     assert scores["method"] == "reference tracker, contacts confirmed by skin colour"
     row = scores["episodes"][0]
     assert row["contact_precision"] > 0.5 and np.isfinite(row["box_pos_err_mm"])

@@ -44,7 +44,8 @@ def check(path: pathlib.Path, inputs: pathlib.Path | None = None) -> str:
     estimate = load_estimate(path, t=np.arange(T) / fps, finger_names=names)
     groups = [g for g, s in (("nominal", estimate.nominal), ("forces", estimate.forces)) if s is not None]
     return (f"{path}: ok: episode {meta.get('episode')!r}, {T} frames, {len(names)} fingers, forces: "
-            f"{', '.join(groups) or 'none'}" + (f"; matches {inputs}" if inputs is not None else ""))
+            f"{', '.join(groups) or 'none'}"
+            + (f"; matches {inputs} (streams: {', '.join(camera.streams)})" if inputs is not None else ""))
 
 
 def run(args: argparse.Namespace) -> str:
