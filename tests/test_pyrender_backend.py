@@ -252,9 +252,10 @@ FLAT_MEDIAN, FLAT_P99 = 1e-4, 1e-3
 background: median and 99th percentile (measured 0 and 0: planar faces' normals are exact in both
 renderers, the same float32 radiance; the lights tilted by 0.5 degrees give 1.7e-3)."""
 HAND_MEDIAN, HAND_P99 = 1e-3, 5e-3
-"""Allowed on the hand (measured median 1.2-1.8e-4, 99th percentile 7.3e-4-8.6e-4 (1.1e-3 with
-seed 0's one light; the hand's red radiance is about 0.3): pyrender's 8-bit normals (up to 0.4 degrees), and on
-the capsules its 64 x 128 facets' interpolated normals; the skin smooth-shaded gives 3.4e-3 and 3.0e-2)."""
+"""Allowed on the hand (measured median 1.2-1.8e-4, 99th percentile 7.3e-4-8.6e-4, 1.1e-3 with
+seed 0's one light; the hand's red radiance is about 0.3): pyrender's 8-bit normals (up to 0.4
+degrees) and, on the capsules, its 64 x 128 facets' interpolated normals. The skin smooth-shaded
+gives 3.4e-3 and 3.0e-2."""
 
 
 def plain_shading(appearance, labels: np.ndarray) -> "P.Shading":
