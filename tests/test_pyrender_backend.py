@@ -1,6 +1,9 @@
 """pyrender as the oracle of the CPU rasteriser: the same scene drawn by OpenGL (EGL; Mesa's
 llvmpipe here) agrees with :class:`benchmark.camera.depth.DepthRenderer` in depth, labels and
-normals, a wrong camera does not, and ``render_pyrender`` measures the depth ``render`` measures.
+normals, a wrong camera does not, and ``render_pyrender`` measures the depth ``render`` measures;
+and the CPU colour renderer's radiance (:class:`benchmark.camera.colour.ColourRenderer`, plain
+appearance) agrees with pyrender's shading of the same scene, where a wrong light direction or a
+smooth-shaded skin does not.
 
 Measured on a 2-core AMD EPYC with Mesa 22.3.6 llvmpipe (lift, seed 0, 1 s, frames 0, 15, 30):
 depth on pixels both renderers see, |pyrender - cpu|: median 6.6e-7 m, 99th percentile 5.7e-6 m
@@ -17,6 +20,9 @@ import mujoco
 import numpy as np
 import pytest
 
+from benchmark.camera.appearance import appearance_of
+from benchmark.camera.colour import ColourRenderer
+from benchmark.camera.colour_sensor import colour_camera, colour_preset
 from benchmark.camera.depth import DepthRenderer, _geometry, hand_skin, pulp_presses
 from benchmark.camera.scene import LABEL_BOX, LABEL_PALM, LABEL_TABLE, world_labels
 from benchmark.camera.views import camera_of
@@ -48,8 +54,8 @@ def gl():
         pytest.skip(f"pyrender cannot open an EGL context on this machine ({type(e).__name__}: {e})")
 
 
-def scene(episode_factory, surface):
-    ep = episode_factory(task="lift", duration_s=1.0, hand_surface=surface)
+def scene(episode_factory, surface, **kw):
+    ep = episode_factory(task="lift", duration_s=1.0, hand_surface=surface, **kw)
     world = build_world(ep.scenario)
     skin = hand_skin(world) if surface != "capsules" else None
     pulps = pulp_presses(ep.truth) if surface == "skin" else None
@@ -228,3 +234,145 @@ def test_render_pyrender_measures_what_render_measures(gl, episode_factory):
     assert np.mean(np.abs(A[both] - B[both]) <= 1.001e-3) > 0.999
     assert np.mean(a.labels == b.labels) > 0.9999
     assert P.renderer_name() == gl and gl.startswith("pyrender ")
+
+
+# --- the colour renderer's radiance against pyrender's shading ------------------------------------
+
+COLOUR_SEED = 1
+"""The lift's scenario seed for the colour checks: its drawn lighting has two lights (key and fill),
+so the sum over lights is checked (seed 0 draws one)."""
+EDGE_PX = 2
+"""Pixels within this many pixels (a (2 EDGE_PX + 1)^2 window) of a label change in either image
+are left out of the radiance comparison (silhouettes, and which primitive a pixel sees there)."""
+COLOUR_SAME_LABEL = 0.999
+"""Fraction of the colour camera's pixels with the same label, at least (measured 0.999987-0.999997:
+1-4 pixels of 307200)."""
+FLAT_MEDIAN, FLAT_P99 = 1e-4, 1e-3
+"""|radiance difference| (largest channel, linear RGB) allowed on the table, the box and the
+background: median and 99th percentile (measured 0 and 0: planar faces' normals are exact in both
+renderers, the same float32 radiance; the lights tilted by 0.5 degrees give 1.7e-3)."""
+HAND_MEDIAN, HAND_P99 = 1e-3, 5e-3
+"""Allowed on the hand (measured median 1.2-1.8e-4, 99th percentile 7.3e-4-8.6e-4, 1.1e-3 with
+seed 0's one light; the hand's red radiance is about 0.3): pyrender's 8-bit normals (up to 0.4
+degrees) and, on the capsules, its 64 x 128 facets' interpolated normals. The skin smooth-shaded
+gives 3.4e-3 and 3.0e-2."""
+
+
+def plain_shading(appearance, labels: np.ndarray) -> "P.Shading":
+    """The :class:`pyrender_backend.Shading` that is ``appearance.plain()``: the albedo the CPU
+    renderer gives each label with its textures off (hand labels 9 and up the skin, the box its
+    board ``box_base[0]``, the table and every other labelled geom the table's base), its ambient,
+    lights and background. Both take a light's direction as the unit vector it travels in the world
+    frame and shade with max(0, -n . dir): the CPU renderer rotates it into the camera frame
+    (``R_cw dir``, its normals are camera-frame), pyrender's oracle rotates its normals into the world."""
+    plain = appearance.plain()
+    albedo = {int(label): plain.skin_albedo if label >= LABEL_PALM else plain.box_albedo if label == LABEL_BOX
+              else plain.table_base for label in np.unique(labels) if label != 0}
+    light = plain.lighting
+    return P.Shading(albedo=albedo, ambient=light.ambient, light_dir=light.direction, light_rgb=light.rgb,
+                     background=plain.background)
+
+
+def interior(*label_images, r: int = EDGE_PX) -> np.ndarray:
+    """Pixels whose (2 r + 1)^2 window holds one label in each image, (H, W) bool."""
+    ok = np.ones(label_images[0].shape, bool)
+    H, W = ok.shape
+    for im in label_images:
+        pad = np.pad(im, r, mode="edge")
+        for dv in range(2 * r + 1):
+            for du in range(2 * r + 1):
+                ok &= pad[dv : dv + H, du : du + W] == im
+    return ok
+
+
+def radiance_agreement(cpu_radiance, cpu_labels, oracle_labels, oracle_radiance) -> dict:
+    """Per class (table, box, hand, nothing): pixels compared, median and 99th percentile of the
+    largest channel's |radiance difference| on pixels both label alike away from label edges."""
+    d = np.abs(oracle_radiance.astype(np.float64) - cpu_radiance).max(axis=-1)
+    inside = interior(cpu_labels, oracle_labels) & (cpu_labels == oracle_labels)
+    out = {"same": float(np.mean(cpu_labels == oracle_labels))}
+    for name, mask in (("table", cpu_labels == LABEL_TABLE), ("box", cpu_labels == LABEL_BOX),
+                       ("hand", cpu_labels >= LABEL_PALM), ("nothing", cpu_labels == 0)):
+        e = d[mask & inside]
+        out[name] = (e.size, float(np.median(e)), float(np.percentile(e, 99))) if e.size else (0, 0.0, 0.0)
+    return out
+
+
+def colour_scene(episode_factory, surface):
+    ep, world, skin, pulps = scene(episode_factory, surface, seed=COLOUR_SEED)
+    camera = colour_camera(camera_of(ep.scenario.view), colour_preset("ds325"))
+    return ep, world, skin, pulps, camera, world_labels(world), appearance_of(ep.scenario).plain()
+
+
+def disagreements(s) -> list:
+    """The classes of :func:`radiance_agreement`'s ``s`` that break the thresholds (with "labels"
+    for the label fraction, and a class with under 1000 pixels compared)."""
+    bad = [] if s["same"] > COLOUR_SAME_LABEL else ["labels"]
+    for name in ("table", "box", "hand", "nothing"):
+        n, median, p99 = s[name]
+        limit = (HAND_MEDIAN, HAND_P99) if name == "hand" else (FLAT_MEDIAN, FLAT_P99)
+        if n < 1000 or not (median < limit[0] and p99 < limit[1]):
+            bad.append(name)
+    return bad
+
+
+@pytest.mark.parametrize("surface", ["capsules", "skin"])
+def test_colour_radiance_agrees_with_pyrenders_shading(gl, episode_factory, surface):
+    """The plain appearance's radiance, CPU against pyrender, on the ds325 colour camera (640 x 480)
+    at frames 0, 15, 30 of a lift: labels and, per class away from label edges, the radiance."""
+    ep, world, skin, pulps, camera, labels, plain = colour_scene(episode_factory, surface)
+    assert camera.width == 640 and camera.height == 480 and len(plain.lighting.direction) == 2
+    cpu = ColourRenderer(world.model, camera, labels, plain, skin=skin)
+    with P.PyrenderRenderer(world.model, camera, labels, skin=skin, shading=plain_shading(plain, labels)) as oracle:
+        for k, _, ((rad, _, la), (_, lb, theirs)) in frames(ep, world, skin, pulps, [cpu, oracle]):
+            s = radiance_agreement(rad, la, lb, theirs)
+            assert disagreements(s) == [], (k, s)
+
+
+def test_a_wrong_light_or_a_smooth_skin_fails_the_radiance_agreement(gl, episode_factory, monkeypatch):
+    """The oracle can fail. On the CPU side (frame 0 of the skinned hand): the lights' direction
+    flipped (the same radiance as inward normals), or left in the world frame while the normals are
+    the camera's (what a renderer that forgot ``R_cw dir`` computes: given here as the lighting
+    R_wc dir, which it rotates back to dir), or tilted by 2 degrees (about world x). On the
+    oracle's side: the skin smooth-shaded (area-weighted vertex normals; its facets' normals lie a
+    median 7 degrees from their corners') where both renderers shade its facets flat. Measured:
+    flipped and world-frame lights (on this camera both send the lights upwards, so what the camera
+    sees is lit by the ambient alone) differ by a median 0.41 on the table, 0.40 on the box, 0.25 on
+    the hand; the 2-degree tilt 6.6e-3 on the table; the smooth skin 3.4e-3 (median) and 3.0e-2
+    (99th percentile) on the hand, its table and box unchanged. The thresholds catch a 2-degree tilt
+on every lit class (a 0.5-degree one on the table and box)."""
+    ep, world, skin, pulps, camera, labels, plain = colour_scene(episode_factory, "skin")
+    light = plain.lighting
+    R = camera.T_world_cam[:3, :3]
+    c, s = np.cos(np.radians(2.0)), np.sin(np.radians(2.0))
+    tilt = np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+    wrong = {"flipped": dataclasses.replace(light, direction=-light.direction),
+             "world frame": dataclasses.replace(light, direction=light.direction @ R.T),
+             "tilted": dataclasses.replace(light, direction=light.direction @ tilt.T)}
+    renderers = [ColourRenderer(world.model, camera, labels, dataclasses.replace(plain, lighting=w), skin=skin)
+                 for w in wrong.values()]
+    with P.PyrenderRenderer(world.model, camera, labels, skin=skin, shading=plain_shading(plain, labels)) as oracle:
+        _, _, (*bad, (_, lb, theirs)) = next(frames(ep, world, skin, pulps, [*renderers, oracle]))
+        for name, (rad, _, la) in zip(wrong, bad):
+            s = radiance_agreement(rad, la, lb, theirs)
+            assert s["same"] > COLOUR_SAME_LABEL, (name, s)  # the geometry is right, the light is not:
+            if name == "tilted":  # measured median 6.6e-3 table, 6.5e-3 box, 2.9e-3 hand (99th pct 7.5e-3)
+                assert disagreements(s) == ["table", "box", "hand"] and s["table"][1] > 20 * FLAT_MEDIAN, s
+            else:
+                assert s["table"][1] > 0.2 and s["box"][1] > 0.2 and s["hand"][1] > 0.1, (name, s)
+
+        def smooth(vertices, faces):
+            p = vertices[faces]
+            n = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+            vn = np.zeros_like(vertices)
+            for i in range(3):
+                np.add.at(vn, faces[:, i], n)
+            vn /= np.where((length := np.sqrt((vn * vn).sum(axis=1))) > 0, length, 1.0)[:, None]
+            return p.reshape(-1, 3), vn[faces].reshape(-1, 3)
+
+        monkeypatch.setattr(P, "_flat", smooth)  # the skin's mesh is built per frame, the rest kept
+        cpu = ColourRenderer(world.model, camera, labels, plain, skin=skin)
+        _, _, ((rad, _, la), (_, lb, theirs)) = next(frames(ep, world, skin, pulps, [cpu, oracle]))
+    s = radiance_agreement(rad, la, lb, theirs)
+    assert disagreements(s) == ["hand"], s
+    assert s["hand"][1] > 2 * HAND_MEDIAN and s["hand"][2] > 4 * HAND_P99, s
