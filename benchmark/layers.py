@@ -36,8 +36,8 @@ FLOORS: tuple = (
 - ``commands``: the main command's stages, pictures, reports, the command line, file exchange;
 - ``reproduce``: regenerating every committed result; speed scripts; the console script
   (``benchmark.commands.entry``, which runs ``reproduce`` and hands every other command to
-  ``benchmark.commands.cli``); the package's front door (``benchmark/__init__.py`` re-exports the
-  world's and the camera's entry points).
+  ``benchmark.commands.cli``); the package itself (``benchmark/__init__.py``, a docstring naming
+  where the world's and the camera's entry points live).
 """
 
 

@@ -128,7 +128,9 @@ def test_a_trained_model_adds_the_learned_forces(lift):
 
 _METHOD_RUN = """
 import sys, numpy as np
-from benchmark import Scenario, render, simulate
+from benchmark.camera.render import render
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
 from benchmark.method.init import tracker_init
 from fsv import run_pipeline
 ep = render(simulate(Scenario(task="lift", seed=1, duration_s=1.5)))

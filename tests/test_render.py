@@ -389,7 +389,9 @@ def test_a_simulated_lift_renders_one_frame_per_truth_frame_and_shows_box_and_fi
 
 _WORLD_DIGEST = """
 import dataclasses, hashlib, numpy as np
-from benchmark import Scenario, render, simulate
+from benchmark.camera.render import render
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
 ep = render(simulate(Scenario(task="lift", seed=0, duration_s=3.0, hand_surface="capsules")))
 h = hashlib.sha256()
 for f in dataclasses.fields(ep.truth):
@@ -419,7 +421,9 @@ def test_truth_and_depth_are_bit_identical_under_every_openblas_kernel():
 
 _PINNED = """
 import hashlib, sys
-from benchmark import Scenario, render, simulate
+from benchmark.camera.render import render
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
 ep = render(simulate(Scenario(task="lift", seed=0, duration_s=2.0, hand_surface="capsules")))
 skin = render(simulate(Scenario(task="lift", seed=0, duration_s=2.0, hand_surface="skin")))
 maps = open("/proc/self/maps").read()

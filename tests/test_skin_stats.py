@@ -7,7 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from benchmark import Scenario, render, simulate
+from benchmark.camera.render import render
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
 from benchmark.camera.skin_stats import collision_gap, hand_depth_difference
 from benchmark.errors import BenchmarkError
 

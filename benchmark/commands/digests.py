@@ -40,7 +40,7 @@ def stage_digests(episode, estimate) -> dict:
     """``{stage: digest}`` for :data:`STAGES` of one run of the main command.
 
     Args:
-        episode: The rendered ``benchmark.Episode``.
+        episode: The rendered ``benchmark.world.episode.Episode``.
         estimate: The method's ``fsv.method.Estimate`` on it.
     """
     tracking = estimate.tracking

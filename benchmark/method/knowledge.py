@@ -226,7 +226,7 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
     """What the method is told of ``episode`` under knowledge ``name``.
 
     Args:
-        episode: A rendered ``benchmark.Episode``.
+        episode: A rendered ``benchmark.world.episode.Episode``.
         name: One of :data:`KNOWLEDGE`, optionally with ``:FACTOR`` (:func:`parse_knowledge`).
 
     Returns:

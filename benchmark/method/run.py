@@ -16,7 +16,7 @@ def camera_input(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOW
     (:mod:`benchmark.method.protocol`).
 
     Args:
-        episode: A rendered ``benchmark.Episode``.
+        episode: A rendered ``benchmark.world.episode.Episode``.
         init_scale: Scale of the seeded first-frame perturbation (``benchmark.method.init.INIT_PERTURBATION``).
         knowledge: "exact" (the simulation's own values, an ablation) or "lab" (measured, with errors).
         protocol: "blind" (nothing known of the person) or "calibrated".
@@ -71,7 +71,7 @@ def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None, progres
 
     Args:
         spec: Which method, and which inputs the truth replaces.
-        episode: A rendered ``benchmark.Episode``.
+        episode: A rendered ``benchmark.world.episode.Episode``.
         inputs: Its camera inputs, if already made (:func:`camera_input`).
         tracking: The output of this method's tracker on this episode, if already computed by a
             method with the same tracker (methods differing only after tracking share it).

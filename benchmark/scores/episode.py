@@ -35,7 +35,7 @@ def score_episode(episode, estimate, world_from_method=None) -> dict:
     """Every metric of one episode.
 
     Args:
-        episode: A rendered ``benchmark.Episode`` (its truth is the reference).
+        episode: A rendered ``benchmark.world.episode.Episode`` (its truth is the reference).
         estimate: The method's ``fsv.method.Estimate`` on the episode's camera inputs (learned
             metrics are NaN when it has no final forces).
         world_from_method: Carries the method's world frame into the true one, (4, 4), when the
@@ -93,7 +93,7 @@ def episode_row(episode, estimate, known, protocol: str, *, seconds: float, rend
     metrics (:func:`score_episode`), what the method was told and how long it took.
 
     Args:
-        episode: A rendered ``benchmark.Episode``.
+        episode: A rendered ``benchmark.world.episode.Episode``.
         estimate: The method's ``fsv.Estimate`` on it (run in process, or read from a file).
         known: The ``benchmark.method.knowledge.Knowledge`` the method was given (its calibration
             carries the estimate into the true world).

@@ -118,7 +118,7 @@ def score_episode(episode, solution, kinematics: Kinematics, contacts: Contacts)
     truth.
 
     Args:
-        episode: A simulated ``benchmark.Episode``.
+        episode: A simulated ``benchmark.world.episode.Episode``.
         solution: The method's final forces (:class:`fsv.forces.ForceSolution`; the reference: the
             reconstruction of eq. 14 with learned internal forces).
         kinematics: The object kinematics the method used (estimated, or the oracle).

@@ -76,7 +76,7 @@ def episode_kinematics(episode, choice: str = "algebraic", config=None, poses: P
     """The box kinematics later stages use for ``episode``.
 
     Args:
-        episode: A ``benchmark.Episode`` (only ``.truth`` and ``.scenario`` are used).
+        episode: A ``benchmark.world.episode.Episode`` (only ``.truth`` and ``.scenario`` are used).
         choice: One of ``CHOICES``.
         config: Differentiator config overriding ``DECLARED[choice]`` (not for "oracle").
         poses: Observed poses overriding ``observed_poses(episode)`` (e.g. tracked ones).

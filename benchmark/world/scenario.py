@@ -36,7 +36,7 @@ class Scenario:
     """Everything that determines an episode; the same scenario gives bit-identical results.
 
     Attributes:
-        task: Name of a registered task (see ``benchmark.TASKS``).
+        task: Name of a registered task (see ``benchmark.world.tasks.TASKS``).
         user: The person: 0-4 the named cohort of ``sim_assets/users.yaml``, N >= 5 a person drawn
             with seed N (``benchmark.world.people``), the same for every scenario.
         grasp: Index into ``sim_assets/grasps.yaml``.

@@ -24,7 +24,7 @@ class DatasetSpec:
     """Which episodes a dataset holds and how its samples are made.
 
     Attributes:
-        tasks: Task names (see ``benchmark.TASKS``).
+        tasks: Task names (see ``benchmark.world.tasks.TASKS``).
         users, grasps, masses: People, grasps and masses: indices (people and grasps beyond the
             named ones are drawn, see ``benchmark.world.people`` and ``grasp_families``).
         views: Camera views (0: the paper's set-up; N >= 1 drawn, ``benchmark.camera.views``).
