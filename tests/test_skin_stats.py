@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from benchmark.camera.render import render
-from benchmark.world.scenario import Scenario
-from benchmark.world.simulate import simulate
 from benchmark.camera.skin_stats import collision_gap, hand_depth_difference
 from benchmark.errors import BenchmarkError
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
 
 
 def test_the_statistics_of_a_known_difference():
