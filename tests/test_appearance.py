@@ -31,7 +31,7 @@ def test_tones_are_uniform_over_the_ten_and_the_jitter_is_small():
     for user in range(400):
         tone, albedo = A.skin_of(user)
         tones.append(tone)
-        ratios.append(albedo / A.hex_to_linear(A.MONK_SRGB[tone - 1]))
+        ratios.append(albedo / (A.hex_to_linear(A.MONK_SRGB[tone - 1]) * A.SKIN_REFLECTANCE_SCALE))
     counts = np.bincount(tones, minlength=11)[1:]
     assert counts.min() >= 20 and counts.max() <= 62  # 40 expected each (binomial sd 6)
     ratios = np.asarray(ratios)
@@ -92,3 +92,11 @@ def test_people_of_each_tone_can_be_picked():
         assert all(A.appearance_of(Scenario(user=u)).skin_tone == tone for u in users)
     with pytest.raises(BenchmarkError, match="Monk"):
         A.people_with_tone(0)
+
+
+def test_the_lightest_skin_reflects_about_six_tenths_in_the_red_and_less_than_a_white_board():
+    red = [A.hex_to_linear(h)[0] * A.SKIN_REFLECTANCE_SCALE for h in A.MONK_SRGB]
+    assert red[0] == pytest.approx(0.6, abs=0.002) and red[-1] == pytest.approx(0.016, abs=0.002)
+    assert np.all(np.diff(red) <= 0.025)  # MST3 is redder than MST2 by 0.022; otherwise lighter tones first
+    white_board = A.hex_to_linear("e9e4da")
+    assert np.all(A.hex_to_linear(A.MONK_SRGB[0]) * A.SKIN_REFLECTANCE_SCALE < white_board)

@@ -285,7 +285,7 @@ for a in (frames.rgb, frames.labels, np.stack(depth), frames.samples):
 print(h.hexdigest())
 """
 
-PINNED_COLOUR_SHA256 = "903d1b078baad6b2ada82b89bf312f872c18130b0886e3c375ad5aa1a3c7dd3f"
+PINNED_COLOUR_SHA256 = "8f01bb2246860d3a24525ecaaaecd7e92200f462cd7f80f8afec2392ae18e070"
 """The colour video (rgb, labels, depth, sub-renders) of ``Scenario(task="lift", duration_s=1.0)``
 with the ds325 colour preset: blur, noise and white balance included."""
 

@@ -14,7 +14,13 @@ here). The tone index is drawn uniformly over the ten from a generator seeded wi
 skin-tone fairness evaluations use; the world's prevalence of the tones is not uniform. Within a
 tone the albedo is jittered: a common lightness factor 1 + 0.04 N(0, 1) and a per-channel factor
 1 + 0.015 N(0, 1) (:data:`SKIN_LIGHTNESS_JITTER`, :data:`SKIN_CHANNEL_JITTER`: smaller than the
-steps between neighbouring swatches, so the tone stays recognisable), clipped to [0, 1].
+steps between neighbouring swatches, so the tone stays recognisable), clipped to [0, 1]. The
+swatches are skin as it looks in a photograph, not how much light it reflects: taken as albedo,
+MST1's red channel (0.92 linear) would make a light hand brighter than a white-coated box. Diffuse
+reflectance spectra of skin put the lightest skin at about 0.6 in the red (Anderson & Parrish 1981,
+"The optics of human skin", J. Invest. Dermatol. 77(1)), so every swatch's linear RGB is scaled by
+:data:`SKIN_REFLECTANCE_SCALE` = 0.6 / 0.92: each tone keeps its chromaticity and the tones their
+ratios, and the lightest reflects 0.6 in the red.
 
 **Box** (per scenario, the "appearance" stream): a printed cardboard box. Its board is kraft
 (sRGB c19a6b) or white-coated (sRGB e9e4da) with probability 1/2, its lightness jittered by
@@ -65,6 +71,9 @@ from benchmark.errors import BenchmarkError
 
 MONK_SRGB = ("f6ede4", "f3e7db", "f7ead0", "eadaba", "d7bd96", "a07e56", "825c43", "604134", "3a312a", "292420")
 """The Monk Skin Tone scale's ten swatches, MST1 (lightest) to MST10, sRGB hex (Monk 2019, Google)."""
+SKIN_REFLECTANCE_SCALE = 0.6 / 0.92
+"""Linear RGB albedo per unit of a Monk swatch's linear RGB: MST1's red channel (0.92) becomes the
+lightest skin's measured red reflectance, about 0.6 (Anderson & Parrish 1981)."""
 SKIN_LIGHTNESS_JITTER = 0.04
 """Standard deviation of a person's common lightness factor around the tone's swatch."""
 SKIN_CHANNEL_JITTER = 0.015
@@ -241,7 +250,7 @@ def skin_of(user: int) -> tuple[int, np.ndarray]:
     tone = int(rng.integers(1, len(MONK_SRGB) + 1))
     common = 1.0 + SKIN_LIGHTNESS_JITTER * float(rng.standard_normal())
     channel = 1.0 + SKIN_CHANNEL_JITTER * rng.standard_normal(3)
-    albedo = np.clip(hex_to_linear(MONK_SRGB[tone - 1]) * common * channel, 0.0, 1.0)
+    albedo = np.clip(hex_to_linear(MONK_SRGB[tone - 1]) * SKIN_REFLECTANCE_SCALE * common * channel, 0.0, 1.0)
     return tone, albedo
 
 
