@@ -219,3 +219,26 @@ def test_every_array_has_a_digest_in_meta_json(saved):
         assert set(meta["array_sha256"]) == set(z.files) - {"meta.json"}
         assert all(meta["array_sha256"][k] == array_sha256(z[k], k) for k in meta["array_sha256"])
     assert meta["meta_sha256"] == tree_sha256({k: v for k, v in meta.items() if k != "meta_sha256"})
+
+
+def test_a_version_2_file_still_reads_and_version_3_keeps_the_labels(rendered_lift_episode, tmp_path):
+    """Version 2 (before the colour and the annotations) is read; version 3 round-trips the labels."""
+    import dataclasses
+
+    from benchmark.archive import write_archive
+    from benchmark.camera.episode_file import FORMAT, _sections
+
+    ep = rendered_lift_episode
+    back = load_episode(save_episode(ep, tmp_path / "v3.npz"))
+    for stream, labels in ep.annotations.streams.items():
+        np.testing.assert_array_equal(back.annotations.streams[stream].keypoints_uv, labels.keypoints_uv)
+        np.testing.assert_array_equal(back.annotations.streams[stream].keypoint_visibility, labels.keypoint_visibility)
+    np.testing.assert_array_equal(back.annotations.keypoints_world, ep.annotations.keypoints_world)
+    old = dataclasses.replace(ep, annotations=None)
+    sections = _sections(old)
+    meta = {"scenario": dataclasses.asdict(old.scenario), "sections": list(sections),
+            **{name: scalars for name, (_, scalars) in sections.items()}}
+    arrays = {f"{name}/{k}": v for name, (arrs, _) in sections.items() for k, v in arrs.items()}
+    v2 = load_episode(write_archive(tmp_path / "v2.npz", FORMAT, 2, meta, arrays))
+    assert v2.annotations is None and v2.colour is None and v2.streams == ("depth",)
+    np.testing.assert_array_equal(v2.depth.depth_m, ep.depth.depth_m)
