@@ -27,7 +27,9 @@ no calibration error enters:
   end-effector forces), the estimate's with the same rule for unscored fingers;
   ``peak_err_n`` = |max_t Ĥ(t) - max_t H(t)| over the episode's frames, the absolute error of the
   episode's peak (the MAE over a suite's episodes is its mean). Always defined when the method
-  gave forces (an estimate with no solved frame has the peak 0).
+  gave forces (an estimate with no solved frame has the peak 0). Internal forces between the
+  fingers cancel in H, those the table balances (a finger pressing the box onto it) do not: the peak
+  scores the load the hand carries more than its grip, which the per-contact normal error holds.
 
 The truth is instantaneous at the frame times (as the paper's tactile sensors read it; the learned
 metrics' reference too), so transients of a few milliseconds (a grasp's onset, the table's impact)
