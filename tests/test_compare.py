@@ -50,6 +50,15 @@ def test_hiding_the_worst_episode_cannot_make_a_method_better():
     assert compare(_scores([1.0] * 8), recall)["metrics"]["contact_recall"]["better"] == "A"
 
 
+def test_an_older_scores_file_without_the_newer_metrics_is_compared_on_the_metrics_both_have():
+    a = _scores([1.0, 2.0, 3.0, 4.0])
+    a["metrics"].append("force_mae_n")
+    for e in a["episodes"]:
+        e["force_mae_n"] = 2.0
+    r = compare(a, _scores([0.5, 1.5, 2.5, 3.5]))["metrics"]
+    assert set(r) == {"box_pos_err_mm", "contact_recall"} and r["box_pos_err_mm"]["mean_diff"] == pytest.approx(-0.5)
+
+
 def test_other_suite_versions_are_refused():
     with pytest.raises(ValueError, match="same suite and version"):
         compare(_scores([1.0]), _scores([1.0], version=2))

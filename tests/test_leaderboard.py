@@ -41,6 +41,17 @@ def test_the_leaderboard_scores_every_variant_and_the_oracles_score_as_truth(tin
     assert s["calibrated"]["net_force_err_n_rms"] == s["reference"]["net_force_err_n_rms"]  # forces before learning
     assert "protocol: calibrated" in json.loads((out / "calibrated" / "scores.json").read_text())["method"]
     # the spread over grasp families: the tiny suite's one episode, grasp 0 of the width-four family
+    # the peers' metrics in newtons (means over the episodes), final forces: the reference's finite
+    head = next(line for line in table.splitlines() if line.startswith("| method |"))
+    for header in ("per-contact MAE [N] (mean)", "per-contact RMSE [N] (mean)", "normal MAE [N] (mean)",
+                   "tangential MAE [N] (mean)", "peak-force MAE [N] (mean)"):
+        assert header in head
+    ref = s["reference"]
+    assert 0 < ref["force_normal_mae_n"] <= ref["force_mae_n"] <= ref["force_rmse_n"] < 20
+    assert ref["force_tangential_mae_n"] <= ref["force_mae_n"] and 0 <= ref["peak_force_err_n"] < 20
+    none = s["baseline-no-internal"]  # its final forces are its nominal ones
+    assert none["force_mae_n"] == pytest.approx(none["nominal_force_mae_n"]) and none["force_mae_n"] > 0
+    assert ref["force_normal_mae_n"] < 0.5 * ref["nominal_force_normal_mae_n"]  # the grip is learned: 1.7 vs 5.7 N
     spread = table.split("Spread of **reference**")[1] if "Spread of" in table else skills.split("Spread of **reference**")[1]
     assert "| width-four | 1 |" in spread and "the worst person 0" in spread
 
@@ -53,10 +64,9 @@ def test_skill_is_measured_against_the_baseline_of_the_metrics_stage():
     assert skill(None, 1.0, "acc_err_rms") is None
 
     def scores(**medians):
-        agg = {m: {s: {"value": medians.get(m, 1.0)} for s in ("median", "mean")}
-               for m in ("box_pos_err_mm", "contact_err_mm_std", "contact_recall", "acc_err_rms", "net_force_err_n_rms",
-                         "net_force_err_n_rms_instant", "least_violation_frac", "learned_rel_err_pct", "learned_mae_n",
-                         "learned_rel_err_pct_paper")}
+        from benchmark.scores.metrics import METRICS
+
+        agg = {m: {s: {"value": medians.get(m, 1.0)} for s in ("median", "mean")} for m in METRICS}
         return {"aggregate": agg}
 
     entries = [("reference", scores(acc_err_rms=0.3)),

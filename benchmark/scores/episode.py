@@ -17,7 +17,14 @@ the metric's :data:`benchmark.scores.metrics.WORST` value):
   gaps), ``learned_rel_err_pct`` (Table 2's relative error, true forces >= 1 N) and
   ``learned_mae_n``, the mean absolute error of the final normal force [N]; and, for comparison
   with the paper, ``learned_rel_err_pct_paper``: the relative error on the frames the paper's
-  sample rules keep (they choose by the truth: a secondary column, Table 2's protocol).
+  sample rules keep (they choose by the truth: a secondary column, Table 2's protocol);
+* forces in newtons in the peers' forms (:mod:`benchmark.scores.contact_forces`), of the final
+  forces (:data:`benchmark.scores.metrics.FORCE_METRICS`) and of the nominal ones (the same names
+  prefixed ``nominal_``): ``force_mae_n`` and ``force_rmse_n``, the MAE and RMSE of the 3D finger
+  force's error norm over the truth's contacts (a finger the method leaves without force there
+  counts as 0 N), ``force_normal_mae_n`` and ``force_tangential_mae_n`` its parts along the true
+  normal and across it, and ``peak_force_err_n``, the absolute error of the episode's peak hand
+  force ||Σ_k F_k|| [N].
 """
 
 from __future__ import annotations
@@ -26,7 +33,8 @@ from dataclasses import asdict
 
 import numpy as np
 
-from benchmark.scores.metrics import METRICS
+from benchmark.scores.contact_forces import KEYS, contact_force_errors
+from benchmark.scores.metrics import FORCE_METRICS, METRICS, NOMINAL_FORCE_METRICS
 from benchmark.world.grasp_plan import grasp_spec
 from benchmark.world.scenario import episode_name
 
@@ -64,6 +72,7 @@ def score_episode(episode, estimate, world_from_method=None) -> dict:
         out.update(net_force_err_n_rms=np.nan, net_force_err_n_rms_instant=np.nan, net_torque_err_nm_rms=np.nan,
                    least_violation_frac=np.nan)
     out.update(learned_errors(episode, estimate))
+    out.update(newton_errors(estimate, tr))
     return {k: float(out[k]) for k in METRICS}
 
 
@@ -86,6 +95,15 @@ def learned_errors(episode, estimate) -> dict:
     block = score_learned(episode, estimate.forces, estimate.kinematics, estimate.contacts)
     return {"learned_rel_err_pct": block["rel_err_pct_mean"], "learned_mae_n": block["mae_n"],
             "learned_rel_err_pct_paper": block["paper_rule"]["rel_err_pct_mean"]}
+
+
+def newton_errors(estimate, truth) -> dict:
+    """The final and nominal forces' errors in the peers' forms (:mod:`benchmark.scores.contact_forces`),
+    NaN for a stage the estimate does not have: ``{metric: float}`` for
+    :data:`~benchmark.scores.metrics.FORCE_METRICS` and :data:`~benchmark.scores.metrics.NOMINAL_FORCE_METRICS`."""
+    final, nominal = contact_force_errors(estimate.forces, truth), contact_force_errors(estimate.nominal, truth)
+    return {**{m: final[k] for m, k in zip(FORCE_METRICS, KEYS, strict=True)},
+            **{m: nominal[k] for m, k in zip(NOMINAL_FORCE_METRICS, KEYS, strict=True)}}
 
 
 def episode_row(episode, estimate, known, protocol: str, *, seconds: float, rendered: bool) -> dict:

@@ -57,7 +57,7 @@ def compare(a: dict, b: dict) -> dict:
     if not common:
         raise ValueError("the two evaluations share no episode")
     out = {}
-    for m in a["metrics"]:
+    for m in (m for m in a["metrics"] if m in b["metrics"]):  # an older scores.json may lack the newer metrics
         d = [paired_difference(ea[k][m], eb[k][m], WORST.get(m)) for k in common]
         agg = aggregate(d, "mean")
         test = paired_test(d)
