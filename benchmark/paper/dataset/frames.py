@@ -7,7 +7,7 @@ Layout of a frames dataset folder::
     dataset.json              format, spec (grid, streams, colour encoding), the world's fingerprint
                               and the provenance of the run (a resumed run must match them)
     episodes/<episode>.h5     one shard per episode, written atomically by this process only
-    episodes/<episode>.seconds.json   how long it took to build
+    episodes/<episode>.seconds.json   how long it took to build (wall and CPU seconds)
     index.parquet             one row per shard (:data:`INDEX_COLUMNS`), sealed with its content digest
     README.md                 the dataset card (Hugging Face form, YAML header: licences, size, configs)
     croissant.json            Croissant 1.0 metadata with its responsible-AI fields
@@ -124,11 +124,12 @@ def build_shard(scenario: Scenario, spec: FramesSpec, make=render_episode) -> by
 
 
 def _run_one(job) -> tuple:
-    """``(episode name, shard bytes, seconds)`` of a ``(scenario, spec, make)`` job, in a worker."""
+    """``(episode name, shard bytes, {"seconds": wall, "cpu_seconds": this process's CPU time})`` of a
+    ``(scenario, spec, make)`` job, in a worker."""
     scenario, spec, make = job
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     data = build_shard(scenario, spec, make)
-    return episode_name(scenario), data, time.perf_counter() - t0
+    return episode_name(scenario), data, {"seconds": time.perf_counter() - t0, "cpu_seconds": time.process_time() - c0}
 
 
 def made_by_generate_frames(out) -> bool:
@@ -250,11 +251,11 @@ def generate_frames(spec: FramesSpec, out, *, workers: int | None = None, ray_ad
     claims = Claims(out)
 
     def done(result) -> None:
-        name, data, seconds = result
+        name, data, timing = result
         path = os.path.join(out, "episodes", name + SHARD_SUFFIX)
         write_bytes(path, data)
         written[os.path.relpath(path, out)] = verify_shard(path, data)
-        write_text(os.path.join(out, "episodes", name + TIMING_SUFFIX), json.dumps({"seconds": seconds}))
+        write_text(os.path.join(out, "episodes", name + TIMING_SUFFIX), json.dumps(timing))
         claims.release(name)
         bar.update(1)
 
