@@ -303,9 +303,11 @@ def open_shard(path, data: bytes | None = None):
         raise DatasetFileError(f"{path} is not a readable shard: {e}") from e
 
 
-def verify_shard(path, data: bytes | None = None, sha256: str | None = None) -> dict:
+def verify_shard(path, data: bytes | None = None, sha256: str | None = None, content: bool = True) -> dict:
     """Checks a shard: readable, of this format, named after its episode, its content matching its
-    digest, and its bytes matching ``sha256`` (the index's) if given. Returns its root attributes.
+    digest (unless ``content`` is False: the writer of bytes a worker has just made skips the
+    decompression), and its bytes matching ``sha256`` (the index's) if given. Returns its root
+    attributes with ``sha256`` and ``bytes``.
 
     Raises:
         DatasetFileError: naming the file and what is wrong.
@@ -326,7 +328,7 @@ def verify_shard(path, data: bytes | None = None, sha256: str | None = None) -> 
             if meta.get("format") != SHARD_FORMAT or meta.get("version") != SHARD_VERSION:
                 raise DatasetFileError(f"{path} is a {meta.get('format')!r} file of version {meta.get('version')!r}; "
                                        f"this fsv-bench reads {SHARD_FORMAT!r} version {SHARD_VERSION}")
-            if meta.get("content_sha256") != content_sha256(f):
+            if content and meta.get("content_sha256") != content_sha256(f):
                 raise DatasetFileError(f"{path} is corrupt: its content does not match its digest")
     except DatasetFileError:
         raise
