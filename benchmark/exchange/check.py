@@ -7,6 +7,12 @@ arrays, and their physics (:func:`benchmark.exchange.estimates_file.check_physic
 ``--inputs`` (the episode's camera-input file from ``fsv-bench export``) also the frames, the
 fingers and the identity (episode, suite, world) against that episode. Exit 0 and one line when it
 is good; exit 2 and one line naming the array, the frame or the entry when it is not.
+
+    fsv-bench check DIR
+
+Given a folder, checks a frames dataset of ``fsv-bench generate --frames``
+(:func:`benchmark.paper.dataset.frames.check_frames`): the index's digest, every shard's bytes
+and content digests, and that the card and the Croissant file are there.
 """
 
 from __future__ import annotations
@@ -18,7 +24,7 @@ import numpy as np
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("file", type=pathlib.Path, help="an estimates file (.npz)")
+    p.add_argument("file", type=pathlib.Path, help="an estimates file (.npz), or a frames dataset's folder")
     p.add_argument("--inputs", type=pathlib.Path, default=None,
                    help="the episode's camera-input file (fsv-bench export): frames, fingers and identity checked too")
 
@@ -49,6 +55,12 @@ def check(path: pathlib.Path, inputs: pathlib.Path | None = None) -> str:
 
 
 def run(args: argparse.Namespace) -> str:
+    if args.file.is_dir():
+        from benchmark.paper.dataset.frames import check_frames
+
+        line = check_frames(args.file)
+        print(line)
+        return line
     line = check(args.file, args.inputs)
     print(line)
     return line

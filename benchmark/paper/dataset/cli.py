@@ -11,6 +11,10 @@ refuses dev and test people); a dev or test person is recorded only for their ca
 grasp and view (``benchmark.paper.dataset.spec.DatasetSpec``):
 
     fsv-bench generate --split train --design people --users 0-39 --tasks lift,place,... --masses 0-5 --seeds 100
+
+With ``--frames`` it writes every frame of the rendered streams (``--streams depth,colour``) with its
+labels instead, one HDF5 shard per episode, an index, a dataset card and Croissant metadata
+(:mod:`benchmark.paper.dataset.frames`); dev and test people are refused.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import pandas as pd
 from benchmark import limits
 from benchmark.errors import DatasetError
 from benchmark.paper.dataset.build import generate
+from benchmark.paper.dataset.shards import COLOUR_ENCODINGS
 from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, DatasetSpec
 
 
@@ -80,6 +85,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"local worker processes, 1 to {limits.MAX_WORKERS} (default: all cores)")
     p.add_argument("--ray-address", default=None, help="run on a Ray cluster at this address (needs the 'ray' extra)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--frames", action="store_true",
+                   help="write the rendered frames and every per-frame label (forces, contacts, box and hand state, "
+                        "keypoints, masks) as one HDF5 shard per episode, with index.parquet, README.md and "
+                        "croissant.json, instead of the networks' features (training data: dev and test people refused)")
+    from benchmark.suites.options import add_streams_argument
+
+    add_streams_argument(p)
+    p.add_argument("--colour-encoding", default="raw", choices=COLOUR_ENCODINGS,
+                   help="with --frames --streams depth,colour: raw (lossless uint8, ~160 MB per 10 s episode) or "
+                        "jpeg (quality 90, lossy, ~12 MB; for training data) (default: raw)")
 
 
 def run(args: argparse.Namespace) -> pd.DataFrame:
@@ -109,6 +124,10 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
     from benchmark.atomic import check_out
     from benchmark.paper.dataset.files import made_by_generate
 
+    if args.frames:
+        return run_frames(args, spec)
+    if args.streams != ("depth",) or args.colour_encoding != "raw":
+        raise DatasetError("--streams and --colour-encoding apply to --frames only (the features come from the depth)")
     if not made_by_generate(args.out):  # new, empty, or fsv-bench's: resumed, never a user's folder
         check_out(pathlib.Path(args.out), replace=False)
     t0 = time.perf_counter()
@@ -122,3 +141,28 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         f"(oracle = from the truth; error-model = truth + the paper's contact error; tracker = rendered and tracked); {time.perf_counter() - t0:.1f} s"
     )
     return man
+
+
+def run_frames(args: argparse.Namespace, spec: DatasetSpec) -> pd.DataFrame:
+    """``fsv-bench generate --frames``: a frames dataset (:func:`benchmark.paper.dataset.frames.generate_frames`)."""
+    from benchmark.atomic import check_out
+    from benchmark.paper.dataset.frames import (
+        FramesSpec,
+        check_training_people,
+        generate_frames,
+        made_by_generate_frames,
+    )
+
+    frames = FramesSpec(grid=spec, streams=args.streams, colour_encoding=args.colour_encoding)
+    check_training_people(spec)  # before the folder is touched
+    if not made_by_generate_frames(args.out):
+        check_out(pathlib.Path(args.out), replace=False)
+    t0 = time.perf_counter()
+    index = generate_frames(frames, args.out, workers=args.workers, ray_address=args.ray_address,
+                            progress=not args.no_progress)
+    failed = int((index["status"] != "ok").sum())
+    seconds = time.perf_counter() - t0
+    print(f"frames dataset {args.out}: {len(index)} episodes ({failed} failed), {int(index['frames'].sum())} frames, "
+          f"streams {', '.join(frames.streams)}, {index['bytes'].sum() / 1e6:.1f} MB; README.md and croissant.json "
+          f"written; {seconds:.1f} s")
+    return index
