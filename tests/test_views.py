@@ -51,8 +51,8 @@ def test_a_view_is_part_of_the_scenario_and_its_name():
 
 def test_a_lift_from_another_view_shows_the_box_and_the_hand_and_gives_its_calibration():
     from benchmark.camera.render import render
-    from benchmark.world.simulate import simulate
     from benchmark.camera.scene import LABEL_BOX, LABEL_FINGER0
+    from benchmark.world.simulate import simulate
 
     ep = render(simulate(Scenario(task="lift", seed=1, duration_s=1.0, view=4)))
     np.testing.assert_array_equal(ep.calib.T_world_cam, camera_of(4).T_world_cam)  # the method gets the view's calibration
