@@ -138,6 +138,7 @@ def test_rows_tones_and_verdict_from_the_episodes():
 @pytest.mark.parametrize("argv, needle", [
     (["--suite", "nope"], "no such suite"),
     (["--workers", "0"], "expected an integer"),
+    (["--every", "0"], "expected an integer"),
 ])
 def test_bad_options_exit_2_before_any_work(argv, needle, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:
