@@ -190,19 +190,21 @@ def _episode(job) -> dict:
     return {**ablate_episode(episode), "seconds": time.perf_counter() - t0}
 
 
-def colour_ablation(suite, *, cache=None, workers: int = 1, every: int = 1) -> dict:
-    """Every ``every``-th episode of ``suite`` from its first (1: all) ablated (:func:`ablate_episode`),
-    and the summary rows (:func:`summary_rows`, :func:`tone_rows`, :func:`verdict`)."""
+def colour_ablation(suite, *, cache=None, workers: int = 1, every: int = 1, first: int = 0) -> dict:
+    """Every ``every``-th episode of ``suite`` from its ``first`` (``every`` 1, ``first`` 0: all)
+    ablated (:func:`ablate_episode`), and the summary rows (:func:`summary_rows`,
+    :func:`tone_rows`, :func:`verdict`)."""
     from benchmark.commands.colour_ablation import _episode as job  # by its module's name, also when run as __main__
 
     cache = episode_cache(cache)
-    scenarios = suite.scenarios[::every]
+    scenarios = suite.scenarios[first::every]
     found = dict(run_jobs(job, [(suite, sc, cache) for sc in scenarios], workers=workers))
     episodes = []
     for i, sc in enumerate(scenarios):
         episodes.append({"episode": episode_name(sc), "scenario": asdict(sc), "grasp_family": grasp_spec(sc)["family"],
                          "skin_tone": skin_of(sc.user)[0], **found[i]})
-    return {"suite": {"name": suite.name, "version": suite.version, "episodes": len(suite.scenarios), "every": every},
+    return {"suite": {"name": suite.name, "version": suite.version, "episodes": len(suite.scenarios), "every": every,
+                      "first": first},
             "skin_method": SKIN_METHOD,
             "variants": [asdict(v) for v in VARIANTS], "skin_fixed_tone": SKIN_FIXED_TONE,
             "rows": summary_rows(episodes), "tones": tone_rows(episodes), "verdict": verdict(episodes),
@@ -232,6 +234,15 @@ def _worst(episodes, variant) -> dict:
     return {"episode": episodes[i]["episode"], "contact_recall": recall[i]}
 
 
+def _paired_test(episodes, variant, metric) -> dict:
+    """:func:`paired_test` of the skin-gated method under ``variant`` minus the reference, per
+    episode (a missing value at the metric's worst), with the mean of the finite differences."""
+    d = [paired_difference(a, b, WORST[metric])
+         for a, b in zip(_values(episodes, None, metric), _values(episodes, variant, metric))]
+    finite = [x for x in d if x is not None and np.isfinite(x)]
+    return {**paired_test(d), "mean_diff": float(np.mean(finite)) if finite else None}
+
+
 def summary_rows(episodes: list) -> list:
     """One row per method: the depth-only reference, then the skin-gated method under each variant.
 
@@ -244,9 +255,7 @@ def summary_rows(episodes: list) -> list:
         for m in METRICS:
             row[m] = {s: aggregate(_values(episodes, variant, m), s, WORST[m]) for s in ("median", "mean")}
         if variant is not None:
-            row["paired"] = {m: paired_test([paired_difference(a, b, WORST[m]) for a, b in
-                                             zip(_values(episodes, None, m), _values(episodes, variant, m))])
-                             for m in METRICS}
+            row["paired"] = {m: _paired_test(episodes, variant, m) for m in METRICS}
             row["gate"] = _pooled(episodes, variant)
         row["worst"] = _worst(episodes, variant)
         rows.append(row)
@@ -273,11 +282,7 @@ def verdict(episodes: list, variant: str = "drawn") -> dict:
     when precision or recall rises (Wilcoxon p < :data:`ALPHA`, positive mean difference) and
     neither falls so; it hurts when one falls so and neither rises; otherwise no difference is
     shown."""
-    tests = {}
-    for m in ("contact_precision", "contact_recall"):
-        d = [paired_difference(a, b, WORST[m]) for a, b in zip(_values(episodes, None, m), _values(episodes, variant, m))]
-        finite = [x for x in d if x is not None and np.isfinite(x)]
-        tests[m] = {**paired_test(d), "mean_diff": float(np.mean(finite)) if finite else None}
+    tests = {m: _paired_test(episodes, variant, m) for m in ("contact_precision", "contact_recall")}
     up = [m for m, t in tests.items() if t["p"] is not None and t["p"] < ALPHA and (t["mean_diff"] or 0) > 0]
     down = [m for m, t in tests.items() if t["p"] is not None and t["p"] < ALPHA and (t["mean_diff"] or 0) < 0]
     answer = "helps" if up and not down else "hurts" if down and not up else "mixed" if up else "no difference shown"
@@ -298,10 +303,10 @@ def _kept(gate: dict, which: str) -> str:
 
 
 def _paired(t: dict) -> str:
-    if t["median_diff"] is None:
+    if t["mean_diff"] is None:
         return "—"
-    p = "n < 6" if t["p"] is None else f"p {t['p']:.2g}"
-    return f"{t['median_diff']:+.3f} ({p}, {t['n']} differ)"
+    p = "too few differ" if t["p"] is None else f"p {t['p']:.2g}"
+    return f"{t['mean_diff']:+.4f} ({p}, {t['n']} differ)"
 
 
 def report_markdown(doc: dict) -> str:
@@ -314,7 +319,7 @@ def report_markdown(doc: dict) -> str:
                       + ("too few differing episodes for a test" if t["p"] is None else f"Wilcoxon p {t['p']:.2g}")
                       + f" ({t['n']} of {n} episodes differ)"
                       for m, t in v["tests"].items() if t["mean_diff"] is not None)
-    subset = "" if s["every"] == 1 else f" of {s['episodes']} (every {s['every']}th from the first)"
+    subset = "" if n == s["episodes"] else f" of {s['episodes']} (one in {s['every']}, from episode {s['first']})"
     lines = [f"# Colour ablation: suite {s['name']} v{s['version']}, {n} episodes{subset}{few}", "",
              f"The reference tracker once per episode on the depth (lab knowledge); `{REFERENCE}` is the reference "
              f"method on it, `skin-gated` the same tracking with each contact kept only where the colour image shows "
@@ -323,8 +328,8 @@ def report_markdown(doc: dict) -> str:
              f"(skin: Monk {doc['skin_fixed_tone']}, unjittered); the colour noise is the same in every variant.", "",
              f"**Does skin colour help the reference's contacts on {s['name']}?** {v['answer']} "
              f"(skin-gated under `{v['variant']}` against `{REFERENCE}`; {tests or 'no paired differences'}).", "",
-             "Medians over episodes with 95 % bootstrap intervals; Δ: median paired difference from the reference "
-             "(Wilcoxon's two-sided p over the episodes that differ); kept: the tracker's true / false contacts "
+             "Medians over episodes with 95 % bootstrap intervals; Δ: mean paired difference from the reference "
+             "over the episodes (Wilcoxon's two-sided signed-rank p over those that differ); kept: the tracker's true / false contacts "
              "(finger-frames) the skin gate kept; worst: the lowest contact recall.", "",
              "| method | holds fixed | contact precision | contact recall | net force error [N] | Δ precision | "
              "Δ recall | Δ net force [N] | true contacts kept | false contacts kept | worst episode (recall) |",
@@ -365,6 +370,7 @@ def main(argv=None) -> int:
     p.add_argument("--every", type=integer(1, 1000), default=1,
                    help="ablate every N-th episode of the suite from the first (default 1: all; the dev suite "
                         "lists its tasks four episodes each, so 2 keeps every task twice)")
+    p.add_argument("--first", type=integer(0, 1000), default=0, help="with --every: the first episode ablated (from 0)")
     p.add_argument("--quiet", action="store_true", help="print only where the ablation was written")
     args = p.parse_args(argv)
     try:
@@ -375,7 +381,9 @@ def main(argv=None) -> int:
     except (ValueError, OutputFolderError) as e:
         p.exit(2, f"{p.prog}: error: {e}\n")
     t0 = time.perf_counter()
-    doc = colour_ablation(suite, cache=args.cache, workers=args.workers, every=args.every)
+    if args.first >= len(suite.scenarios):
+        p.exit(2, f"{p.prog}: error: --first {args.first}: the suite has {len(suite.scenarios)} episodes\n")
+    doc = colour_ablation(suite, cache=args.cache, workers=args.workers, every=args.every, first=args.first)
     doc["seconds"] = time.perf_counter() - t0
     doc["provenance"] = provenance()
     md = report_markdown(doc)
