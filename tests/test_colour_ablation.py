@@ -55,7 +55,7 @@ def test_the_table_has_the_reference_and_every_variant_and_the_tone_of_the_perso
     for name in names:
         assert f"| {name} |" in md
     tone = skin_of(TINY.scenarios[0].user)[0]
-    assert [t["tone"] for t in doc["tones"]] == [tone] and f"\n| {tone} | 1 | {TINY.scenarios[0].user} |" in md
+    assert [t["skin_tone"] for t in doc["tones"]] == [tone] and len(doc["boards"]) == 1 and f"\n| {tone} | 1 | {TINY.scenarios[0].user} |" in md
     assert doc["verdict"]["answer"] in ("helps", "hurts", "mixed", "no difference shown")
     assert "Does skin colour help" in md and doc["provenance"] and len(doc["episodes"]) == 1
     for r in doc["rows"]:  # one episode: every median is that episode's value, its interval the value itself
@@ -113,7 +113,7 @@ def test_gate_counts_split_the_trackers_contacts_by_the_truth():
 def _episode(name, tone, ref_recall, gated_recall, kept=(4, 4, 2, 1)):
     metrics = lambda r: {"contact_recall": r, "contact_precision": 0.9, "net_force_err_n_rms": 0.3}  # noqa: E731
     gate = dict(zip(("true_found", "true_kept", "false_found", "false_kept"), kept))
-    return {"episode": name, "skin_tone": tone, "scenario": {"user": tone * 100}, "reference": metrics(ref_recall),
+    return {"episode": name, "skin_tone": tone, "box_board": "kraft", "scenario": {"user": tone * 100}, "reference": metrics(ref_recall),
             "variants": {v.name: {**metrics(gated_recall), "gate": gate} for v in ca.VARIANTS}}
 
 
@@ -128,17 +128,28 @@ def test_rows_tones_and_verdict_from_the_episodes():
     assert drawn["gate"]["true_found"] == 37 and drawn["gate"]["true_kept_share"] == pytest.approx(32 / 37)
     assert drawn["paired"]["contact_recall"]["n"] == 9 and drawn["paired"]["contact_recall"]["p"] < 0.01
     tones = ca.tone_rows(eps)
-    assert [(t["tone"], t["episodes"]) for t in tones] == [(1, 4), (2, 5)]
+    assert [(t["skin_tone"], t["episodes"]) for t in tones] == [(1, 4), (2, 5)]
     assert tones[0]["gated_contact_recall"]["value"] == pytest.approx(np.median([0.8, 0.6, 0.4, 0.2]))
     assert ca.verdict(eps)["answer"] == "hurts"
     assert ca.verdict([_episode(f"e{i}", 1, 0.5, 0.5 + 0.05 * (i + 1)) for i in range(8)])["answer"] == "helps"
     assert ca.verdict([_episode(f"e{i}", 1, 0.5, 0.5) for i in range(8)])["answer"] == "no difference shown"
 
 
+def test_the_board_is_the_drawn_one():
+    from benchmark.world.scenario import Scenario
+
+    boards = [ca.box_board(Scenario(task="lift", seed=s)) for s in range(12)]
+    assert set(boards) == {"kraft", "white"}  # half each, drawn
+    sc = Scenario(task="lift", seed=boards.index("kraft"))
+    base = appearance_of(sc).box_base[0]
+    assert base[2] / base[0] < 0.5  # kraft is brown: little blue (white board: about 0.86)
+
+
 @pytest.mark.parametrize("argv, needle", [
     (["--suite", "nope"], "no such suite"),
     (["--workers", "0"], "expected an integer"),
     (["--every", "0"], "expected an integer"),
+    (["--first", "48"], "the suite has 48 episodes"),
 ])
 def test_bad_options_exit_2_before_any_work(argv, needle, tmp_path, capsys):
     with pytest.raises(SystemExit) as e:

@@ -39,7 +39,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from benchmark.atomic import OutputFolderError, check_cache, check_out, staging_folder, swap_folder, write_text
-from benchmark.camera.appearance import appearance_of, skin_of
+from benchmark.camera.appearance import _KRAFT, _WHITE_BOARD, appearance_of, hex_to_linear, skin_of
 from benchmark.camera.colour import render_colour
 from benchmark.errors import BenchmarkError
 from benchmark.limits import MAX_WORKERS, integer
@@ -202,12 +202,13 @@ def colour_ablation(suite, *, cache=None, workers: int = 1, every: int = 1, firs
     episodes = []
     for i, sc in enumerate(scenarios):
         episodes.append({"episode": episode_name(sc), "scenario": asdict(sc), "grasp_family": grasp_spec(sc)["family"],
-                         "skin_tone": skin_of(sc.user)[0], **found[i]})
+                         "skin_tone": skin_of(sc.user)[0], "box_board": box_board(sc), **found[i]})
     return {"suite": {"name": suite.name, "version": suite.version, "episodes": len(suite.scenarios), "every": every,
                       "first": first},
             "skin_method": SKIN_METHOD,
             "variants": [asdict(v) for v in VARIANTS], "skin_fixed_tone": SKIN_FIXED_TONE,
-            "rows": summary_rows(episodes), "tones": tone_rows(episodes), "verdict": verdict(episodes),
+            "rows": summary_rows(episodes), "tones": tone_rows(episodes),
+            "boards": group_rows(episodes, "box_board"), "verdict": verdict(episodes),
             "episodes": episodes}
 
 
@@ -262,13 +263,27 @@ def summary_rows(episodes: list) -> list:
     return rows
 
 
+def box_board(scenario) -> str:
+    """The scenario's box board, ``"kraft"`` or ``"white"`` (:func:`appearance_of` draws one of the two
+    and scales its lightness: the nearer in chromaticity)."""
+    base = appearance_of(scenario).box_base[0]
+    chroma = lambda rgb: np.asarray(rgb) / np.sum(rgb)  # noqa: E731
+    kraft, white = (float(np.abs(chroma(base) - chroma(hex_to_linear(h))).sum()) for h in (_KRAFT, _WHITE_BOARD))
+    return "kraft" if kraft < white else "white"
+
+
 def tone_rows(episodes: list, variant: str = "drawn") -> list:
-    """Per Monk tone present in ``episodes``: the skin-gated method under ``variant`` (the people's
-    own tones: ``drawn``) beside the depth-only reference on the same episodes."""
+    """Per Monk tone present in ``episodes`` (:func:`group_rows` by ``skin_tone``)."""
+    return group_rows(episodes, "skin_tone", variant)
+
+
+def group_rows(episodes: list, key: str, variant: str = "drawn") -> list:
+    """Per value of ``key`` in ``episodes`` (``skin_tone``, ``box_board``): the skin-gated method under
+    ``variant`` (the world as drawn: ``drawn``) beside the depth-only reference on the same episodes."""
     rows = []
-    for tone in sorted({e["skin_tone"] for e in episodes}):
-        group = [e for e in episodes if e["skin_tone"] == tone]
-        rows.append({"tone": tone, "episodes": len(group), "users": sorted({e["scenario"]["user"] for e in group}),
+    for value in sorted({e[key] for e in episodes}):
+        group = [e for e in episodes if e[key] == value]
+        rows.append({key: value, "episodes": len(group), "users": sorted({e["scenario"]["user"] for e in group}),
                      **{f"{who}_{m}": aggregate(_values(group, v, m), "median", WORST[m])
                         for who, v in (("reference", None), ("gated", variant))
                         for m in ("contact_recall", "contact_precision")},
@@ -351,10 +366,20 @@ def report_markdown(doc: dict) -> str:
               "precision, skin-gated | true contacts kept | false contacts kept |", "|---|---|---|---|---|---|---|---|---|"]
     for t in doc["tones"]:
         g = t["gate"]
-        lines.append(f"| {t['tone']} | {t['episodes']} | {', '.join(str(u) for u in t['users'])} | "
+        lines.append(f"| {t['skin_tone']} | {t['episodes']} | {', '.join(str(u) for u in t['users'])} | "
                      f"{_ci(t['reference_contact_recall'])} | {_ci(t['gated_contact_recall'])} | "
                      f"{_ci(t['reference_contact_precision'])} | {_ci(t['gated_contact_precision'])} | "
                      f"{_kept(g, 'true')} | {_kept(g, 'false')} |")
+    lines += ["", "## By the box's board, the world as drawn", "",
+              "The box is kraft or white-coated board (half each; :mod:`benchmark.camera.appearance`). The skin "
+              "window around a contact also sees what is behind and beside the finger: the board and the table.", "",
+              "| board | episodes | recall, reference | recall, skin-gated | precision, reference | precision, skin-gated | "
+              "true contacts kept | false contacts kept |", "|---|---|---|---|---|---|---|---|"]
+    for t in doc["boards"]:
+        g = t["gate"]
+        lines.append(f"| {t['box_board']} | {t['episodes']} | {_ci(t['reference_contact_recall'])} | "
+                     f"{_ci(t['gated_contact_recall'])} | {_ci(t['reference_contact_precision'])} | "
+                     f"{_ci(t['gated_contact_precision'])} | {_kept(g, 'true')} | {_kept(g, 'false')} |")
     return "\n".join(lines) + "\n"
 
 
