@@ -335,7 +335,9 @@ def report_markdown(doc: dict) -> str:
                       + f" ({t['n']} of {n} episodes differ)"
                       for m, t in v["tests"].items() if t["mean_diff"] is not None)
     subset = "" if n == s["episodes"] else f" of {s['episodes']} (one in {s['every']}, from episode {s['first']})"
-    lines = [f"# Colour ablation: suite {s['name']} v{s['version']}, {n} episodes{subset}{few}", "",
+    runs = doc.get("runs") or []
+    merged = f" (from {len(runs)} runs over disjoint episodes, merged: `runs` in the JSON)" if len(runs) > 1 else ""
+    lines = [f"# Colour ablation: suite {s['name']} v{s['version']}, {n} episodes{subset}{merged}{few}", "",
              f"The reference tracker once per episode on the depth (lab knowledge); `{REFERENCE}` is the reference "
              f"method on it, `skin-gated` the same tracking with each contact kept only where the colour image shows "
              f"skin around it ({doc['skin_method']}: Chai & Ngan's fixed YCbCr rule), then the reference's stages "
@@ -371,7 +373,7 @@ def report_markdown(doc: dict) -> str:
                      f"{_ci(t['reference_contact_precision'])} | {_ci(t['gated_contact_precision'])} | "
                      f"{_kept(g, 'true')} | {_kept(g, 'false')} |")
     lines += ["", "## By the box's board, the world as drawn", "",
-              "The box is kraft or white-coated board (half each; :mod:`benchmark.camera.appearance`). The skin "
+              "The box is kraft or white-coated board (half each; benchmark/camera/appearance.py). The skin "
               "window around a contact also sees what is behind and beside the finger: the board and the table.", "",
               "| board | episodes | recall, reference | recall, skin-gated | precision, reference | precision, skin-gated | "
               "true contacts kept | false contacts kept |", "|---|---|---|---|---|---|---|---|"]
