@@ -130,3 +130,23 @@ def test_the_findings_quote_the_committed_failure_atlas():
         assert row in text, row
     lost = {k: sum(e[k]["table_lost_frames"] for e in doc["episodes"]) for k in ("lab", "exact")}
     assert f"({lost['lab']} such frames over" in text and f"under lab knowledge,\n  {lost['exact']} under exact" in text
+
+
+def _mean_ci(result: str, metric: str) -> str:
+    m = json.loads((ROOT / "results" / result / "scores.json").read_text())["aggregate"][metric]["mean"]
+    return f"{m['value']:.2f} N [{m['ci_low']:.2f}, {m['ci_high']:.2f}]"
+
+
+PEER_FORM_QUOTES = [  # (text before, result, metric, text after)
+    ("per-contact force MAE ", "standard/reference", "force_mae_n", "\n(median"),
+    ("RMSE ", "standard/reference", "force_rmse_n", " (median"),
+    ("peak-force MAE ", "standard/reference", "peak_force_err_n", "\n(median"),
+    ("smaller peak-force error, ", "standard/baseline-no-internal", "peak_force_err_n", ": the nominal"),
+]
+
+
+@pytest.mark.parametrize("before, result, metric, after", PEER_FORM_QUOTES)
+def test_the_peers_forms_quoted_in_results_are_the_committed_ones(before, result, metric, after):
+    text = (ROOT / "docs/results.md").read_text()
+    quoted = before + _mean_ci(result, metric) + after.replace("\\n", "\n")
+    assert quoted in text, f"docs/results.md should quote {quoted!r} (results/{result}/scores.json)"
