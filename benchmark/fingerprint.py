@@ -31,7 +31,7 @@ RESULTS_ENTRY_POINTS = WORLD_ENTRY_POINTS + (
     "fsv", "benchmark.commands.cli", "benchmark.commands.humanness", "benchmark.commands.table1",
     "benchmark.paper.dataset.cli", "benchmark.paper.calibration", "benchmark.paper.training", "benchmark.paper.table2",
     "benchmark.commands.eval", "benchmark.suites.leaderboard", "benchmark.commands.learning_curve",
-    "benchmark.commands.atlas",
+    "benchmark.commands.atlas", "benchmark.commands.colour_ablation",
 )
 """What makes the committed results: the method, the main command and every sub-command that
 ``fsv-bench reproduce`` runs (:data:`benchmark.reproduce.RESULTS`)."""

@@ -150,3 +150,16 @@ def test_the_peers_forms_quoted_in_results_are_the_committed_ones(before, result
     text = (ROOT / "docs/results.md").read_text()
     quoted = before + _mean_ci(result, metric) + after.replace("\\n", "\n")
     assert quoted in text, f"docs/results.md should quote {quoted!r} (results/{result}/scores.json)"
+
+
+def test_the_findings_quote_the_committed_colour_ablation():
+    doc = json.loads((ROOT / "results/colour_ablation/colour_ablation.json").read_text())
+    text = " ".join((ROOT / "docs/findings.md").read_text().split())
+    tests = doc["verdict"]["tests"]
+    recall, precision = tests["contact_recall"], tests["contact_precision"]
+    assert doc["verdict"]["answer"] == "hurts" and "No: the gate costs contact recall" in text
+    assert f"(mean paired difference {recall['mean_diff']:.4f}, Wilcoxon p {recall['p']:.2g}, " in text
+    assert f"gains no precision ({precision['mean_diff']:.4f}, p {precision['p']:.2g})" in text
+    tone = {t["skin_tone"]: t for t in doc["tones"]}
+    assert f"keeps {100 * tone[10]['gate']['true_kept_share']:.1f} % of the true contacts of the darkest" in text
+    assert f"{100 * tone[1]['gate']['true_kept_share']:.1f} % of the lightest (Monk 1)" in text
