@@ -359,6 +359,19 @@ def _check_writable(out: pathlib.Path, option: str) -> None:
         raise OutputFolderError(f"{option} {out}: cannot write in {probe} ({e.strerror or e})") from None
 
 
+def write_folder(out: str | os.PathLike, files: dict) -> pathlib.Path:
+    """Writes a command's output folder whole: ``{file name: text}`` into a :func:`staging_folder`,
+    then :func:`swap_folder` into ``out``; an error or an interrupt leaves ``out`` as it was."""
+    tmp = staging_folder(out)
+    try:
+        for name, text in files.items():
+            write_text(tmp / name, text)
+        return swap_folder(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
 def write_bytes(path: str | os.PathLike, data: bytes) -> pathlib.Path:
     """Writes ``data`` to ``path`` atomically and returns the path."""
     with atomic_path(path) as tmp:

@@ -43,7 +43,7 @@ from benchmark.camera import colour_kernels as ck
 from benchmark.camera import raster_kernels as rk
 from benchmark.camera.camera import Camera
 from benchmark.camera.colour_sensor import ColourSensor, colour_camera, colour_preset
-from benchmark.camera.depth import DepthRenderer, HandSkin, hand_skin, pulp_presses
+from benchmark.camera.depth import DepthRenderer, HandSkin, drawn_hand
 from benchmark.camera.scene import LABEL_BOX
 from benchmark.errors import BenchmarkError
 from fsv import Calibration, ColourVideo
@@ -483,10 +483,7 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
         box_pos, box_quat, hand_qpos = interpolated_state(truth, k, s, sc.fps)
         set_frame(world, data, box_pos, box_quat, hand_qpos)
 
-    skin, pulps = None, None
-    if sc.hand_surface != "capsules":
-        skin = hand_skin(world)
-        pulps = pulp_presses(truth) if sc.hand_surface == "skin" else None
+    skin, pulps = drawn_hand(world, truth, sc.hand_surface)
     return render_colour_video(world.model, set_state, len(truth.t), camera=colour_cam, labels=world_labels(world),
                                appearance=appearance, sensor=sensor, fps=sc.fps, rng=sc.rng("colour"), skin=skin,
                                pulps=pulps, observe=observe)

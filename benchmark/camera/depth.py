@@ -94,6 +94,17 @@ def hand_skin(world) -> HandSkin:
                     box_body=int(world.box_body), box_half=np.asarray(world.obj.half_extents, dtype=np.float64))
 
 
+def drawn_hand(world, truth, hand_surface: str) -> tuple:
+    """How every renderer draws the hand of a scenario: ``(skin, pulps)``.
+
+    ``(None, None)`` for ``"capsules"`` (the primitives); the person's :func:`hand_skin` for
+    ``"skin-rigid"``, with its pulps pressed (:func:`pulp_presses`) for ``"skin"``.
+    """
+    if hand_surface == "capsules":
+        return None, None
+    return hand_skin(world), (pulp_presses(truth) if hand_surface == "skin" else None)
+
+
 def pulp_presses(truth) -> tuple[np.ndarray, np.ndarray]:
     """Per frame and finger, the world-frame centre of pressure and the pulp's push (its compression
     along the contact normal, :func:`benchmark.world.skin.pulp_indentation_m`), each (T, K, 3) [m]."""

@@ -59,9 +59,9 @@ import mujoco
 import numpy as np
 
 from benchmark.camera.camera import GL_FROM_CV, Camera
-from benchmark.camera.depth import DepthRenderer, HandSkin, _geometry, hand_skin, pulp_presses
+from benchmark.camera.depth import DepthRenderer, HandSkin, _geometry, drawn_hand
+from benchmark.camera.render import scenario_sensor
 from benchmark.camera.scene import LABEL_PALM, world_labels
-from benchmark.camera.sensor import sensor_preset
 from benchmark.camera.views import camera_of
 from benchmark.errors import BenchmarkError
 from benchmark.world.assets import build_world, set_frame
@@ -433,19 +433,11 @@ def render_pyrender(episode, *, sensor=None, camera: Camera | None = None):
         them; the depth differs from ``render``'s in the last bits and on silhouette pixels.
     """
     sc = episode.scenario
-    sensor = sensor_preset(sc.sensor, sc.noise_m) if sensor is None else sensor
-    if sensor.noise_m != sc.noise_m:
-        raise BenchmarkError(
-            f"sensor.noise_m = {sensor.noise_m} differs from the scenario's noise_m = {sc.noise_m}; "
-            "the scenario sets the noise"
-        )
+    sensor = scenario_sensor(sc, sensor)
     camera = camera_of(sc.view) if camera is None else camera
     world = build_world(sc)
     truth = episode.truth
-    skin, pulps = None, None
-    if sc.hand_surface != "capsules":
-        skin = hand_skin(world)
-        pulps = pulp_presses(truth) if sc.hand_surface == "skin" else None
+    skin, pulps = drawn_hand(world, truth, sc.hand_surface)
     data = mujoco.MjData(world.model)
     T = len(truth.t)
     shape = (T, camera.height, camera.width)

@@ -23,7 +23,7 @@ import numpy as np
 from benchmark.camera.camera import Camera
 from benchmark.camera.colour import render_colour
 from benchmark.camera.colour_sensor import colour_camera, colour_preset
-from benchmark.camera.depth import DepthRenderer, HandSkin, hand_skin, pulp_presses  # noqa: F401 (re-exported)
+from benchmark.camera.depth import DepthRenderer, HandSkin, drawn_hand, hand_skin, pulp_presses  # noqa: F401 (re-exported)
 from benchmark.camera.labelling import Annotations, Labeller
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
@@ -122,16 +122,22 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
     return episode
 
 
+def scenario_sensor(scenario, sensor: SensorModel | None = None) -> SensorModel:
+    """The depth sensor of ``scenario``: ``sensor``, or its preset with its noise
+    (``sensor_preset(scenario.sensor, scenario.noise_m)``); BenchmarkError if ``sensor``'s noise is
+    not the scenario's (the scenario sets the noise)."""
+    sensor = sensor_preset(scenario.sensor, scenario.noise_m) if sensor is None else sensor
+    if sensor.noise_m != scenario.noise_m:
+        raise BenchmarkError(f"sensor.noise_m = {sensor.noise_m} differs from the scenario's noise_m = "
+                             f"{scenario.noise_m}; the scenario sets the noise")
+    return sensor
+
+
 def _render_depth(episode: Episode, sensor: SensorModel | None, camera: Camera | None) -> Episode:
     from benchmark.world.assets import build_world, set_frame
 
     sc = episode.scenario
-    sensor = sensor_preset(sc.sensor, sc.noise_m) if sensor is None else sensor
-    if sensor.noise_m != sc.noise_m:
-        raise BenchmarkError(
-            f"sensor.noise_m = {sensor.noise_m} differs from the scenario's noise_m = {sc.noise_m}; "
-            "the scenario sets the noise"
-        )
+    sensor = scenario_sensor(sc, sensor)
     camera = camera_of(sc.view) if camera is None else camera
     world = build_world(sc)
     truth = episode.truth
@@ -139,10 +145,7 @@ def _render_depth(episode: Episode, sensor: SensorModel | None, camera: Camera |
     def set_k(data, k):
         set_frame(world, data, truth.box_pos[k], truth.box_quat[k], truth.hand_qpos[k])
 
-    skin, pulps = None, None
-    if sc.hand_surface != "capsules":
-        skin = hand_skin(world)
-        pulps = pulp_presses(truth) if sc.hand_surface == "skin" else None
+    skin, pulps = drawn_hand(world, truth, sc.hand_surface)
     labeller = Labeller(world, truth, camera.calibration())
     depth, labels = render_video(
         world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth"),

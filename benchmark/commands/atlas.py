@@ -15,12 +15,11 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import shutil
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_text
+from benchmark.atomic import OutputFolderError, check_out, write_folder
 from benchmark.limits import MAX_WORKERS, integer
 from benchmark.method import run_method
 from benchmark.method.run import camera_input_and_knowledge
@@ -233,14 +232,8 @@ def main(argv=None) -> int:
     doc = atlas(suite, cache=args.cache, workers=args.workers)
     doc["provenance"] = provenance()
     md = report_markdown(doc)
-    tmp = staging_folder(args.out)
-    try:
-        write_text(str(tmp / "atlas.md"), md)
-        write_text(str(tmp / "atlas.json"), json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
-        swap_folder(tmp, args.out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+    write_folder(args.out, {"atlas.md": md,
+                            "atlas.json": json.dumps(strict(doc), indent=1, allow_nan=False) + "\n"})
     if not args.quiet:
         print(md)
     print(f"written to {args.out}/ (atlas.md, atlas.json)")

@@ -32,13 +32,12 @@ import dataclasses
 import functools
 import json
 import pathlib
-import shutil
 import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from benchmark.atomic import OutputFolderError, check_cache, check_out, staging_folder, swap_folder, write_text
+from benchmark.atomic import OutputFolderError, check_cache, check_out, write_folder
 from benchmark.camera.appearance import _KRAFT, _WHITE_BOARD, appearance_of, hex_to_linear, skin_of
 from benchmark.camera.colour import render_colour
 from benchmark.errors import BenchmarkError
@@ -414,14 +413,8 @@ def main(argv=None) -> int:
     doc["seconds"] = time.perf_counter() - t0
     doc["provenance"] = provenance()
     md = report_markdown(doc)
-    tmp = staging_folder(args.out)
-    try:
-        write_text(str(tmp / "colour_ablation.md"), md)
-        write_text(str(tmp / "colour_ablation.json"), json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
-        swap_folder(tmp, args.out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
+    write_folder(args.out, {"colour_ablation.md": md,
+                            "colour_ablation.json": json.dumps(strict(doc), indent=1, allow_nan=False) + "\n"})
     if not args.quiet:
         print(md)
     print(f"written to {args.out}/ (colour_ablation.md, colour_ablation.json)")
