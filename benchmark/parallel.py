@@ -118,7 +118,12 @@ def check_picklable(fn: Callable, jobs: list) -> None:
 
 def _stop(pool, processes: list) -> None:
     """Shuts ``pool`` down at once and ends its worker processes (``processes``, taken before the
-    shutdown forgets them): none outlives an error."""
+    shutdown forgets them): none outlives an error.
+
+    The pool's manager thread joins the same processes; it is waited for last, so that a process
+    it reaped first (whose exit this thread's join then cannot see) is recorded as ended before
+    the error goes on."""
+    manager = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for p in processes:
         p.terminate()
@@ -126,7 +131,9 @@ def _stop(pool, processes: list) -> None:
         p.join(timeout=5.0)
         if p.is_alive():
             p.kill()
-            p.join()
+            p.join(timeout=5.0)
+    if manager is not None:
+        manager.join(timeout=5.0)
 
 
 def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple]:
