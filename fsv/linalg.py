@@ -66,6 +66,16 @@ def norm(x: np.ndarray) -> float:
     return float(np.sqrt(np.einsum("i,i->", x, x)))
 
 
+def rigid_inverse(T: np.ndarray) -> np.ndarray:
+    """The inverse of a rigid transform, (4, 4) -> (4, 4): ``[R^T, -R^T t]`` in a fixed order of
+    operations (no LAPACK inverse)."""
+    T = np.asarray(T, dtype=float)
+    out = np.eye(4)
+    out[:3, :3] = T[:3, :3].T
+    out[:3, 3] = -mv(out[:3, :3], T[:3, 3])
+    return out
+
+
 def correlate_valid(x: np.ndarray, w: np.ndarray) -> np.ndarray:
     """``np.correlate(x, w, "valid")`` of 1-D arrays: out[j] = sum_k x[j + k] w[k], (N,), (L,) -> (N - L + 1,)."""
     x, w = np.asarray(x, dtype=float), np.asarray(w, dtype=float)

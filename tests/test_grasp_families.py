@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from openblas_kernels import KERNEL_FLAGS, runnable_kernels
 
 from benchmark.world.assets import build_world
 from benchmark.world.grasp_families import FAMILIES, FINGER_GAP_M, PAD_HEIGHT_M, draw_candidate
@@ -133,7 +134,6 @@ except ImportError:
     arch = None
 print(json.dumps({"solved": solved.hexdigest(), "blas": hashlib.sha256((a.T @ a).tobytes()).hexdigest(), "arch": arch}))
 """
-_KERNEL_FLAGS = {"Sandybridge": {"avx"}, "Haswell": {"avx2", "fma"}, "SkylakeX": {"avx512f", "avx512bw", "avx512vl"}}
 
 
 def test_unstored_plans_are_solved_to_the_same_bits_under_every_openblas_kernel():
@@ -146,15 +146,9 @@ def test_unstored_plans_are_solved_to_the_same_bits_under_every_openblas_kernel(
     import subprocess
     import sys
 
-    flags = set()
-    if pathlib.Path("/proc/cpuinfo").is_file():
-        for line in pathlib.Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("flags"):
-                flags = set(line.split(":", 1)[1].split())
-                break
-    kernels = [k for k, need in _KERNEL_FLAGS.items() if need <= flags]
+    kernels = runnable_kernels()
     if len(kernels) < 2:
-        pytest.skip(f"this CPU runs fewer than two of the kernels {sorted(_KERNEL_FLAGS)}")
+        pytest.skip(f"this CPU runs fewer than two of the kernels {sorted(KERNEL_FLAGS)}")
     root = pathlib.Path(__file__).resolve().parent.parent
     out = {}
     for k in kernels:

@@ -6,6 +6,7 @@ import sys
 
 import numpy as np
 import pytest
+from openblas_kernels import runnable_kernels
 
 from fsv import linalg
 
@@ -57,6 +58,17 @@ def test_solve_and_inverse(rng):
         linalg.solve(np.zeros((3, 2)), np.ones(3))
 
 
+def test_rigid_inverse_inverts_a_rigid_transform(rng):
+    from fsv.rotation import exp_so3
+
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = exp_so3(rng.normal(size=3)), rng.normal(size=3)
+    inv = linalg.rigid_inverse(T)
+    np.testing.assert_allclose(inv @ T, np.eye(4), atol=1e-15)
+    np.testing.assert_allclose(inv, np.linalg.inv(T), atol=1e-15)
+    assert np.all(inv[3] == [0.0, 0.0, 0.0, 1.0])
+
+
 _PROBE = """
 import hashlib, numpy as np
 from fsv import linalg
@@ -65,7 +77,8 @@ A = rng.normal(size=(40, 3, 3)); J = rng.normal(size=(500, 26)); b = rng.normal(
 G = linalg.gram(J) + np.eye(26)
 out = [linalg.mm(A, A), linalg.vm(J[:, :3], A[0]), linalg.gram(J), linalg.solve(G, b), linalg.inv(G[:6, :6]),
        np.array(linalg.norm(J)), linalg.tmv(J, J[:, 0]),
-       linalg.correlate_valid(J[:, 0], b[:9]), linalg.convolve_full(b, J[:5, 1])]
+       linalg.correlate_valid(J[:, 0], b[:9]), linalg.convolve_full(b, J[:5, 1]),
+       linalg.rigid_inverse(np.vstack([np.hstack([A[1], b[:3, None]]), [0, 0, 0, 1]]))]
 print(hashlib.sha256(b"".join(np.ascontiguousarray(o).tobytes() for o in out)).hexdigest())
 """
 
@@ -73,7 +86,7 @@ print(hashlib.sha256(b"".join(np.ascontiguousarray(o).tobytes() for o in out)).h
 def test_same_bits_under_every_openblas_kernel():
     """The point of the module: OPENBLAS_CORETYPE changes NumPy's BLAS products, not these."""
     digests = set()
-    for kernel in ("Haswell", "Sandybridge", "Nehalem", "Prescott"):
+    for kernel in ("Haswell", "Sandybridge", "Nehalem", "Prescott", *(["SkylakeX"] if "SkylakeX" in runnable_kernels() else [])):
         env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
         out = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, check=True)
         digests.add(out.stdout.strip())

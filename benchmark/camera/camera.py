@@ -11,6 +11,7 @@ import yaml
 
 from benchmark.errors import BenchmarkError
 from fsv import Calibration
+from fsv.linalg import norm
 
 GL_FROM_CV = np.diag([1.0, -1.0, -1.0, 1.0])
 """Maps OpenCV camera coordinates to OpenGL camera coordinates (and back: it is its own inverse)."""
@@ -62,13 +63,13 @@ def look_at(position, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
     """
     p, t, u = (np.asarray(v, dtype=float).reshape(3) for v in (position, target, up))
     z = t - p
-    if np.linalg.norm(z) < 1e-9:
+    if norm(z) < 1e-9:
         raise BenchmarkError(f"camera position and look_at coincide: {p}")
-    z /= np.linalg.norm(z)
+    z /= norm(z)  # fsv.linalg's norm, not BLAS's: the same pose under every kernel
     x = np.cross(z, u)
-    if np.linalg.norm(x) < 1e-9:
+    if norm(x) < 1e-9:
         raise BenchmarkError(f"camera up {u} is parallel to the optical axis {z}")
-    x /= np.linalg.norm(x)
+    x /= norm(x)
     y = np.cross(z, x)
     T = np.eye(4)
     T[:3, :3] = np.stack([x, y, z], axis=1)

@@ -17,6 +17,7 @@ from benchmark.camera.camera import Camera
 from benchmark.camera.scene import LABEL_PALM, body_pose0, geom_trimesh
 from benchmark.errors import BenchmarkError
 from benchmark.world.skin import PULP_EXPONENT_PER_MM, PULP_REACH, PULP_STIFFNESS_N_PER_MM, Skin, skin_of
+from fsv.linalg import mm, mv, rigid_inverse
 
 RASTERISER = "fsv-bench cpu raster v1"
 """The name of the rasteriser, recorded with every rendered episode (its bits are pinned by
@@ -42,12 +43,12 @@ def _geometry(model, labels: np.ndarray) -> tuple:
         T[:3, 3] = model.geom_pos[g]
         body = int(model.geom_bodyid[g])
         if model.body_weldid[body] == 0 and model.body_mocapid[body] < 0:  # welded to the world
-            T = body_pose0(model, body) @ T
+            T = mm(body_pose0(model, body), T)
             body = 0  # the world body: identity pose
         kind = int(model.geom_type[g])
         if kind in (G.mjGEOM_CAPSULE, G.mjGEOM_SPHERE):
             half = float(model.geom_size[g, 1]) if kind == G.mjGEOM_CAPSULE else 0.0
-            ends.append(np.array([[0.0, 0.0, -half], [0.0, 0.0, half]]) @ T[:3, :3].T + T[:3, 3])
+            ends.append(np.stack([mv(T[:3, :3], np.array([0.0, 0.0, z])) for z in (-half, half)]) + T[:3, 3])
             cbody.append(body)
             radius.append(float(model.geom_size[g, 0]))
             clabel.append(labels[g])
@@ -177,7 +178,7 @@ class DepthRenderer:
             self._no_trans = np.zeros((1, 3))
         self.triangles = len(self._tri["faces"])
         self.capsules = len(self._cap["radius"])
-        cam_from_world = np.linalg.inv(camera.T_world_cam)
+        cam_from_world = rigid_inverse(camera.T_world_cam)
         self._R_cw, self._t_cw = cam_from_world[:3, :3].copy(), cam_from_world[:3, 3].copy()
         self._nbody = model.nbody
         K = np.asarray(camera.K, dtype=np.float64)

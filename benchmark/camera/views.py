@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from benchmark.camera.camera import Camera, load_camera, look_at
+from fsv.linalg import norm
 
 DISTANCE_M = (0.45, 0.70)
 """Range of the camera's distance from its target, [m]."""
@@ -51,7 +52,7 @@ class View:
 
 def _spherical(position, target) -> tuple:
     d = np.asarray(position, float) - np.asarray(target, float)
-    dist = float(np.linalg.norm(d))
+    dist = norm(d)
     return dist, math.degrees(math.asin(d[2] / dist)), math.degrees(math.atan2(d[1], d[0]))
 
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from fsv.linalg import mm, mv, norm
+from fsv.linalg import mm, norm, rigid_inverse
 
 SOURCES = ("hand", "box", "camera")
 """The sources of a lab's errors; ``lab-<source>`` applies that source's alone (an ablation)."""
@@ -210,16 +210,6 @@ def _rotation(rotvec) -> np.ndarray:
     k = v / angle
     K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
     return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * mm(K, K)
-
-
-def rigid_inverse(T: np.ndarray) -> np.ndarray:
-    """The inverse of a rigid transform (4, 4): ``[R^T, -R^T t]``, in a fixed order of operations
-    (no BLAS or LAPACK: the same bits under every kernel, ``fsv.linalg``)."""
-    T = np.asarray(T, dtype=float)
-    out = np.eye(4)
-    out[:3, :3] = T[:3, :3].T
-    out[:3, 3] = -mv(out[:3, :3], T[:3, 3])
-    return out
 
 
 def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:

@@ -34,9 +34,9 @@ def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str 
                                protocol: str = DEFAULT_PROTOCOL) -> tuple:
     """:func:`camera_input` and the :class:`benchmark.method.knowledge.Knowledge` record behind it."""
     from benchmark.method.init import tracker_init
-    from benchmark.method.knowledge import given, given_colour, rigid_inverse
+    from benchmark.method.knowledge import given, given_colour
     from benchmark.method.protocol import person_grip
-    from fsv.linalg import mm, mv
+    from fsv.linalg import mm, mv, rigid_inverse
     from fsv.method import CameraInput
 
     hand, obj, calib, known = given(episode, knowledge)

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsv.linalg import norm
+
 STILL_ACC = 0.3
 """A lifted box moves less than this during a hold, [m/s^2]."""
 STILL_OMEGA = 0.2
@@ -112,7 +114,7 @@ def episode_humanness(truth, fps: float, friction: float = float("nan")) -> Epis
     corr, lead = _best_lag(grip, load, coupling_frames(truth, fps), int(round(MAX_LAG_S * fps)))
     force, _ = truth.newton_euler_residual()
     margin = float(np.nanmedian(effective_margin(truth, friction)[up])) if up.any() and np.isfinite(friction) else float("nan")
-    weight = truth.mass * np.linalg.norm(truth.gravity)
+    weight = truth.mass * norm(truth.gravity)
     return EpisodeHumanness(
         peak_acc=float(acc[up].max()) if up.any() else float("nan"),
         peak_omega=float(omega[up].max()) if up.any() else float("nan"),

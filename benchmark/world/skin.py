@@ -43,6 +43,7 @@ import numpy as np
 from benchmark.world.anatomy import hand_spec
 from fsv import HandModel
 from fsv.hand import finger_of_segment, forward_kinematics
+from fsv.linalg import norm
 
 LATERAL = 1.12
 """Half-width of a digit's cross-section over its capsule's radius (finger breadth / depth about
@@ -298,7 +299,7 @@ def _palm_piece(hand: HandModel):
     v, f = _closed_piece(yy, rr, thenar_section)
     e_y = axis / length
     e_z = np.array([0.0, 0.0, 1.0]) - e_y[2] * e_y
-    e_z /= np.linalg.norm(e_z)
+    e_z /= norm(e_z)
     e_x = np.cross(e_y, e_z)
     v = a + v[:, :1] * e_x + v[:, 1:2] * e_y + v[:, 2:] * e_z
     return [slab, (v, _outward(v, f))]

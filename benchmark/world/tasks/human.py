@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from fsv.linalg import norm
+
 MIN_JERK_PEAK_ACC = 10.0 / np.sqrt(3.0)
 """Peak of |d2p/ds2| of the minimum-jerk profile 10 s^3 - 15 s^4 + 6 s^5 (at s = 1/2 -+ sqrt(3)/6)."""
 MIN_JERK_PEAK_VEL = 1.875
@@ -104,7 +106,7 @@ class Plan:
         r1 = r0 if rotation is None else np.asarray(rotation, float)
         if duration is None:
             a, alpha = TRANSPORT_PEAK_ACC.draw(self.rng), ROTATION_PEAK_ALPHA.draw(self.rng)
-            T = max(move_duration(np.linalg.norm(d1 - d0), a), move_duration(np.linalg.norm(r1 - r0), alpha))
+            T = max(move_duration(norm(d1 - d0), a), move_duration(norm(r1 - r0), alpha))
         else:
             T = float(duration)
         self.way.append((d1, r1))
