@@ -147,7 +147,7 @@ class AhrsParams:
             elif not (ok and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"AhrsParams.{f.name} must be a finite number >= 0, got {v!r}")
         if self.mounting_misalignment_rad + self.sensor_alignment_rad > math.pi / 2:
-            raise ScenarioError("AhrsParams: the misalignment bounds must add up to at most pi/2 rad, got "
+            raise ScenarioError("AhrsParams.mounting_misalignment_rad + sensor_alignment_rad must be at most pi/2, got "
                                 f"{self.mounting_misalignment_rad!r} + {self.sensor_alignment_rad!r}")
 
     def only(self, *sources: str) -> "AhrsParams":
@@ -304,9 +304,10 @@ def resample(signal: np.ndarray, shift_frames: np.ndarray) -> np.ndarray:
     if T < 2:
         raise ScenarioError(f"resampling needs at least 2 frames, got {T}")
     x = np.clip(np.arange(T) + np.asarray(shift_frames, dtype=float), 0.0, T - 1.0)
-    i = np.minimum(np.floor(x).astype(int), T - 2)
+    i = np.floor(x).astype(int)
     u = (x - i)[:, None]
-    padded = np.concatenate([2 * y[:1] - y[1:2], y, 2 * y[-1:] - y[-2:-1]])  # linear extension at the ends
+    step = y[-1:] - y[-2:-1]
+    padded = np.concatenate([2 * y[:1] - y[1:2], y, y[-1:] + step, y[-1:] + 2 * step])  # linear extension at the ends
     p0, p1, p2, p3 = padded[i], padded[i + 1], padded[i + 2], padded[i + 3]
     return p1 + 0.5 * u * ((p2 - p0) + u * ((2 * p0 - 5 * p1 + 4 * p2 - p3) + u * (3 * (p1 - p2) + (p3 - p0))))
 
