@@ -46,7 +46,7 @@ def test_the_datasheet_values_in_si_units():
 
 
 @pytest.mark.parametrize("field, value", [("acc_noise_density_mps2_rthz", -1.0), ("lever_arm_m", math.inf),
-                                          ("time_offset_s", math.nan), ("output_rate_hz", 0.0), ("gyro_range_radps", "1"),
+                                          ("time_offset_s", math.nan), ("output_rate_hz", 0.0), ("gyro_range_radps", "1"), ("acc_bandwidth_hz", math.inf),
                                           ("mounting_misalignment_rad", 2.0), ("acc_scale_factor_error", True)])
 def test_bad_parameters_are_refused_by_name(field, value):
     with pytest.raises(ScenarioError, match=re.escape(f"AhrsParams.{field}")):

@@ -63,8 +63,8 @@ def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | 
     return paths
 
 
-MTI_300_REFERENCE = ("a lab's Xsens MTi-300 (benchmark.paper.ahrs: datasheet noise and biases, scale factors, "
-                     "alignment, 1 deg mounting, 5 mm lever arm, clock offset within 1/60 s, 100 Hz output)")
+MTI_300_REFERENCE = (f"a lab's Xsens MTi-300 (benchmark.paper.ahrs: datasheet noise and biases, scale factors, "
+                     f"alignment, {MTI_300.caption()})")
 
 
 def lab_ahrs_report(episodes: list, scenarios: list, poses_label: str) -> tuple[Table1, list, dict]:

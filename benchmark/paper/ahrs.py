@@ -45,7 +45,9 @@ turn-on bias, the scale-factor errors, the mounting, the lever arm, the clock of
 output rate. g = 9.80665 m/s^2 converts the datasheet's g and ug.
 
 Every draw comes from ``scenario.rng("ahrs")`` (:func:`draw`), in a fixed order and count that do
-not depend on the parameters, so zeroing one error source leaves the others' draws unchanged.
+not depend on the parameters, so zeroing one error source leaves the others' draws unchanged. That
+stream depends on the scenario's seed only: episodes of one seed (Table 1's six excitations) share
+one drawn sensor, as one sensor mounted once would.
 """
 
 from __future__ import annotations
@@ -141,9 +143,12 @@ class AhrsParams:
         for f in fields(self):
             v = getattr(self, f.name)
             ok = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and not math.isnan(v)
-            if f.name in ("output_rate_hz", "acc_range_mps2", "gyro_range_radps", "acc_bandwidth_hz", "gyro_bandwidth_hz"):
+            if f.name in ("output_rate_hz", "acc_range_mps2", "gyro_range_radps"):
                 if not (ok and v > 0):
                     raise ScenarioError(f"AhrsParams.{f.name} must be a number > 0 (inf allowed), got {v!r}")
+            elif f.name in ("acc_bandwidth_hz", "gyro_bandwidth_hz"):
+                if not (ok and math.isfinite(v) and v > 0):
+                    raise ScenarioError(f"AhrsParams.{f.name} must be a finite number > 0, got {v!r}")
             elif not (ok and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"AhrsParams.{f.name} must be a finite number >= 0, got {v!r}")
         if self.mounting_misalignment_rad + self.sensor_alignment_rad > math.pi / 2:
@@ -157,6 +162,11 @@ class AhrsParams:
             raise ScenarioError(f"no such AHRS error source {bad[0]!r}; accepted: {', '.join(SOURCES)}")
         off = {k: (math.inf if k == "output_rate_hz" else 0.0) for s in SOURCES if s not in sources for k in SOURCES[s]}
         return replace(self, **off)
+
+    def caption(self) -> str:
+        """The lab's choices in a few words, for a table's caption."""
+        return (f"{math.degrees(self.mounting_misalignment_rad):g} deg mounting, {1e3 * self.lever_arm_m:g} mm lever arm, "
+                f"clock offset within {1e3 * self.time_offset_s:.1f} ms, {self.output_rate_hz:g} Hz output")
 
     def describe(self) -> dict:
         """The parameters as a JSON-ready dict (``inf`` as the string "inf")."""
