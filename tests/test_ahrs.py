@@ -65,6 +65,10 @@ def test_only_keeps_one_source_and_names_the_accepted_ones():
 def test_the_ideal_ahrs_reads_the_truth_bit_for_bit(analytic_truth):
     r = read(analytic_truth, 30.0, _rng(), IDEAL)
     assert np.array_equal(r.acc, analytic_truth.imu_acc) and np.array_equal(r.gyro, analytic_truth.imu_gyro)
+    with pytest.raises(ScenarioError, match="not k / 25 s"):
+        read(analytic_truth, 25.0, _rng())
+    with pytest.raises(ScenarioError, match="fps must be"):
+        read(analytic_truth, math.nan, _rng())
 
 
 def test_noise_std_is_the_density_times_the_root_of_the_bandwidth(analytic_truth_factory):
