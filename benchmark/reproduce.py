@@ -2,9 +2,9 @@
 
     fsv-bench reproduce [--only NAMES] [--write] [--data DIR] [--workers N] [--list]
 
-Each committed result (the reference run of the main command, Table 1, Table 2 and its variants,
-the shipped internal-force model) is a :class:`Result`: the documented commands that make it, the
-datasets it needs (generated once into ``--data``, default ``data/``, and resumed), and a
+Each committed result (the reference run of the main command, Table 1 against the ideal and a
+lab's AHRS, Table 2 and its variants, the shipped internal-force model) is a :class:`Result`: the
+documented commands that make it, the datasets it needs (generated once into ``--data``, default ``data/``, and resumed), and a
 comparison with tolerances. Without ``--write`` the results are made in a temporary folder and
 compared with the committed ones; every value that moved beyond its tolerance is printed and the
 command exits 1. With ``--write`` the committed files are replaced (each folder swapped in whole
@@ -266,6 +266,10 @@ RESULTS = (
     Result(name="table1", path="results/table1", datasets=(),
            commands=(("python", "-m", "benchmark.commands.table1", "--score", "--seeds", "0,1,2", "--out", "{out}"),),
            compare=_compare_csv("table1.csv")),
+    Result(name="table1-ahrs", path="results/table1_ahrs", datasets=(),
+           commands=(("python", "-m", "benchmark.commands.table1", "--score", "--seeds", "0,1,2", "--imu", "mti-300",
+                      "--out", "{out}"),),
+           compare=lambda new, old: _compare_csv("table1.csv")(new, old) + _compare_json("ahrs.json")(new, old)),
     Result(name="standard", path="results/standard", datasets=(),
            commands=(("fsv-bench", "leaderboard", "--suite", "standard", "--quiet", "--workers", "2", "--out",
                       "{out}"),),

@@ -5,11 +5,18 @@
 ``--calibrate`` tunes the differentiators on the calibration seeds, ``--sweep`` compares the best
 filters per window budget, ``--score`` scores the six-axis table (:mod:`benchmark.paper.table1`)
 and, with ``--out``, writes ``table1.md``, ``table1.csv`` and Fig. 4.
+
+    python -m benchmark.commands.table1 --score --seeds 0,1,2 --imu mti-300 --out results/table1_ahrs
+
+compares with a lab's AHRS instead of the truth (:mod:`benchmark.paper.ahrs`) and writes
+``table1.md``, ``table1.csv`` and ``ahrs.json`` (the sensor's parameters, each episode's drawn
+errors, and the table's standard deviations with each error source alone).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import sys
@@ -18,11 +25,13 @@ from pathlib import Path
 from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_bytes
 from benchmark.commands.pictures.fig4 import plot_fig4
 from benchmark.errors import ScenarioError
+from benchmark.paper.ahrs import IMU_CHOICES, MTI_300, SOURCES, lab_readings
 from benchmark.paper.table1 import (
     MAX_SUPPORT_FRAMES,
     POSES_LABEL,
     SIX_AXIS_TASKS,
     Table1,
+    episode_scenarios,
     episode_set,
     pose_error_stats,
     rms_errors,
@@ -54,6 +63,42 @@ def write_outputs(table: Table1, truth: Truth, kinematics: dict, out_dir: str | 
     return paths
 
 
+MTI_300_REFERENCE = (f"a lab's Xsens MTi-300 (benchmark.paper.ahrs: datasheet noise and biases, scale factors, "
+                     f"alignment, {MTI_300.caption()})")
+
+
+def lab_ahrs_report(episodes: list, scenarios: list, poses_label: str) -> tuple[Table1, list, dict]:
+    """Table 1 against the MTi-300 of :mod:`benchmark.paper.ahrs`, and what each error source does.
+
+    Args:
+        episodes: (truth, poses) pairs.
+        scenarios: Their scenarios (each reading draws from its ``"ahrs"`` stream).
+        poses_label: Where the poses came from.
+
+    Returns:
+        ``(table, kinematics, report)``; ``report`` (``ahrs.json``): ``params``, ``episodes`` (name
+        and drawn errors of each) and ``sources``: for each error source alone, and all together,
+        each method's ``acc_std`` [m/s^2] and ``gyro_std`` [rad/s].
+    """
+    from benchmark.world.scenario import episode_name
+
+    readings = [lab_readings(truth, sc) for (truth, _), sc in zip(episodes, scenarios)]
+    table, kins = score_episodes(episodes, poses_label=poses_label, readings=readings, reference=MTI_300_REFERENCE)
+    sources = {}
+    for name in (*SOURCES, "all"):
+        params = MTI_300 if name == "all" else MTI_300.only(name)
+        alone = [lab_readings(truth, sc, params) for (truth, _), sc in zip(episodes, scenarios)]
+        t, _ = score_episodes(episodes, poses_label=poses_label, readings=alone)
+        sources[name] = {m: {k: t.stats[m][k] for k in ("acc_std", "gyro_std")} for m in t.stats}
+    report = {
+        "sensor": "Xsens MTi-300 (benchmark.paper.ahrs)",
+        "params": MTI_300.describe(),
+        "episodes": [{"episode": episode_name(sc), **r.draw.summary()} for sc, r in zip(scenarios, readings)],
+        "sources": sources,
+    }
+    return table, kins, report
+
+
 def _csv_list(text: str) -> list[str]:
     return [x for x in (t.strip() for t in text.split(",")) if x]
 
@@ -74,6 +119,9 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--tracked", action="store_true", help="with --score: differentiate the tracker's poses (render + fsv.track; slow)"
     )
+    parser.add_argument("--imu", choices=IMU_CHOICES, default="ideal",
+                        help="with --score: compare with the simulator's truth (ideal) or a lab's Xsens MTi-300 "
+                             "(benchmark.paper.ahrs); the latter writes table1.md, table1.csv and ahrs.json")
     args = parser.parse_args(argv)
     if not (args.calibrate or args.sweep or args.score):
         parser.print_help()
@@ -108,7 +156,11 @@ def main(argv=None) -> int:
             raise ScenarioError(f"--seeds {seeds} overlap the calibration seeds {CALIBRATION_SEEDS}: they are never scored")
         episodes = episode_set(tasks, args.noise, seeds, tracked=args.tracked)
         label = "tracked poses (fsv.track, from depth)" if args.tracked else POSES_LABEL
-        table, kins = score_episodes(episodes, poses_label=label)
+        report = None
+        if args.imu == "ideal":
+            table, kins = score_episodes(episodes, poses_label=label)
+        else:
+            table, kins, report = lab_ahrs_report(episodes, episode_scenarios(tasks, args.noise, seeds), label)
         err = pose_error_stats(episodes)
         print(
             f"pose errors: {err['pos_std_mm']:.2f} mm and {err['rot_std_deg']:.2f} deg per axis (std), "
@@ -116,7 +168,22 @@ def main(argv=None) -> int:
         )
         print(f"Table 1 on tasks {','.join(tasks)}, seeds {','.join(map(str, seeds))}, noise {args.noise} m")
         print(table.markdown())
-        if args.out is not None:
+        if report is not None:
+            print("Standard deviations with each AHRS error source alone (acc [m/s^2] / gyro [rad/s], algebraic):")
+            for name, stats in report["sources"].items():
+                print(f"    {name}: {stats['algebraic']['acc_std']:.3f} / {stats['algebraic']['gyro_std']:.3f}")
+        if args.out is not None and report is not None:
+            tmp = staging_folder(args.out)
+            try:
+                write_bytes(tmp / "table1.md", (table.markdown() + "\n").encode())
+                write_bytes(tmp / "table1.csv", table.csv().encode())
+                write_bytes(tmp / "ahrs.json", (json.dumps(report, indent=1) + "\n").encode())
+                swap_folder(tmp, args.out)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)
+                raise
+            print(f"wrote {', '.join(str(args.out / n) for n in ('table1.md', 'table1.csv', 'ahrs.json'))}")
+        elif args.out is not None:
             panels = None
             by_task = {task: i * len(seeds) for i, task in enumerate(tasks)}  # first seed of each task
             wanted = [f"excite-{kind}{axis}" for kind in "tr" for axis in "xyz"]

@@ -8,6 +8,9 @@ the AHRS sees it) using ``Kinematics.imu``, rotational velocity with ``Truth.imu
 frame). The scored window is the set of frames where every method in the table has a defined
 estimate (``Kinematics.valid``), so all methods are scored on the same frames.
 
+``--imu mti-300`` compares with a lab's AHRS instead (:mod:`benchmark.paper.ahrs`: an Xsens MTi-300's
+noise, biases, scale factors, alignment, mounting, lever arm and clock offset), as the paper did.
+
 Fairness: every method's parameters are either declared in advance or tuned on calibration
 episodes whose seeds are never scored (``benchmark.world.motion.DECLARED``, ``TUNING``); the table
 prints them and says which. ``python -m benchmark.commands.table1 --calibrate`` re-runs the tuning.
@@ -20,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from benchmark.errors import ScenarioError
+from benchmark.paper.ahrs import AhrsReadings
 from benchmark.world.motion import CALIBRATION_SEEDS, DECLARED, TUNING
 from benchmark.world.truth import Truth
 from fsv import Kinematics, Poses
@@ -66,12 +70,23 @@ GAUSSIAN_GRID = gaussian_grid()
 ALGEBRAIC_GRID = algebraic_grid()
 
 
-def imu_errors(kin: Kinematics, truth: Truth) -> tuple[np.ndarray, np.ndarray]:
-    """Per-frame, per-axis errors of the AHRS readings implied by ``kin``: (acc (T,3), gyro (T,3))."""
+IDEAL_REFERENCE = "the simulator's truth (an ideal AHRS)"
+"""What Table 1 compares with unless given readings."""
+
+
+def imu_errors(kin: Kinematics, truth: Truth, readings: AhrsReadings | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Per-frame, per-axis errors of the AHRS readings implied by ``kin``: (acc (T,3), gyro (T,3)).
+
+    Against ``readings`` (a lab's AHRS, :mod:`benchmark.paper.ahrs`) if given, else against the
+    truth's ``imu_acc`` and ``imu_gyro``.
+    """
     if len(kin) != len(truth.t):
         raise ScenarioError(f"kinematics have {len(kin)} frames but the truth has {len(truth.t)}")
+    ref_acc, ref_gyro = (truth.imu_acc, truth.imu_gyro) if readings is None else (readings.acc, readings.gyro)
+    if ref_acc.shape != (len(truth.t), 3) or ref_gyro.shape != (len(truth.t), 3):
+        raise ScenarioError(f"the AHRS readings have shapes {ref_acc.shape} and {ref_gyro.shape}; the truth has {len(truth.t)} frames")
     acc, gyro = kin.imu(truth.gravity)
-    return acc - truth.imu_acc, gyro - truth.imu_gyro
+    return acc - ref_acc, gyro - ref_gyro
 
 
 def error_stats(kin: Kinematics, truth: Truth, window: np.ndarray) -> dict:
@@ -103,6 +118,7 @@ class Table1:
         tuning: method -> how the parameters were chosen.
         frames: Number of scored frames.
         poses: Where the differentiated poses came from.
+        reference: What the kinematics were compared with (printed unless the ideal AHRS).
     """
 
     stats: dict
@@ -110,6 +126,7 @@ class Table1:
     tuning: dict
     frames: int
     poses: str
+    reference: str = IDEAL_REFERENCE
 
     def summary(self) -> dict:
         """The ``kinematics`` block of summary.json."""
@@ -129,6 +146,8 @@ class Table1:
             lines.append(f"| {label} | " + " | ".join(cells) + " |")
         lines.append("")
         lines.append(f"Scored frames: {self.frames}. Poses: {self.poses}.")
+        if self.reference != IDEAL_REFERENCE:
+            lines.append(f"Compared with: {self.reference}.")
         for m in methods:
             lines.append(f"- {m}: {self.params[m]} ({self.tuning[m]})")
         return "\n".join(lines)
@@ -171,11 +190,17 @@ def score_episodes(
     configs: dict | None = None,
     tuning: dict | None = None,
     poses_label: str = POSES_LABEL,
+    readings: list[AhrsReadings] | None = None,
+    reference: str = IDEAL_REFERENCE,
 ) -> tuple[Table1, list[dict]]:
     """Table 1 pooled over several episodes (e.g. the six-axis excitations of the paper's §4.1).
 
     In each episode the scored window is the frames where every method is defined; the errors of
     all episodes' windows are pooled before taking the mean and standard deviation.
+
+    Args:
+        readings: One lab AHRS's readings per episode (:func:`benchmark.paper.ahrs.lab_readings`)
+            to compare with instead of the truth; ``reference`` names them in the table.
 
     Returns:
         ``(table, kinematics)`` with one dict method -> Kinematics per episode.
@@ -183,9 +208,11 @@ def score_episodes(
     configs = dict(DECLARED) if configs is None else dict(configs)
     tuning = dict(TUNING) if tuning is None else dict(tuning)
     methods = [m for m in METHODS if m in configs]
+    if readings is not None and len(readings) != len(episodes):
+        raise ScenarioError(f"{len(readings)} AHRS recordings for {len(episodes)} episodes")
     errors = {m: ([], []) for m in methods}
     all_kins, frames = [], 0
-    for truth, poses in episodes:
+    for e, (truth, poses) in enumerate(episodes):
         if len(poses) != len(truth.t) or not np.allclose(poses.t, truth.t):
             raise ScenarioError("poses and truth must share their frame times")
         kins = {m: differentiate_poses(poses, configs[m]) for m in methods}
@@ -193,7 +220,7 @@ def score_episodes(
         if not window.any():
             raise ScenarioError("the scored window is empty: the episode is shorter than the differentiators' stencils")
         for m, k in kins.items():
-            e_acc, e_gyro = imu_errors(k, truth)
+            e_acc, e_gyro = imu_errors(k, truth, None if readings is None else readings[e])
             errors[m][0].append(e_acc[window])
             errors[m][1].append(e_gyro[window])
         frames += int(window.sum())
@@ -202,7 +229,7 @@ def score_episodes(
         raise ScenarioError("Table 1 needs at least one episode")
     stats = {m: _stats(np.concatenate(a), np.concatenate(g)) for m, (a, g) in errors.items()}
     params = {m: configs[m].describe() for m in methods}
-    return Table1(stats, params, {m: tuning.get(m, "given") for m in methods}, frames, poses_label), all_kins
+    return Table1(stats, params, {m: tuning.get(m, "given") for m in methods}, frames, poses_label, reference), all_kins
 
 
 def tune(calibration: list[tuple[Truth, Poses]], grids: dict | None = None) -> tuple[dict, dict]:
@@ -272,6 +299,13 @@ def support_sweep(calibration: list[tuple[Truth, Poses]], supports=(9, 15, 21, 3
     return rows
 
 
+def episode_scenarios(tasks=SIX_AXIS_TASKS, noise_m: float = 0.01, seeds=CALIBRATION_SEEDS, duration_s: float | None = None) -> list:
+    """The scenarios of :func:`episode_set`, in its order (every seed of the first task, then the next)."""
+    from benchmark.world.scenario import Scenario
+
+    return [Scenario(task=task, noise_m=noise_m, seed=int(seed), duration_s=duration_s) for task in tasks for seed in seeds]
+
+
 def episode_set(
     tasks=SIX_AXIS_TASKS, noise_m: float = 0.01, seeds=CALIBRATION_SEEDS, duration_s: float | None = None, tracked: bool = False
 ):
@@ -282,25 +316,22 @@ def episode_set(
             about a minute per 10 s episode) instead of the tracker-like error model.
     """
     from benchmark.world.pose_error import tracker_like_poses
-    from benchmark.world.scenario import Scenario
     from benchmark.world.simulate import simulate
 
     out = []
-    for task in tasks:
-        for seed in seeds:
-            sc = Scenario(task=task, noise_m=noise_m, seed=int(seed), duration_s=duration_s)
-            ep = simulate(sc)
-            if tracked:
-                from benchmark.camera.render import render
-                from benchmark.method.init import tracker_init
-                from fsv.track.tracker import track
+    for sc in episode_scenarios(tasks, noise_m, seeds, duration_s):
+        ep = simulate(sc)
+        if tracked:
+            from benchmark.camera.render import render
+            from benchmark.method.init import tracker_init
+            from fsv.track.tracker import track
 
-                ep = render(ep)
-                init = tracker_init(ep.truth, sc, ep.hand_model)
-                poses = track(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, rng=sc.rng("tracker")).box
-            else:
-                poses = tracker_like_poses(ep.truth, sc)
-            out.append((ep.truth, poses))
+            ep = render(ep)
+            init = tracker_init(ep.truth, sc, ep.hand_model)
+            poses = track(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, rng=sc.rng("tracker")).box
+        else:
+            poses = tracker_like_poses(ep.truth, sc)
+        out.append((ep.truth, poses))
     return out
 
 
