@@ -23,16 +23,16 @@ def _work(*args, **kwargs):
 
 
 def _refused(argv, capsys, tmp_path) -> str:
-    """Runs ``fsv-bench argv`` in ``tmp_path``; asserts exit 2, one line, under 5 s, nothing written;
-    returns the line."""
+    """Runs ``fsv-bench argv`` in ``tmp_path``; asserts exit 2, one line, under 5 s of this process's
+    CPU (not wall time, which a loaded machine stretches), nothing written; returns the line."""
     before = sorted(tmp_path.rglob("*"))
     capsys.readouterr()
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     try:
         code = main(argv)
     except SystemExit as e:  # argparse's own errors
         code = e.code
-    seconds = time.perf_counter() - t0
+    seconds = time.process_time() - t0
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1, err
     assert seconds < 5
@@ -41,9 +41,9 @@ def _refused(argv, capsys, tmp_path) -> str:
 
 
 def test_ranges_are_counted_without_being_built():
-    t0 = time.perf_counter()
+    t0 = time.process_time()  # CPU, not wall time: building the range would take seconds of it
     assert count_ints("0-100000000,5", "--seeds") == 100_000_002
-    assert time.perf_counter() - t0 < 0.1
+    assert time.process_time() - t0 < 0.1
     assert parse_ints("0,2,5-7", "--seeds") == (0, 2, 5, 6, 7)
     with pytest.raises(ValueError, match=r"--seeds '0-100000000': 100,000,001 values, more than the 100,000 accepted"):
         parse_ints("0-100000000", "--seeds")
@@ -128,9 +128,17 @@ def test_a_cache_that_is_a_file_is_refused_in_one_line(command, tmp_path, capsys
     ["--out", "r", "--init-perturbation", "nan"],
 ])
 def test_the_console_script_refuses_in_seconds(argv, tmp_path):
-    t0 = time.perf_counter()
+    """One line, exit 2, nothing written, within 5 s of CPU (measured 1.7-2.0 s, the imports; CPU
+    time, not wall time, which a loaded machine stretches: 3 s at load 6, 7.5 s at load 9)."""
+    import resource
+
+    def cpu_of_children():
+        r = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return r.ru_utime + r.ru_stime
+
+    before = cpu_of_children()
     out = subprocess.run([sys.executable, "-m", "benchmark.commands.entry", *argv], cwd=tmp_path, capture_output=True,
-                         text=True, timeout=60, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+                         text=True, timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     assert out.returncode == 2 and out.stderr.count("\n") == 1, out.stderr
-    assert time.perf_counter() - t0 < 5
+    assert cpu_of_children() - before < 5
     assert not list(tmp_path.iterdir())
