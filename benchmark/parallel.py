@@ -15,8 +15,8 @@ from __future__ import annotations
 import pickle
 from typing import Callable, Iterator
 
-from benchmark import NUMPY_BASELINE_ENV
 from benchmark.errors import BenchmarkError, DatasetError
+from benchmark.simd import NUMPY_BASELINE_ENV
 
 
 class RayUnavailable(DatasetError):

@@ -1,4 +1,4 @@
-"""benchmark/__init__.py pins NumPy's vector loops to the baseline: the same truth on CPUs with and without AVX-512."""
+"""benchmark.simd: NumPy's vector loops pinned to the baseline, the same truth on CPUs with and without AVX-512."""
 
 import json
 import os
@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from benchmark import NUMPY_BASELINE_ENV
+from benchmark.simd import NUMPY_BASELINE_ENV, pin_numpy_baseline
 from fsv.provenance import numpy_simd
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -45,6 +45,12 @@ def _run(order: str, env: dict, *extra) -> dict:
 def test_this_process_runs_numpy_at_its_baseline():
     assert NUMPY_BASELINE_ENV == {"NPY_ENABLE_CPU_FEATURES": " "}
     assert numpy_simd() == {"dispatched": [], "baseline": True}
+
+
+def test_the_pin_leaves_a_process_that_already_imported_numpy_alone(monkeypatch):
+    monkeypatch.setenv("NPY_DISABLE_CPU_FEATURES", "X86_V4")
+    assert pin_numpy_baseline() is False  # NumPy is imported here: its choice stands
+    assert os.environ["NPY_DISABLE_CPU_FEATURES"] == "X86_V4"
 
 
 def test_the_truth_is_the_same_with_and_without_avx512():
