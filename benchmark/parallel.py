@@ -16,6 +16,7 @@ import pickle
 from typing import Callable, Iterator
 
 from benchmark.errors import BenchmarkError, DatasetError
+from benchmark.simd import NUMPY_BASELINE_ENV
 
 
 class RayUnavailable(DatasetError):
@@ -180,7 +181,9 @@ def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
 
     host = (address[len("ray://"):] if address.startswith("ray://") else address).rpartition(":")[0]
     local = {"_node_ip_address": "127.0.0.1"} if host in ("127.0.0.1", "localhost") else {}  # stay on loopback
-    ray.init(address=address, ignore_reinit_error=True, log_to_driver=False, **local)
+    # the job's workers run NumPy at its baseline as this process does (benchmark/__init__.py)
+    ray.init(address=address, ignore_reinit_error=True, log_to_driver=False,
+             runtime_env={"env_vars": dict(NUMPY_BASELINE_ENV)}, **local)
     remote = ray.remote(fn)
     refs = {remote.remote(job): i for i, job in enumerate(jobs)}
     pending = list(refs)

@@ -22,6 +22,10 @@ Keys:
                   BLAS libraries loaded in this process (``threadpoolctl``), with the file's basename;
                   "architecture" is the kernel OpenBLAS picked (e.g. "Haswell")
     openblas_coretype  the ``OPENBLAS_CORETYPE`` environment variable, only if it is set
+    numpy_simd    {"dispatched": [features NumPy's vector loops use beyond its baseline],
+                  "baseline": bool}: ``baseline`` True when none is used (the pin that ``benchmark``
+                  sets before NumPy is imported; other choices give other last bits to NumPy's
+                  transcendental functions and sorts); absent before NumPy is imported
 
 Everything but ``blas`` and ``openblas_coretype`` is computed once per process (the loaded
 libraries and their thread counts can change, so those two are read on every call). Nothing here
@@ -64,7 +68,23 @@ def provenance() -> dict:
     coretype = os.environ.get("OPENBLAS_CORETYPE")
     if coretype is not None:
         out["openblas_coretype"] = coretype
+    simd = numpy_simd()
+    if simd is not None:
+        out["numpy_simd"] = simd
     return out
+
+
+def numpy_simd() -> dict | None:
+    """Which of NumPy's run-time dispatched CPU features its vector loops use in this process:
+    ``{"dispatched": [names], "baseline": bool}``, or None if NumPy is not imported (or does not say)."""
+    core = sys.modules.get("numpy._core._multiarray_umath") or sys.modules.get("numpy.core._multiarray_umath")
+    if core is None:
+        return None
+    features, dispatch = getattr(core, "__cpu_features__", None), getattr(core, "__cpu_dispatch__", None)
+    if features is None or dispatch is None:
+        return None
+    used = [name for name in dispatch if features.get(name)]
+    return {"dispatched": used, "baseline": not used}
 
 
 @functools.lru_cache(maxsize=1)

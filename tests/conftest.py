@@ -2,6 +2,8 @@
 
 import os
 
+import benchmark  # noqa: F401  (NumPy at its baseline instructions: set before NumPy is imported)
+
 # Headless rendering on the CPU, set before any test module imports mujoco or pyrender.
 os.environ.setdefault("MUJOCO_GL", "egl")
 os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
