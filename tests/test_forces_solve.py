@@ -307,14 +307,13 @@ def test_a_violation_within_the_solvers_precision_counts_as_solved():
     # box slides on the table with its force exactly on the cone; the least-violation answer then
     # explains the motion to 1.3e-6 N (mostly the slack weight's own trade-off) and is reported
     # solved, unless the tolerance is 0.
-    exact_mu = ForceSettings(friction_error_deg=0.0)  # the friction taken as exact
     model, contacts, kin = _single_contact((0.8 * (1 + 2e-7), -1.0, 0.0))
-    strict = nominal_forces(kin, contacts, model, settings=ForceSettings(feasibility_tol=0.0, friction_error_deg=0.0))
+    strict = nominal_forces(kin, contacts, model, settings=ForceSettings(feasibility_tol=0.0))
     assert strict.status[0] == FrameStatus.LEAST_VIOLATION and 0 < np.linalg.norm(strict.residual[0]) < 1e-5
-    sol = nominal_forces(kin, contacts, model, settings=exact_mu)
+    sol = nominal_forces(kin, contacts, model)
     assert sol.status[0] == FrameStatus.OPTIMAL and np.allclose(sol.force, strict.force)
     model, contacts, kin = _single_contact((0.8 * 1.01, -1.0, 0.0))  # 1 % outside: a real violation
-    assert nominal_forces(kin, contacts, model, settings=exact_mu).status[0] == FrameStatus.LEAST_VIOLATION
+    assert nominal_forces(kin, contacts, model).status[0] == FrameStatus.LEAST_VIOLATION
 
 
 def _pinch_with_a_candidate(gap_m):
@@ -369,28 +368,3 @@ def test_contacts_used_checks_the_fingers():
     other = Contacts(["a", "b"], contacts.active, contacts.sliding, contacts.point, contacts.normal, contacts.slide_dir)
     with pytest.raises(InputError, match="fingers"):
         sol.contacts_used(other)
-
-
-def _push_at_angle(ratio):
-    """One finger at the +y face pushing with tangential / normal force ``ratio``."""
-    model = box_model(friction=0.8)
-    h = model.half_extents
-    point = np.array([[[0.0, h[1], 0.0]]])
-    contacts = Contacts(finger_names=["index"], active=[[True]], sliding=[[False]], point=point,
-                        normal=np.array([[[0.0, -1.0, 0.0]]]), slide_dir=np.zeros((1, 1, 3)), gap=[[0.0]])
-    force = np.array([[[0.0, -3.0, 3.0 * ratio]]])
-    return model, contacts, kinematics_for(np.random.default_rng(0), force, point, model, rot=np.eye(3)[None])
-
-
-def test_a_friction_a_little_too_low_is_widened_within_its_stated_error():
-    # tan(atan(0.8) + 3 deg) = 0.874: a push at 0.85 needs it, one at 0.9 does not fit
-    model, contacts, kin = _push_at_angle(0.85)
-    sol = nominal_forces(kin, contacts, model)
-    assert sol.status[0] == FrameStatus.FRICTION_WIDENED
-    assert _rel_residual(sol)[0] <= REL
-    f = sol.nominal[0, 0]
-    assert np.hypot(f[0], f[2]) / -f[1] == pytest.approx(0.85, rel=1e-4)
-    off = ForceSettings(friction_error_deg=0.0)
-    assert nominal_forces(kin, contacts, model, settings=off).status[0] == FrameStatus.LEAST_VIOLATION
-    model, contacts, kin = _push_at_angle(0.9)
-    assert nominal_forces(kin, contacts, model).status[0] == FrameStatus.LEAST_VIOLATION

@@ -31,9 +31,6 @@ class FrameStatus(IntEnum):
     CONTACTS_ADDED: infeasible with the given contacts (kinetic and static friction); solved with
         the fingers near the surface added as static contacts (``ForceSettings.repair_gap_m``,
         ``Contacts.gap``); ``active`` includes them.
-    FRICTION_WIDENED: infeasible with the given friction coefficient (and with the contacts
-        added); solved with the finger friction raised to the upper end of its stated error
-        (``ForceSettings.friction_error_deg``), the contacts static.
     """
 
     OPTIMAL = 0
@@ -44,11 +41,9 @@ class FrameStatus(IntEnum):
     STATIC_FRICTION = 5
     IMPLAUSIBLE = 6
     CONTACTS_ADDED = 7
-    FRICTION_WIDENED = 8
 
 
-SOLVED = (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION, FrameStatus.CONTACTS_ADDED,
-          FrameStatus.FRICTION_WIDENED)
+SOLVED = (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION, FrameStatus.CONTACTS_ADDED)
 """Statuses whose forces satisfy the cones and Newton–Euler exactly."""
 
 FALLBACKS = (FrameStatus.LEAST_VIOLATION, FrameStatus.FAILED, FrameStatus.IMPLAUSIBLE)

@@ -30,12 +30,7 @@ is still infeasible, a contact is missing: the fingers the tracker saw near the 
 it (``Contacts.gap`` at most ``settings.repair_gap_m``) are added as static contacts at their pads'
 projections and the frame is solved again, flagged :attr:`FrameStatus.CONTACTS_ADDED` when that
 succeeds (the solution's ``active`` then includes them, and :meth:`ForceSolution.contacts_used`
-passes them on to the next stage). If it is still infeasible, the finger friction coefficient, known only to the error of its
-measurement (a tilt test reads the slip angle to ``settings.friction_error_deg``), is raised to
-tan(atan(mu) + ``FRICTION_ERROR_SIGMAS`` x that error) with the contacts static (the tracked ones,
-then with the candidates added), flagged :attr:`FrameStatus.FRICTION_WIDENED` when that succeeds: a
-coefficient measured a little low does not make the motion impossible. If it is still infeasible
-(e.g. a single contact that would have
+passes them on to the next stage). If it is still infeasible (e.g. a single contact that would have
 to pull), it is solved with the tracked contacts and a slack σ on the nominal wrench equality,
 ``slack_weight`` ||σ||² added to the cost: the least-violation answer, flagged
 :attr:`FrameStatus.LEAST_VIOLATION`.
@@ -47,9 +42,8 @@ motion and the grasp's size can need at most; a frame whose finger forces exceed
 
 from __future__ import annotations
 
-import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -57,7 +51,7 @@ from fsv._check import as_array, positive, same_length
 from fsv.errors import InputError
 from fsv.forces.environment import TableContacts, table_contacts
 from fsv.forces.program import OK, Layout, Program, Weights
-from fsv.forces.solution import SOLVED, ForceSolution, FrameStatus
+from fsv.forces.solution import ForceSolution, FrameStatus
 from fsv.forces.wrench import GRAVITY, required_wrench, tangent_basis, to_object_frame
 from fsv.models import ObjectModel
 from fsv.types import Contacts, Kinematics
@@ -107,16 +101,6 @@ same contact precision (0.968-0.969); 0.05 m gained little more. Pads within 35 
 contact detector's 6-12 mm hysteresis rejects under hand-tracking errors of 1-3 cm."""
 
 
-FRICTION_ERROR_DEG = 1.5
-"""The stated error (one standard deviation) of the finger friction coefficient, as the slip angle
-of a tilt test, mu = tan(theta), [deg]: an inclinometer read to 1.5 degrees (the lab's
-``benchmark.method.knowledge.TILT_SD_RAD``; a lab states its own)."""
-
-FRICTION_ERROR_SIGMAS = 2.0
-"""How far above its measured value the finger friction may be taken on a frame no force explains:
-two standard deviations of its error (a one-sided 97.7 % bound), a choice made in advance."""
-
-
 @dataclass(frozen=True)
 class ForceSettings:
     """Modelling and solver choices of the force programs.
@@ -138,9 +122,6 @@ class ForceSettings:
         repair_gap_m: An infeasible frame is solved again with the inactive fingers whose
             ``Contacts.gap`` is at most this added as static contacts, [m]; 0 = off (see
             :data:`REPAIR_GAP_M`).
-        friction_error_deg: Stated error of the finger friction, as a tilt test's slip angle,
-            [deg]; an infeasible frame is solved again with the friction
-            ``FRICTION_ERROR_SIGMAS`` errors higher (module docstring); 0 = off.
     """
 
     table: bool = True
@@ -154,12 +135,8 @@ class ForceSettings:
     feasibility_tol: float = FEASIBILITY_TOL
     bound_factor: float = BOUND_FACTOR
     repair_gap_m: float = REPAIR_GAP_M
-    friction_error_deg: float = FRICTION_ERROR_DEG
 
     def __post_init__(self):
-        if not (np.isfinite(self.friction_error_deg) and 0 <= self.friction_error_deg < 30):
-            raise InputError(f"ForceSettings.friction_error_deg must be an angle in [0, 30) degrees, "
-                             f"got {self.friction_error_deg!r}")
         for name in ("table_height_tol_m", "regularization", "feasibility_tol", "repair_gap_m"):
             v = getattr(self, name)
             if not (np.isfinite(v) and v >= 0):
@@ -340,14 +317,10 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
         regularization=settings.regularization,
         max_iter=settings.max_iter,
     )
-    widened = None
-    if settings.friction_error_deg > 0:
-        theta = math.atan(model.friction) + math.radians(FRICTION_ERROR_SIGMAS * settings.friction_error_deg)
-        widened = replace(weights, finger_friction=math.tan(min(theta, math.radians(89.0))))
     sliding = contacts.sliding & use
     fitted = use & np.isfinite(target) & (kind != "nominal")
     target = np.where(fitted, target, 0.0)
-    frames = _Frames(kind=kind, K=K, weights=weights, widened=widened, bank=bank, required=required, target=target, use=use,
+    frames = _Frames(kind=kind, K=K, weights=weights, bank=bank, required=required, target=target, use=use,
                      sliding=sliding, fitted=fitted, corners_on=corners_on, candidates=candidates, settings=settings)
     # Per frame the rows of Program.solve: nominal fingers (K), internal fingers (K), nominal table
     # corners (8), internal corners (8); one row block per frame keeps the loop to a single copy.
@@ -373,7 +346,8 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
     if kind == "nominal" and np.isfinite(settings.bound_factor):
         bound = force_bound(required, model.friction, float(np.min(model.size_m)) / 2, settings.bound_factor)
         total = np.sqrt(np.sum(out[:, :K] ** 2, axis=2)).sum(axis=1)
-        absurd = np.isin(status, [int(s) for s in (*SOLVED, FrameStatus.LEAST_VIOLATION)])
+        absurd = np.isin(status, [int(s) for s in (FrameStatus.OPTIMAL, FrameStatus.STATIC_FRICTION,
+                                                   FrameStatus.CONTACTS_ADDED, FrameStatus.LEAST_VIOLATION)])
         absurd &= total > bound
         status[absurd] = FrameStatus.IMPLAUSIBLE
         out[absurd] = np.nan
@@ -386,18 +360,18 @@ class _Frames:
     the per-frame fallbacks. ``use`` and ``sliding`` are the caller's arrays: a fallback that adds
     contacts or holds sliding ones writes its frame's row of them."""
 
-    def __init__(self, *, kind, K, weights, widened, bank, required, target, use, sliding, fitted, corners_on,
-                 candidates, settings):
-        self.kind, self.K, self.weights, self.widened, self.settings = kind, K, weights, widened, settings
+    def __init__(self, *, kind, K, weights, bank, required, target, use, sliding, fitted, corners_on, candidates,
+                 settings):
+        self.kind, self.K, self.weights, self.settings = kind, K, weights, settings
         self.bank, self.required, self.target = bank, required, target
         self.use, self.sliding, self.fitted, self.corners_on, self.candidates = use, sliding, fitted, corners_on, candidates
         self.programs: dict = {}
 
-    def _program(self, slack: bool, key: bytes, use, sliding, fitted, corners_on, widened: bool = False):
-        prog = self.programs.get((key, slack, widened))
+    def _program(self, slack: bool, key: bytes, use, sliding, fitted, corners_on):
+        prog = self.programs.get((key, slack))
         if prog is None:
-            prog = self.programs[(key, slack, widened)] = _program(
-                slack, self.kind, use, sliding, fitted, corners_on, self.widened if widened else self.weights, self.K)
+            prog = self.programs[(key, slack)] = _program(slack, self.kind, use, sliding, fitted, corners_on,
+                                                          self.weights, self.K)
         return prog
 
     def assemble(self, keys: list, frames: list, seconds: np.ndarray) -> list:
@@ -418,11 +392,11 @@ class _Frames:
 
     def solve(self, t: int, key: bytes, prepared) -> tuple:
         """Frame ``t``: its layout's program, then the fallbacks (static friction, contacts added,
-        friction widened, least violation); ``(forces (2K + 16, 3), status, objective, iterations)``."""
+        least violation); ``(forces (2K + 16, 3), status, objective, iterations)``."""
         K, use, sliding, fitted, corners_on = self.K, self.use, self.sliding, self.fitted, self.corners_on
         args = (self.bank[t], self.required[t], self.target[t])
         status = FrameStatus.OPTIMAL
-        forces, code, objective, iterations = self.programs[(key, False, False)].run(prepared)
+        forces, code, objective, iterations = self.programs[(key, False)].run(prepared)
         if code not in OK and self.settings.static_retry and sliding[t].any():
             held = np.zeros(K, bool)
             static = self._program(False, np.concatenate([use[t], held, fitted[t], corners_on[t]]).tobytes(),
@@ -441,17 +415,6 @@ class _Frames:
                 forces, code, objective, iterations = got
                 status = FrameStatus.CONTACTS_ADDED
                 use[t], sliding[t] = more, held
-        if code not in OK and self.widened is not None:
-            held = np.zeros(K, bool) if self.settings.static_retry else sliding[t]
-            tries = [use[t].copy()] + ([use[t] | self.candidates[t]] if self.candidates[t].any() else [])
-            for more in tries:
-                got = self._program(False, np.concatenate([more, held, fitted[t], corners_on[t]]).tobytes(),
-                                    more, held, fitted[t], corners_on[t], widened=True).solve(*args)
-                if got[1] in OK:
-                    forces, code, objective, iterations = got
-                    status = FrameStatus.FRICTION_WIDENED
-                    use[t], sliding[t] = more, held
-                    break
         if code not in OK:
             retry = self._program(True, key, use[t], sliding[t], fitted[t], corners_on[t])
             forces, code, objective, iterations = retry.solve(*args)
