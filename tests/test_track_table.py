@@ -40,7 +40,11 @@ def test_the_table_is_fitted_where_the_depth_shows_it():
     calib = _camera()
     n, d = _tilted(0.5, 0.004)  # a calibration 0.5 degrees and 4 mm off
     depth = _plane_depth(calib, n, d, noise=0.005)
-    plane = fit_table(depth, calib, np.array([0.0, 0.0, 0.03]), np.eye(3), MODEL)
+    box = np.array([0.1, 0.05, 0.03])
+    height = fit_table(depth, calib, box, np.eye(3), MODEL)  # the default: its height under the box
+    assert height.fitted and height.normal.tolist() == [0.0, 0.0, 1.0]
+    assert height.offset == pytest.approx((d - n[0] * 0.1) / n[2], abs=3e-4)  # 3.1 mm, not 4
+    plane = fit_table(depth, calib, box, np.eye(3), MODEL, config=TableFitConfig(tilt=True))
     assert plane.fitted and plane.points > 10000
     assert np.degrees(np.arccos(plane.normal @ n)) < 0.05
     assert plane.offset == pytest.approx(d, abs=3e-4)
@@ -56,7 +60,7 @@ def test_the_box_and_what_stands_above_the_table_are_left_out():
     patch = (abs(u - 80) < 30) & (abs(v - 60) < 20)
     depth = np.where(patch, box, depth)  # ... seen over a patch of the image
     centre = calib.T_world_cam[:3, 3] + box[60, 80] * (calib.T_world_cam[:3, :3] @ [0.0, 0.0, 1.0])
-    plane = fit_table(depth, calib, centre, np.eye(3), MODEL, config=TableFitConfig(box_margin_m=0.0))
+    plane = fit_table(depth, calib, centre, np.eye(3), MODEL, config=TableFitConfig(box_margin_m=0.0, tilt=True))
     assert np.degrees(np.arccos(plane.normal @ n)) < 0.01 and plane.offset == pytest.approx(d, abs=1e-4)
 
 
@@ -65,7 +69,7 @@ def test_no_table_near_the_believed_one_keeps_the_calibrations():
     far = fit_table(_plane_depth(calib, np.array([0.0, 0.0, 1.0]), 0.05), calib, np.zeros(3), np.eye(3), MODEL)
     assert not far.fitted and far.offset == 0.0 and far.normal.tolist() == [0.0, 0.0, 1.0]
     steep = fit_table(_plane_depth(calib, *_tilted(5.0, 0.0)), calib, np.zeros(3), np.eye(3), MODEL,
-                      config=TableFitConfig(band_m=0.2))
+                      config=TableFitConfig(band_m=0.2, tilt=True))
     assert not steep.fitted
     empty = fit_table(np.zeros((120, 160), np.float32), calib, np.zeros(3), np.eye(3), MODEL)
     assert not empty.fitted
