@@ -4,9 +4,9 @@ import pytest
 from fsv import InputError
 from fsv.forces.environment import table_contacts
 from fsv.kinematics import kinematics_in_frame
-from fsv.linalg import mm, mv
+from fsv.linalg import mm, mv, rigid_inverse
 from fsv.models import ObjectModel
-from fsv.track.table import TableFitConfig, TablePlane, fit_table, rigid_inverse, table_frame
+from fsv.track.table import TableFitConfig, TablePlane, fit_table, table_frame
 from fsv.types import Calibration, Kinematics
 
 SIZE = np.array([0.171, 0.111, 0.06])

@@ -27,7 +27,7 @@ import numpy as np
 
 from fsv._check import positive
 from fsv.errors import InputError
-from fsv.linalg import gram, mm, mv, solve, vm
+from fsv.linalg import gram, mm, solve, vm
 from fsv.models import ObjectModel
 from fsv.types import Calibration
 
@@ -175,10 +175,3 @@ def table_frame(plane: TablePlane) -> np.ndarray:
     out[2, 3] = -plane.offset
     return out
 
-
-def rigid_inverse(T: np.ndarray) -> np.ndarray:
-    """Inverse of a rigid motion (4, 4), without BLAS."""
-    out = np.eye(4)
-    out[:3, :3] = T[:3, :3].T
-    out[:3, 3] = -mv(T[:3, :3].T, T[:3, 3])
-    return out

@@ -12,13 +12,13 @@ import numpy as np
 
 from fsv._check import as_array
 from fsv.errors import InputError
-from fsv.linalg import mm, mv
+from fsv.linalg import mm, mv, rigid_inverse
 from fsv.models import HandModel, ObjectModel
 from fsv.rotation import quat_to_rot, rot_to_quat
 from fsv.track.contacts import ContactConfig, detect_contacts
 from fsv.track.hand import HandState, HandTracker, HandTrackerConfig
 from fsv.track.object import BoxTracker, BoxTrackerConfig, predict_box_depth
-from fsv.track.table import TableFitConfig, TablePlane, fit_table, rigid_inverse, table_frame
+from fsv.track.table import TableFitConfig, TablePlane, fit_table, table_frame
 from fsv.types import Calibration, Contacts, DepthVideo, Poses
 
 
