@@ -82,7 +82,22 @@ def test_sliding_starts_on_evidence_and_stops_below_the_lower_speed():
     c = detect_contacts(jump, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",), cfg)
     assert not c.sliding.any()
     assert detect_contacts(jump, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",),
-                           ContactConfig(slide_window=1, median_frames=0, slide_frames=1)).sliding.any()
+                           ContactConfig(slide_window=1, median_frames=0, slide_frames=1,
+                                         slide_jump_share=1.0)).sliding.any()
+
+
+def test_a_contact_point_that_jumps_does_not_slide():
+    # A hidden finger found again 15 mm from where the occlusion prior held it: one step. Over the
+    # default window (3 frames each side) the step reads 0.075 m/s on six frames: a slide without
+    # the jump test, none with it; a steady 0.075 m/s slide is one with both.
+    r = 0.008
+    step = _speeds([0.0] * 12 + [0.45] + [0.0] * 12)
+    steady = _speeds([0.075] * 25)
+    T = len(step)
+    for tips, slides, share in ((step, False, 0.5), (step, True, 1.0), (steady, True, 0.5)):
+        c = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",),
+                            ContactConfig(slide_jump_share=share))
+        assert c.sliding.any() == slides
 
 
 def test_an_unseen_finger_keeps_its_last_observed_contact_point():
@@ -109,6 +124,8 @@ def test_bad_inputs_are_named():
         ContactConfig(opposition_range_m=0.0)
     with pytest.raises(InputError, match="finger_share"):
         ContactConfig(finger_share=(("index", -1.0),))
+    with pytest.raises(InputError, match="slide_jump_share"):
+        ContactConfig(slide_jump_share=0.0)
     with pytest.raises(InputError, match="seen_off_share"):
         ContactConfig(seen_off_share=1.0)
     with pytest.raises(InputError, match="seen_off_frames"):
