@@ -30,8 +30,11 @@ def test_contact_hysteresis_and_object_frame_point():
     gaps = np.array([0.02, 0.005, 0.009, 0.011, 0.013, 0.004])
     # the finger sits over the box's +x face (world +y) at object point (HALF_x, 0.01, 0.005)
     tips = np.array([[pos + R @ [HALF[0] + r + g, 0.01, 0.005]] for g in gaps])
-    c = detect_contacts(tips, np.array([r]), np.ones((6, 1), bool), box_poses(6, pos, R), MODEL, ("thumb",))
+    c = detect_contacts(tips, np.array([r]), np.ones((6, 1), bool), box_poses(6, pos, R), MODEL, ("thumb",),
+                        ContactConfig(bridge_frames=0))
     assert c.active[:, 0].tolist() == [False, True, True, True, False, True]
+    bridged = detect_contacts(tips, np.array([r]), np.ones((6, 1), bool), box_poses(6, pos, R), MODEL, ("thumb",))
+    assert bridged.active[:, 0].tolist() == [False, True, True, True, True, True]  # one frame off: bridged
     np.testing.assert_allclose(c.point[1, 0], [HALF[0], 0.01, 0.005], atol=1e-12)
     np.testing.assert_allclose(c.normal[1, 0], [-1, 0, 0])
     # every frame's pad gap is passed on, and a finger off the surface keeps its projection there
@@ -124,6 +127,8 @@ def test_bad_inputs_are_named():
         ContactConfig(opposition_range_m=0.0)
     with pytest.raises(InputError, match="finger_share"):
         ContactConfig(finger_share=(("index", -1.0),))
+    with pytest.raises(InputError, match="bridge_frames"):
+        ContactConfig(bridge_frames=-1)
     with pytest.raises(InputError, match="slide_jump_share"):
         ContactConfig(slide_jump_share=0.0)
     with pytest.raises(InputError, match="seen_off_share"):
@@ -252,3 +257,20 @@ def test_the_grasp_keeps_three_digits():
         [False, False, False, False, True]
     assert not out_of_grasp(active[:, :4], observed[:, :4], gap[:, :4], ContactConfig(grasp_min_digits=4)).any()
     assert detect_contacts(tips, rad, observed, poses, MODEL, names).active.shape == (T, 5)
+
+
+def test_a_break_of_two_frames_in_a_contact_is_bridged():
+    r = 0.008
+    gaps = np.array([0.0] * 5 + [0.02] + [0.0] * 5 + [0.02] * 2 + [0.0] * 5 + [0.02] * 3 + [0.0] * 5 + [0.02] * 2)
+    T = len(gaps)
+    tips = np.stack([[0.1 + 0.02 * (i > 8), 0.2 + HALF[1] + r + g, 0.03] for i, g in enumerate(gaps)])[:, None, :]
+    seen = np.ones((T, 1), bool)
+    off = detect_contacts(tips, np.array([r]), seen, box_poses(T), MODEL, ("index",), ContactConfig(bridge_frames=0))
+    assert off.active[:, 0].tolist() == (gaps <= 0.012).tolist()
+    c = detect_contacts(tips, np.array([r]), seen, box_poses(T), MODEL, ("index",))
+    want = np.ones(T, bool)
+    want[18:21] = False  # three frames off: a release
+    want[-2:] = False  # off at the end: no contact after it to bridge to
+    assert c.active[:, 0].tolist() == want.tolist()
+    # the bridged frames join one hold: one point for frames 0-17 (the median's), whatever the jump at frame 9
+    assert np.ptp(c.point[:18, 0], axis=0).max() == 0 and np.ptp(off.point[:5, 0], axis=0).max() == 0

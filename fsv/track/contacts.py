@@ -99,6 +99,15 @@ class ContactConfig:
             fingers not named weigh the mean of the named ones.
         median_frames: Each contact point is the median of its points over this many frames on
             each side (within the same contact), against tracking jitter; 0 = off.
+        bridge_frames: A break of at most this many frames between two contacts of the same digit
+            is filled (0: off): a finger does not leave a face and touch it again within two frames
+            (67 ms at 30 frames/s, a third of the fastest voluntary tapping cycle, 5-7 taps/s); its
+            pad's gap crossed ``off_m`` by the tracker's jitter, and the two holds it made had two
+            points and a jump in the nominal forces. 2 chosen in advance, measured on ``dev``
+            against 0 and 1 (lab / exact): net force p90 0.492 / 0.441 -> 0.452 / 0.441 N (1:
+            0.478 / 0.441), frames with no finger while the truth has two 12 -> 6 (lab),
+            least-violation frames 366 / 72 -> 358 / 61, precision and recall up on 19 / 21 episodes,
+            down on none.
         grasp_evidence: Drop the digits the camera saw outside the grasp (module docstring,
             :func:`out_of_grasp`).
         seen_off_share: A digit seen off the box on more than this share of the frames it was
@@ -136,6 +145,7 @@ class ContactConfig:
     finger_share: tuple = (("index", 0.33), ("middle", 0.33), ("ring", 0.17), ("little", 0.15))
     median_frames: int = 5
     slide_jump_share: float = 0.5
+    bridge_frames: int = 2
     grasp_evidence: bool = True
     seen_off_share: float = 2.0 / 3.0
     seen_off_frames: int = 30
@@ -156,6 +166,9 @@ class ContactConfig:
         positive("opposition_range_m", self.opposition_range_m, "> 0")
         if int(self.opposition_min_fingers) < 1:
             raise InputError(f"opposition_min_fingers must be >= 1, got {self.opposition_min_fingers!r}")
+        if isinstance(self.bridge_frames, bool) or not isinstance(self.bridge_frames, (int, np.integer)) \
+                or self.bridge_frames < 0:
+            raise InputError(f"bridge_frames must be a whole number of frames >= 0, got {self.bridge_frames!r}")
         if not (np.isfinite(self.slide_jump_share) and 0 < self.slide_jump_share <= 1):
             raise InputError(f"slide_jump_share must be a share in (0, 1], got {self.slide_jump_share!r}")
         if not (np.isfinite(self.seen_off_share) and 0 <= self.seen_off_share < 1):
@@ -237,6 +250,20 @@ def _runs(active):
         a = np.concatenate([[False], active[:, k], [False]])
         starts, ends = np.flatnonzero(~a[:-1] & a[1:]), np.flatnonzero(a[:-1] & ~a[1:])
         out += [(k, int(s0), int(e0)) for s0, e0 in zip(starts, ends)]
+    return out
+
+
+def _bridge(active: np.ndarray, frames: int) -> np.ndarray:
+    """``active`` with every break of at most ``frames`` frames between two contacts of the same
+    digit filled."""
+    out = active.copy()
+    for k in range(active.shape[1]):
+        a = np.concatenate([[True], active[:, k], [True]])
+        starts = np.flatnonzero(a[:-1] & ~a[1:])  # first inactive frame of each break
+        ends = np.flatnonzero(~a[:-1] & a[1:])  # first active frame after it
+        for s0, e0 in zip(starts, ends):
+            if 0 < s0 and e0 < active.shape[0] and e0 - s0 <= frames:
+                out[s0:e0, k] = True
     return out
 
 
@@ -389,6 +416,8 @@ def detect_contacts(fingertips: np.ndarray, radius: np.ndarray, observed: np.nda
             active, point_, normal_ = _activate(gap, observed, q, radius, point, normal, half, weight, outside, c)
             gap = np.where(outside[None, :], np.nan, gap)
     point, normal = point_, normal_
+    if c.bridge_frames:
+        active = _bridge(active, int(c.bridge_frames))
     if c.median_frames > 0:
         point, normal = _median_in_runs(active, point, normal, half, int(c.median_frames))
     sliding, slide_dir = _sliding(active, point, normal, box.t, c)
