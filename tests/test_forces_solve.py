@@ -368,3 +368,30 @@ def test_contacts_used_checks_the_fingers():
     other = Contacts(["a", "b"], contacts.active, contacts.sliding, contacts.point, contacts.normal, contacts.slide_dir)
     with pytest.raises(InputError, match="fingers"):
         sol.contacts_used(other)
+
+
+def test_a_frame_that_lost_every_contact_takes_the_fingers_near_the_surface():
+    # Both fingers of the pinch off the box's surface by the tracker's error (8 mm and 20 mm, beyond
+    # the detector's hysteresis): nothing touches the box, yet it moves as held. The two pads near
+    # the surface carry it exactly, rather than no force at all.
+    model, contacts, kin = _pinch_with_a_candidate(0.02)
+    lost = Contacts(contacts.finger_names, [[False, False]], contacts.sliding, contacts.point, contacts.normal,
+                    contacts.slide_dir, gap=[[0.008, 0.02]])
+    sol = nominal_forces(kin, lost, model)
+    assert sol.status[0] == FrameStatus.CONTACTS_ADDED and sol.active[0].tolist() == [True, True]
+    assert _rel_residual(sol)[0] <= REL
+    nom, _, _ = oracle("nominal", sol.required[0], sol.contacts_used(lost), 0, model)
+    assert np.abs(sol.force[0] - nom).max() <= 1e-4
+    # one pad near: it cannot lift the box alone; the least-violation answer with it, not zero force
+    one = Contacts(contacts.finger_names, [[False, False]], contacts.sliding, contacts.point, contacts.normal,
+                   contacts.slide_dir, gap=[[0.008, 0.05]])
+    sol = nominal_forces(kin, one, model)
+    assert sol.status[0] == FrameStatus.LEAST_VIOLATION and sol.active[0].tolist() == [True, False]
+    assert np.linalg.norm(sol.force[0, 0]) > 0.5
+    assert _rel_residual(sol)[0] < 1.0  # explains part of the motion
+    # no pad near (or an unknown gap): no contacts, as before
+    for gap in ([[0.05, 0.05]], None):
+        none = Contacts(contacts.finger_names, [[False, False]], contacts.sliding, contacts.point, contacts.normal,
+                        contacts.slide_dir, gap=gap)
+        sol = nominal_forces(kin, none, model)
+        assert sol.status[0] == FrameStatus.NO_CONTACTS and np.all(sol.force[0] == 0)

@@ -13,6 +13,7 @@ from fsv.kinematics import (
     GaussianConfig,
     algebraic_weights,
     differentiate_poses,
+    kinematics_in_frame,
     moments,
     sampling_period,
     so3,
@@ -299,3 +300,21 @@ def test_relative_log_matches_the_composed_operations():
     ref[0] = q[0]  # identity relative rotation (the small-angle branch)
     slow = so3.quat_log(so3.quat_mul(so3.quat_conj(ref)[:, None, :], q[index]))
     np.testing.assert_allclose(np.moveaxis(so3.relative_log(ref, q, index), 0, -1), slow, atol=1e-12)
+
+
+def test_kinematics_in_a_fixed_frame_are_those_of_the_moved_poses():
+    t = np.arange(60) * DT
+    poses = _rotating_poses(60, pos=np.stack([0.1 * t**2, np.sin(t), 0.02 * t], axis=1))
+    M = np.eye(4)
+    M[:3, :3] = quat_to_rot(so3.quat_exp(np.array([0.01, -0.008, 0.3])))
+    M[:3, 3] = [0.01, -0.02, -0.004]
+    moved = Poses(t=poses.t, pos=poses.pos @ M[:3, :3].T + M[:3, 3], rot=M[:3, :3] @ poses.rot)
+    cfg = AlgebraicConfig(window_frames=7, kappa=0.5, mu=0.5)
+    want = differentiate_poses(moved, cfg)
+    got = kinematics_in_frame(differentiate_poses(poses, cfg), M)
+    ok = want.valid & got.valid
+    assert ok.sum() > 40
+    for name in ("pos", "rot", "vel", "acc", "omega", "alpha"):
+        assert np.allclose(getattr(got, name)[ok], getattr(want, name)[ok], atol=1e-9), name
+    with pytest.raises(InputError, match="frame_from_world"):
+        kinematics_in_frame(got, np.eye(3))

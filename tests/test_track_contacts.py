@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from fsv import InputError, ObjectModel, Poses
-from fsv.track.contacts import ContactConfig, detect_contacts, surface_contact
+from fsv.track.contacts import ContactConfig, detect_contacts, out_of_grasp, surface_contact
 
 SIZE = np.array([0.171, 0.111, 0.060])
 HALF = SIZE / 2
@@ -30,8 +30,11 @@ def test_contact_hysteresis_and_object_frame_point():
     gaps = np.array([0.02, 0.005, 0.009, 0.011, 0.013, 0.004])
     # the finger sits over the box's +x face (world +y) at object point (HALF_x, 0.01, 0.005)
     tips = np.array([[pos + R @ [HALF[0] + r + g, 0.01, 0.005]] for g in gaps])
-    c = detect_contacts(tips, np.array([r]), np.ones((6, 1), bool), box_poses(6, pos, R), MODEL, ("thumb",))
+    c = detect_contacts(tips, np.array([r]), np.ones((6, 1), bool), box_poses(6, pos, R), MODEL, ("thumb",),
+                        ContactConfig(bridge_frames=0))
     assert c.active[:, 0].tolist() == [False, True, True, True, False, True]
+    bridged = detect_contacts(tips, np.array([r]), np.ones((6, 1), bool), box_poses(6, pos, R), MODEL, ("thumb",))
+    assert bridged.active[:, 0].tolist() == [False, True, True, True, True, True]  # one frame off: bridged
     np.testing.assert_allclose(c.point[1, 0], [HALF[0], 0.01, 0.005], atol=1e-12)
     np.testing.assert_allclose(c.normal[1, 0], [-1, 0, 0])
     # every frame's pad gap is passed on, and a finger off the surface keeps its projection there
@@ -82,7 +85,22 @@ def test_sliding_starts_on_evidence_and_stops_below_the_lower_speed():
     c = detect_contacts(jump, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",), cfg)
     assert not c.sliding.any()
     assert detect_contacts(jump, np.array([0.008]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",),
-                           ContactConfig(slide_window=1, median_frames=0, slide_frames=1)).sliding.any()
+                           ContactConfig(slide_window=1, median_frames=0, slide_frames=1,
+                                         slide_jump_share=1.0)).sliding.any()
+
+
+def test_a_contact_point_that_jumps_does_not_slide():
+    # A hidden finger found again 15 mm from where the occlusion prior held it: one step. Over the
+    # default window (3 frames each side) the step reads 0.075 m/s on six frames: a slide without
+    # the jump test, none with it; a steady 0.075 m/s slide is one with both.
+    r = 0.008
+    step = _speeds([0.0] * 12 + [0.45] + [0.0] * 12)
+    steady = _speeds([0.075] * 25)
+    T = len(step)
+    for tips, slides, share in ((step, False, 0.5), (step, True, 1.0), (steady, True, 0.5)):
+        c = detect_contacts(tips, np.array([r]), np.ones((T, 1), bool), box_poses(T), MODEL, ("a",),
+                            ContactConfig(slide_jump_share=share))
+        assert c.sliding.any() == slides
 
 
 def test_an_unseen_finger_keeps_its_last_observed_contact_point():
@@ -109,6 +127,16 @@ def test_bad_inputs_are_named():
         ContactConfig(opposition_range_m=0.0)
     with pytest.raises(InputError, match="finger_share"):
         ContactConfig(finger_share=(("index", -1.0),))
+    with pytest.raises(InputError, match="bridge_frames"):
+        ContactConfig(bridge_frames=-1)
+    with pytest.raises(InputError, match="slide_jump_share"):
+        ContactConfig(slide_jump_share=0.0)
+    with pytest.raises(InputError, match="seen_off_share"):
+        ContactConfig(seen_off_share=1.0)
+    with pytest.raises(InputError, match="seen_off_frames"):
+        ContactConfig(seen_off_frames=0)
+    with pytest.raises(InputError, match="grasp_min_digits"):
+        ContactConfig(grasp_min_digits=2.5)
     with pytest.raises(InputError, match="fingertips"):
         detect_contacts(np.zeros((3, 2)), np.ones(2), np.ones((3, 2), bool), box_poses(3), MODEL, ("a", "b"))
 
@@ -172,3 +200,77 @@ def test_contact_points_are_medians_over_the_contact():
     assert not held.sliding.any()
     np.testing.assert_allclose(held.point[:, 0], np.tile(np.median(med.point[:, 0], axis=0), (T, 1)), atol=1e-15)
     assert abs(held.point[0, 0, 0] - 0.01) < 0.004
+
+
+def _little_beside(T, seen_every=3):
+    """A four-finger grasp (thumb hidden opposite index, middle, ring) and a little finger curled
+    25 mm off the fingers' face: the camera sees it there on two frames of every ``seen_every``,
+    and on the others, hidden, the hand fit has closed it onto the face (2 mm)."""
+    tips3, rad3, obs3, poses, _, _ = _grasp(T)
+    r = 0.008
+    little = np.tile(poses.pos[0] + [0.036, HALF[1] + r + 0.025, -0.006], (T, 1))
+    hidden = np.arange(T) % seen_every == seen_every - 1
+    little[hidden, 1] -= 0.023  # closed onto the face while hidden
+    tips = np.concatenate([tips3, little[:, None]], axis=1)
+    observed = np.concatenate([obs3, ~hidden[:, None]], axis=1)
+    return tips, np.full(5, r), observed, poses, hidden
+
+
+def test_a_digit_seen_off_the_box_while_the_others_hold_it_is_outside_the_grasp():
+    T = 90
+    tips, rad, observed, poses, hidden = _little_beside(T)
+    names = ("thumb", "index", "middle", "ring", "little")
+    off = detect_contacts(tips, rad, observed, poses, MODEL, names, ContactConfig(grasp_evidence=False))
+    assert off.active[hidden, 4].all() and off.active[:, :4].all()  # the closed, hidden frames: 30 phantom frames
+    c = detect_contacts(tips, rad, observed, poses, MODEL, names)
+    assert not c.active[:, 4].any() and c.active[:, :4].all()
+    assert np.isnan(c.gap[:, 4]).all() and np.isfinite(c.gap[:, :4]).all()  # no candidate for the forces either
+    np.testing.assert_allclose(c.point[:, 0], off.point[:, 0], atol=1e-12)  # the thumb's opposition unchanged
+    active, gap = off.active, off.gap
+    assert out_of_grasp(active, observed, gap).tolist() == [False, False, False, False, True]
+    # seen on every frame, off on 60 of 90: two in three is not more than two in three
+    seen = observed.copy()
+    seen[:, 4] = True
+    assert not out_of_grasp(active, seen, gap).any()
+    assert out_of_grasp(active, seen, gap, ContactConfig(seen_off_share=0.6)).tolist()[4]
+    # seen off on 60 frames: not with fewer than 61 asked
+    assert not out_of_grasp(active, observed, gap, ContactConfig(seen_off_frames=61)).any()
+    # judged on the frames the others hold the box only: four others hold it, five never do
+    assert out_of_grasp(active, observed, gap, ContactConfig(held_by=4)).tolist()[4]
+    assert not out_of_grasp(active, observed, gap, ContactConfig(held_by=5)).any()
+
+
+def test_the_grasp_keeps_three_digits():
+    T = 90
+    tips, rad, observed, poses, hidden = _little_beside(T)
+    names = ("thumb", "index", "middle", "ring", "little")
+    active = np.ones((T, 5), bool)
+    active[:, 4] = hidden
+    gap = np.zeros((T, 5))
+    gap[~hidden, 4] = 0.025
+    gap[:, 3] = np.where(np.arange(T) % 4 == 0, 0.0, 0.03)  # the ring seen off on 3 of 4 frames
+    observed = observed.copy()
+    observed[:, 3] = True
+    assert out_of_grasp(active, observed, gap).tolist() == [False, False, False, True, True]
+    # with one digit to drop, the one seen off most often leaves (the little, always; the ring 3 in 4)
+    assert out_of_grasp(active, observed, gap, ContactConfig(grasp_min_digits=4)).tolist() == \
+        [False, False, False, False, True]
+    assert not out_of_grasp(active[:, :4], observed[:, :4], gap[:, :4], ContactConfig(grasp_min_digits=4)).any()
+    assert detect_contacts(tips, rad, observed, poses, MODEL, names).active.shape == (T, 5)
+
+
+def test_a_break_of_two_frames_in_a_contact_is_bridged():
+    r = 0.008
+    gaps = np.array([0.0] * 5 + [0.02] + [0.0] * 5 + [0.02] * 2 + [0.0] * 5 + [0.02] * 3 + [0.0] * 5 + [0.02] * 2)
+    T = len(gaps)
+    tips = np.stack([[0.1 + 0.02 * (i > 8), 0.2 + HALF[1] + r + g, 0.03] for i, g in enumerate(gaps)])[:, None, :]
+    seen = np.ones((T, 1), bool)
+    off = detect_contacts(tips, np.array([r]), seen, box_poses(T), MODEL, ("index",), ContactConfig(bridge_frames=0))
+    assert off.active[:, 0].tolist() == (gaps <= 0.012).tolist()
+    c = detect_contacts(tips, np.array([r]), seen, box_poses(T), MODEL, ("index",))
+    want = np.ones(T, bool)
+    want[18:21] = False  # three frames off: a release
+    want[-2:] = False  # off at the end: no contact after it to bridge to
+    assert c.active[:, 0].tolist() == want.tolist()
+    # the bridged frames join one hold: one point for frames 0-17 (the median's), whatever the jump at frame 9
+    assert np.ptp(c.point[:18, 0], axis=0).max() == 0 and np.ptp(off.point[:5, 0], axis=0).max() == 0

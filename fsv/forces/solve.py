@@ -30,7 +30,10 @@ is still infeasible, a contact is missing: the fingers the tracker saw near the 
 it (``Contacts.gap`` at most ``settings.repair_gap_m``) are added as static contacts at their pads'
 projections and the frame is solved again, flagged :attr:`FrameStatus.CONTACTS_ADDED` when that
 succeeds (the solution's ``active`` then includes them, and :meth:`ForceSolution.contacts_used`
-passes them on to the next stage). If it is still infeasible (e.g. a single contact that would have
+passes them on to the next stage). A frame on which nothing touches the object at all (the tracker
+lost every contact, and the box is off the table) is solved with those fingers in the same way, or
+by least violation with them: what the forces stage believes carries the box, rather than no force
+(issue 45). If it is still infeasible (e.g. a single contact that would have
 to pull), it is solved with the tracked contacts and a slack σ on the nominal wrench equality,
 ``slack_weight`` ||σ||² added to the cost: the least-violation answer, flagged
 :attr:`FrameStatus.LEAST_VIOLATION`.
@@ -338,7 +341,12 @@ def _solve(kind, kinematics, contacts, model, target, gravity, settings) -> Forc
             out[t] = objective[t] = np.nan
             continue
         if not touching[t]:
-            status[t] = FrameStatus.NO_CONTACTS
+            if candidates[t].any():  # lost contacts: the pads near the surface, as for an infeasible frame
+                t0 = time.perf_counter()
+                out[t], status[t], objective[t], iterations[t] = frames.solve_untouched(t)
+                seconds[t] += time.perf_counter() - t0
+            else:
+                status[t] = FrameStatus.NO_CONTACTS
             continue
         t0 = time.perf_counter()
         out[t], status[t], objective[t], iterations[t] = frames.solve(t, keys[t], prepared[t])
@@ -389,6 +397,24 @@ class _Frames:
                 prepared[t] = frame
             seconds[ts] = (time.perf_counter() - t0) / len(ts)
         return prepared
+
+    def solve_untouched(self, t: int) -> tuple:
+        """Frame ``t``, on which nothing touches the object, with its candidates as static contacts
+        (flagged CONTACTS_ADDED), or their least-violation answer; ``(forces, status, objective,
+        iterations)`` as :meth:`solve`."""
+        K, fitted, corners_on = self.K, self.fitted, self.corners_on
+        more, held = self.candidates[t].copy(), np.zeros(K, bool)
+        key = np.concatenate([more, held, fitted[t], corners_on[t]]).tobytes()
+        args = (self.bank[t], self.required[t], self.target[t])
+        forces, code, objective, iterations = self._program(False, key, more, held, fitted[t], corners_on[t]).solve(*args)
+        status = FrameStatus.CONTACTS_ADDED
+        if code not in OK:
+            forces, code, objective, iterations = self._program(True, key, more, held, fitted[t], corners_on[t]).solve(*args)
+            status = FrameStatus.LEAST_VIOLATION
+        if code not in OK:
+            return np.full((2 * K + 16, 3), np.nan), FrameStatus.FAILED, np.nan, iterations
+        self.use[t], self.sliding[t] = more, held
+        return forces, status, objective, iterations
 
     def solve(self, t: int, key: bytes, prepared) -> tuple:
         """Frame ``t``: its layout's program, then the fallbacks (static friction, contacts added,

@@ -8,7 +8,7 @@ differences) all reduce to stencils (``fsv.kinematics.stencils``); rotations are
 SO(3) through relative rotation vectors (``fsv.kinematics.differentiate``).
 """
 
-from fsv.kinematics.differentiate import differentiate_poses, sampling_period
+from fsv.kinematics.differentiate import differentiate_poses, kinematics_in_frame, sampling_period
 from fsv.kinematics.stencils import (
     AlgebraicConfig,
     CentralConfig,
@@ -28,6 +28,7 @@ __all__ = [
     "Stencil",
     "algebraic_weights",
     "differentiate_poses",
+    "kinematics_in_frame",
     "moments",
     "sampling_period",
 ]

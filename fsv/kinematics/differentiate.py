@@ -23,13 +23,14 @@ and hold the estimate of the nearest valid frame (so arrays stay finite).
 from __future__ import annotations
 
 import functools
+from dataclasses import replace
 
 import numpy as np
 
 from fsv.errors import InputError
 from fsv.kinematics import so3
 from fsv.kinematics.stencils import AlgebraicConfig, CentralConfig, GaussianConfig
-from fsv.linalg import correlate_valid, mv
+from fsv.linalg import correlate_valid, mm, mv
 from fsv.rotation import quat_to_rot
 from fsv.types import Kinematics, Poses
 
@@ -176,3 +177,17 @@ def _rotation_rates(
         out.append(full)
     return out[0], out[1]
 
+
+
+def kinematics_in_frame(kinematics: Kinematics, frame_from_world: np.ndarray) -> Kinematics:
+    """The same motion in another frame fixed to the world: positions by the rigid motion
+    ``frame_from_world`` (4, 4), orientations and every vector (velocities, accelerations, angular
+    rates) by its rotation. The derivatives of poses in a fixed frame are the derivatives
+    expressed in it, so this is what differentiating the moved poses gives (without BLAS)."""
+    M = np.asarray(frame_from_world, dtype=float)
+    if M.shape != (4, 4) or not np.all(np.isfinite(M)):
+        raise InputError(f"frame_from_world must be a finite (4, 4) rigid motion, got {M.shape}")
+    R = M[:3, :3]
+    return replace(kinematics, pos=mv(R, kinematics.pos) + M[:3, 3], rot=mm(R, kinematics.rot),
+                   vel=mv(R, kinematics.vel), acc=mv(R, kinematics.acc), omega=mv(R, kinematics.omega),
+                   alpha=mv(R, kinematics.alpha))

@@ -13,6 +13,7 @@ import numpy as np
 
 from fsv.errors import InputError
 from fsv.forces import ForceSolution
+from fsv.kinematics import kinematics_in_frame
 from fsv.method.estimate import Estimate
 from fsv.method.inputs import CameraInput
 from fsv.method.reference import LearnedInternalForces, NominalForces, ReferenceTracker, StencilDifferentiator
@@ -103,16 +104,23 @@ class Method:
         timing["kinematics"] = time.perf_counter() - t0
         nominal = full = predicted = learned_model = None
         timing["forces"] = timing["learn"] = 0.0
+        # The force stages work in the table's frame (the table the tracker found at z = 0, gravity
+        # along -z); the kinematics of the estimate stay in the calibration's world. Oracle
+        # kinematics are the truth's, whose table is at z = 0 already.
+        table_from_world = getattr(tracking, "table_from_world", None)
+        on_table = kinematics
+        if table_from_world is not None and "kinematics" not in oracle:
+            on_table = kinematics_in_frame(kinematics, table_from_world)
         if self.forces is not None:
             t0 = time.perf_counter()
-            nominal = self.forces(kinematics, contacts, inputs.object_model, inputs.gravity)
+            nominal = self.forces(on_table, contacts, inputs.object_model, inputs.gravity)
             _check_value("forces", labels["forces"], nominal, ForceSolution, T)
             contacts = nominal.contacts_used(contacts)  # with any contact the force stage added
             timing["forces"] = time.perf_counter() - t0
         if self.internal is not None:
             t0 = time.perf_counter()
             grip = {"grip": inputs.grip} if accepts_grip(self.internal) else {}
-            out = self.internal(kinematics, contacts, inputs.object_model, inputs.gravity, **grip)
+            out = self.internal(on_table, contacts, inputs.object_model, inputs.gravity, **grip)
             if not (isinstance(out, tuple) and len(out) == 2):
                 raise InputError(f"the internal-force stage {labels['internal']!r} must return "
                                  f"(ForceSolution, predicted), got {type(out).__name__}")

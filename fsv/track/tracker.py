@@ -12,11 +12,13 @@ import numpy as np
 
 from fsv._check import as_array
 from fsv.errors import InputError
+from fsv.linalg import mm, mv, rigid_inverse
 from fsv.models import HandModel, ObjectModel
 from fsv.rotation import quat_to_rot, rot_to_quat
 from fsv.track.contacts import ContactConfig, detect_contacts
 from fsv.track.hand import HandState, HandTracker, HandTrackerConfig
 from fsv.track.object import BoxTracker, BoxTrackerConfig, predict_box_depth
+from fsv.track.table import TableFitConfig, TablePlane, fit_table, table_frame
 from fsv.types import Calibration, Contacts, DepthVideo, Poses
 
 
@@ -68,6 +70,9 @@ class TrackerConfig:
     hand: HandTrackerConfig = field(default_factory=HandTrackerConfig)
     contacts: ContactConfig = field(default_factory=ContactConfig)
     table_z: float = 0.0
+    table_fit: TableFitConfig | None = field(default_factory=TableFitConfig)
+    """The table fitted to the first frame's depth (:mod:`fsv.track.table`); None: the
+    calibration's table z = ``table_z``."""
 
 
 @dataclass(frozen=True)
@@ -82,6 +87,10 @@ class Tracking:
         box_inliers: Fraction of predicted-visible box pixels agreeing with the fit, shape (T,).
         hand_explained: Fraction of hand candidate points near the fitted hand, shape (T,).
         contacts: Contacts detected from the tracked fingertips (object frame).
+        table: The table plane the tracker used, in the world (:class:`fsv.track.table.TablePlane`).
+        table_from_world: The rigid motion (4, 4) that puts that table at z = 0 with its normal
+            along +z (:func:`fsv.track.table.table_frame`): the frame in which the force stages
+            find the box on the table, gravity along -z.
         timing_s: Seconds spent in each stage: ``box``, ``hand``, ``contacts``.
         first_frame_s: Seconds of the first frame's box and hand fits, part of ``box`` and ``hand``
             (they include any compilation of the kernels), [s].
@@ -96,6 +105,8 @@ class Tracking:
     contacts: Contacts
     timing_s: dict
     first_frame_s: float = 0.0
+    table: TablePlane | None = None
+    table_from_world: np.ndarray | None = None
 
 
 def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand_model: HandModel,
@@ -125,9 +136,23 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     cfg = config or TrackerConfig()
     rng = rng if rng is not None else np.random.default_rng(0)
     box_rng, hand_rng = rng.spawn(2)
-    boxes = BoxTracker(calib, object_model, init.box_pos, init.box_rot, config=cfg.box, rng=box_rng, table_z=cfg.table_z)
+    t0 = time.perf_counter()
+    table = TablePlane.believed(cfg.table_z)
+    if cfg.table_fit is not None and depth.num_frames:
+        table = fit_table(depth.depth_m[0], calib, init.box_pos, init.box_rot, object_model, table_z=cfg.table_z,
+                          config=cfg.table_fit)
+    to_table = table_frame(table)
+    t_table = time.perf_counter() - t0
+    if table.fitted:  # track in the table's frame (the table at z = 0), report in the calibration's world
+        R, t = to_table[:3, :3], to_table[:3, 3]
+        calib = Calibration(K=calib.K, T_world_cam=_rigid_product(to_table, calib.T_world_cam), width=calib.width,
+                            height=calib.height)
+        init = TrackInit(box_pos=mv(R, init.box_pos) + t, box_rot=mm(R, init.box_rot),
+                         palm_pos=mv(R, init.palm_pos) + t, palm_rot=mm(R, init.palm_rot), joints=init.joints)
+    table_z = 0.0 if table.fitted else cfg.table_z
+    boxes = BoxTracker(calib, object_model, init.box_pos, init.box_rot, config=cfg.box, rng=box_rng, table_z=table_z)
     hands = HandTracker(calib, hand_model, object_model, HandState(init.palm_pos, init.palm_rot, init.joints),
-                        config=cfg.hand, rng=hand_rng, table_z=cfg.table_z)
+                        config=cfg.hand, rng=hand_rng, table_z=table_z)
     T, K = depth.num_frames, len(hand_model.finger_names)
     box_pos, box_rot, inl = np.zeros((T, 3)), np.zeros((T, 3, 3)), np.zeros(T)
     qpos = np.zeros((T, 7 + hand_model.num_joints))
@@ -155,6 +180,25 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     t2 = time.perf_counter()
     contacts = detect_contacts(tips, hand_model.fingertip_radius, observed, poses, object_model,
                                hand_model.finger_names, cfg.contacts)
-    timing = {"box": t_box, "hand": t_hand, "contacts": time.perf_counter() - t2}
+    if table.fitted:  # back to the calibration's world
+        back = rigid_inverse(to_table)
+        R, t = back[:3, :3], back[:3, 3]
+        poses = Poses(t=depth.t, pos=mv(R, box_pos) + t, rot=mm(R, box_rot))
+        palm_rot = mm(R, quat_to_rot(qpos[:, 3:7]))
+        qpos = np.concatenate([mv(R, qpos[:, :3]) + t, np.stack([rot_to_quat(r) for r in palm_rot]), qpos[:, 7:]],
+                              axis=1)
+        tips = mv(R, tips) + t
+    timing = {"box": t_box, "hand": t_hand, "contacts": time.perf_counter() - t2, "table": t_table}
+    if not table.fitted and cfg.table_z == 0.0:
+        to_table = None  # the calibration's world is the table's frame
     return Tracking(box=poses, hand_qpos=qpos, fingertips=tips, observed=observed, box_inliers=inl,
-                    hand_explained=explained, contacts=contacts, timing_s=timing, first_frame_s=t_first)
+                    hand_explained=explained, contacts=contacts, timing_s=timing, first_frame_s=t_first,
+                    table=table, table_from_world=to_table)
+
+
+def _rigid_product(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A @ B`` of two rigid motions (4, 4), without BLAS."""
+    out = np.eye(4)
+    out[:3, :3] = mm(A[:3, :3], B[:3, :3])
+    out[:3, 3] = mv(A[:3, :3], B[:3, 3]) + A[:3, 3]
+    return out
