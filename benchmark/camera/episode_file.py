@@ -233,7 +233,7 @@ def save_episode(episode: Episode, path, identity: dict | None = None) -> pathli
         meta[name] = scalars
         for k, v in arrs.items():
             arrays[f"{name}/{k}"] = v
-    return write_archive(path, FORMAT, VERSION, meta, arrays, fast=frozenset({"colour/rgb"}))
+    return write_archive(path, FORMAT, VERSION, meta, arrays, stored=frozenset({"colour/rgb"}))
 
 
 def load_episode(path, *, scenario: Scenario | None = None, identity: dict | None = None) -> Episode:
