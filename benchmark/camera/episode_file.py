@@ -122,8 +122,9 @@ VERSION = 3
 READS = (2, 3)
 """The versions :func:`load_episode` reads: version 2 is version 3 without the colour and annotation sections."""
 FORMAT_DOC = """\
-An episode file is a NumPy ``.npz`` archive (zip, deflate-compressed) holding only plain arrays
-(no pickles). Entry ``meta.json`` is a uint8 array of UTF-8 JSON:
+An episode file is a NumPy ``.npz`` archive (zip; every entry deflate-compressed but the colour
+images ``colour/rgb``, stored as they are) holding only plain arrays (no pickles). Entry
+``meta.json`` is a uint8 array of UTF-8 JSON:
 
     {"format": "fsv-bench-episode", "version": 3, "scenario": {Scenario fields},
      "sections": [names of the sections present], "<section>": {scalars of that section},
@@ -233,7 +234,8 @@ def save_episode(episode: Episode, path, identity: dict | None = None) -> pathli
         meta[name] = scalars
         for k, v in arrs.items():
             arrays[f"{name}/{k}"] = v
-    return write_archive(path, FORMAT, VERSION, meta, arrays, stored=frozenset({"colour/rgb"}))
+    return write_archive(path, FORMAT, VERSION, meta, arrays, fast=frozenset({"colour/labels"}),
+                         stored=frozenset({"colour/rgb"}))
 
 
 def load_episode(path, *, scenario: Scenario | None = None, identity: dict | None = None) -> Episode:
