@@ -69,9 +69,25 @@ def _child(fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked c
     os._exit(0)
 
 
-def _child_returning(conn, fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
+def _end_with_parent(parent: int) -> None:  # pragma: no cover - runs in the forked child
+    """Linux: this process is killed when its parent dies, however it dies (SIGKILL included, which
+    no cleanup code of the parent sees), so that no worker outlives its command."""
+    if sys.platform != "linux":
+        return
+    import ctypes
+
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # it died before the call
+        os._exit(1)
+
+
+def _child_returning(conn, parent, fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
     """A forked job: sends ``("value", fn(...))`` or ``("error", one line)`` through ``conn``, then exits."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _end_with_parent(parent)
     try:
         message = ("value", fn(*args, **kwargs))
         code = 0
@@ -168,7 +184,8 @@ class _ForkJob(Job):
         super().__init__(name)
         ctx = multiprocessing.get_context("fork")
         self._conn, child_end = ctx.Pipe(duplex=False)
-        self.process = ctx.Process(target=_child_returning, args=(child_end, fn, args, kwargs), name=name, daemon=True)
+        self.process = ctx.Process(target=_child_returning, args=(child_end, os.getpid(), fn, args, kwargs), name=name,
+                                   daemon=True)
         self.process.start()
         child_end.close()  # only the child holds the writing end: its exit, however it comes, ends our read
         self._lock = threading.Lock()  # a thread may wait for the result while wait() or cancel() does
@@ -245,7 +262,8 @@ class Background:
         """Runs ``fn(*args, **kwargs)`` in a forked child process whose return value (pickled: keep
         it small, put large arrays in :func:`shared_empty` memory made before this call) comes
         back as the :class:`Job`'s result. Its failure is one line (``Type: message``; a traceback on
-        stderr too where it is not one of :data:`EXPECTED_ERRORS`); Ctrl-C ends it with the caller."""
+        stderr too where it is not one of :data:`EXPECTED_ERRORS`); Ctrl-C ends it with the caller,
+        and on Linux it is killed when the thread that forked it dies, however it dies."""
         if not self.enabled:
             return _DoneJob(name, fn(*args, **kwargs))
         if self._preload is not None:

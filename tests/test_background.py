@@ -1,6 +1,7 @@
 """benchmark.background: jobs beside the caller, their failures reported at the end."""
 
 import os
+import sys
 import time
 
 import numpy as np
@@ -192,3 +193,36 @@ def test_disabled_forks_at_once_and_returns_the_value():
     array = np.zeros(4)
     assert bg.fork("fill", _fill, array, 2).result() == {"sum": 8} and np.all(array == 2)  # the caller's own array
     assert bg.thread("sum", sum, [1, 2]).result() == 3
+
+
+_PARENT = """
+import sys, time
+from benchmark.background import Background
+job = Background().fork("sleeper", time.sleep, 60)
+print(job.process.pid, flush=True)
+time.sleep(60)
+"""
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="the parent-death signal is Linux's")
+def test_a_forked_job_dies_with_a_killed_parent():
+    """SIGKILL gives the parent no chance to end its children: the child ends itself."""
+    import signal
+    import subprocess
+
+    parent = subprocess.Popen([sys.executable, "-c", _PARENT], stdout=subprocess.PIPE,
+                              env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    child = int(parent.stdout.readline())
+    time.sleep(0.3)
+    os.kill(child, 0)  # alive
+    parent.send_signal(signal.SIGKILL)
+    parent.wait(30)
+    deadline = time.perf_counter() + 10
+    while time.perf_counter() < deadline:
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        pytest.fail("the forked job outlived its killed parent")
