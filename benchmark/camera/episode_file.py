@@ -11,6 +11,7 @@ import numpy as np
 from benchmark.archive import read_archive, write_archive
 from benchmark.camera.labelling import Annotations
 from benchmark.camera.sensor import dequantise
+from benchmark.camera.sensor_kernels import quantise_on_grid
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.world.episode import Episode
 from benchmark.world.scenario import Scenario
@@ -62,6 +63,11 @@ def quantise_depth(depth: np.ndarray) -> tuple:
     Raises:
         EpisodeFileError: If the depth does not fit uint16 even at the coarsest quantum.
     """
+    if depth.dtype == np.float32:  # the renderer's depth: one pass where it lies on the first grid
+        depth = np.ascontiguousarray(depth)
+        counts = np.empty(depth.shape, dtype=np.uint16)
+        if quantise_on_grid(depth, DEPTH_QUANTA_M[0], counts):
+            return counts, DEPTH_QUANTA_M[0]
     top = float(depth.max(initial=0.0))
     for i, q in enumerate(DEPTH_QUANTA_M):
         counts = np.rint(depth.astype(np.float64) / q)
