@@ -9,16 +9,22 @@ chain, on the machine's other core:
   the fork (no copying or pickling of the depth video);
 * :meth:`Background.thread`: work that releases the interpreter lock (zlib compression of the
   episode archive) in a thread;
+* :meth:`Background.fork`: CPU-bound work whose (small) result the caller needs later, in a forked
+  child that sends it back through a pipe (:meth:`Job.result`); large arrays it makes go into
+  memory shared with the caller (:func:`shared_empty`), not through the pipe;
 * :meth:`Background.preload`: modules the children will need (matplotlib), imported in a thread
   while the caller works in compiled code, so that each child does not import them again. A fork
   waits for the preload to end (a child must not inherit a half-done import).
 
-:meth:`Background.wait` joins everything and raises if any of it failed, so a command that
-finishes has all its files; :meth:`Background.cancel` stops the rest after a failure.
+:meth:`Background.wait` joins everything and raises if any of it failed (one line naming the job
+and its error), so a command that finishes has all its files; :meth:`Background.cancel` stops the
+rest after a failure or Ctrl-C (a forked child is terminated; a thread waiting for its result is
+woken by the closed pipe).
 """
 
 from __future__ import annotations
 
+import mmap
 import multiprocessing
 import os
 import signal
@@ -26,7 +32,14 @@ import sys
 import threading
 import traceback
 
+import numpy as np
+
 from benchmark.errors import BenchmarkError
+from fsv.errors import FsvError, one_line
+
+EXPECTED_ERRORS = (BenchmarkError, FsvError, OSError)
+"""Failures a forked job reports as one line (the command's own errors, a full disk); any other
+exception is a bug and its traceback goes to stderr too."""
 
 
 def _from_interrupt(error: BaseException | None) -> bool:
@@ -56,6 +69,155 @@ def _child(fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked c
     os._exit(0)
 
 
+def _end_with_parent(parent: int) -> None:  # pragma: no cover - runs in the forked child
+    """Linux: this process is killed when its parent dies, however it dies (SIGKILL included, which
+    no cleanup code of the parent sees), so that no worker outlives its command."""
+    if sys.platform != "linux":
+        return
+    import ctypes
+
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # it died before the call
+        os._exit(1)
+
+
+def _child_returning(conn, parent, fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
+    """A forked job: sends ``("value", fn(...))`` or ``("error", one line)`` through ``conn``, then exits."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _end_with_parent(parent)
+    try:
+        message = ("value", fn(*args, **kwargs))
+        code = 0
+    except BaseException as e:
+        if _from_interrupt(e):
+            os._exit(130)
+        if not isinstance(e, EXPECTED_ERRORS):
+            traceback.print_exc(file=sys.stderr)
+        message, code = ("error", f"{type(e).__name__}: {one_line(e)}"), 1
+    try:
+        conn.send(message)
+        conn.close()
+    except BaseException:  # an unpicklable result, or the parent gone
+        traceback.print_exc(file=sys.stderr)
+        code = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
+def shared_empty(shape: tuple, dtype) -> np.ndarray:
+    """An uninitialised array in anonymous shared memory: what a child forked after this call
+    (:meth:`Background.fork`) writes into it, this process sees, with no copy and no pickling. The
+    memory has no name (nothing to clean up when a process is killed) and is freed with its last
+    reference in every process."""
+    dtype = np.dtype(dtype)
+    count = int(np.prod(shape, dtype=np.int64))
+    buffer = mmap.mmap(-1, max(count * dtype.itemsize, 1), flags=mmap.MAP_SHARED)
+    return np.frombuffer(buffer, dtype=dtype, count=count).reshape(shape)
+
+
+class JobFailed(BenchmarkError):
+    """Raised by :meth:`Job.result` of a job that failed (``job``: that job)."""
+
+    def __init__(self, job: "Job"):
+        super().__init__(f"{job.name} failed: {job.failure()}")
+        self.job = job
+
+
+class Job:
+    """A job started on a :class:`Background`: its result once done."""
+
+    def __init__(self, name: str):
+        self.name = name
+        self._done = False
+        self._value = None
+        self._error: str | None = None
+
+    def _set(self, value=None, error: str | None = None) -> None:
+        self._value, self._error, self._done = value, error, True
+
+    def _wait(self) -> None:  # overridden by the kinds that run beside the caller
+        pass
+
+    def failure(self) -> str | None:
+        """None if the job succeeded, else what went wrong, one line (waits for the job)."""
+        self._wait()
+        return self._error
+
+    def result(self):
+        """The job's return value (waits for it).
+
+        Raises:
+            JobFailed: One line naming the job and its error.
+        """
+        if self.failure() is not None:
+            raise JobFailed(self)
+        return self._value
+
+
+class _ThreadJob(Job):
+    def __init__(self, name: str, fn, args, kwargs):
+        super().__init__(name)
+
+        def target():
+            try:
+                value = fn(*args, **kwargs)
+            except BaseException as e:  # reported by failure(), wait()
+                self._exception = e
+                self._set(error=f"{type(e).__name__}: {one_line(e)}")
+                return
+            self._set(value)
+
+        self._exception = None
+        self.thread = threading.Thread(target=target, name=name, daemon=True)
+        self.thread.start()
+
+    def _wait(self) -> None:
+        self.thread.join()
+
+
+class _ForkJob(Job):
+    def __init__(self, name: str, fn, args, kwargs):
+        super().__init__(name)
+        ctx = multiprocessing.get_context("fork")
+        self._conn, child_end = ctx.Pipe(duplex=False)
+        self.process = ctx.Process(target=_child_returning, args=(child_end, os.getpid(), fn, args, kwargs), name=name,
+                                   daemon=True)
+        self.process.start()
+        child_end.close()  # only the child holds the writing end: its exit, however it comes, ends our read
+        self._lock = threading.Lock()  # a thread may wait for the result while wait() or cancel() does
+
+    def _wait(self) -> None:
+        with self._lock:
+            if self._done:
+                return
+            try:
+                kind, payload = self._conn.recv()
+            except (EOFError, OSError):
+                kind, payload = None, None
+            self._conn.close()
+            self.process.join()
+            if kind == "value":
+                self._set(payload)
+            elif kind == "error":
+                self._set(error=payload)
+            else:
+                self._set(error=f"the process ended without a result (exit code {self.process.exitcode})")
+
+    def terminate(self) -> None:
+        """Sends SIGTERM (nothing if already reaped); no waitpid here, a thread may be joining it."""
+        self.process.terminate()
+
+
+class _DoneJob(Job):
+    def __init__(self, name: str, value):
+        super().__init__(name)
+        self._set(value)
+
+
 class Background:
     """Jobs running beside the caller until :meth:`wait`.
 
@@ -65,7 +227,7 @@ class Background:
 
     def __init__(self, enabled: bool = True):
         self.enabled = bool(enabled) and "fork" in multiprocessing.get_all_start_methods()
-        self._jobs: list = []  # (name, Process | Thread, errors list or None)
+        self._jobs: list = []  # (name, Process or Job)
         self._preload: threading.Thread | None = None
 
     def preload(self, *modules: str) -> None:
@@ -94,24 +256,30 @@ class Background:
             self._preload.join()
         p = multiprocessing.get_context("fork").Process(target=_child, args=(fn, args, kwargs), name=name, daemon=True)
         p.start()
-        self._jobs.append((name, p, None))
+        self._jobs.append((name, p))
 
-    def thread(self, name: str, fn, *args, **kwargs) -> None:
-        """Runs ``fn(*args, **kwargs)`` in a thread (for work that releases the interpreter lock)."""
+    def fork(self, name: str, fn, *args, **kwargs) -> Job:
+        """Runs ``fn(*args, **kwargs)`` in a forked child process whose return value (pickled: keep
+        it small, put large arrays in :func:`shared_empty` memory made before this call) comes
+        back as the :class:`Job`'s result. Its failure is one line (``Type: message``; a traceback on
+        stderr too where it is not one of :data:`EXPECTED_ERRORS`); Ctrl-C ends it with the caller,
+        and on Linux it is killed when the thread that forked it dies, however it dies."""
         if not self.enabled:
-            fn(*args, **kwargs)
-            return
-        errors: list = []
+            return _DoneJob(name, fn(*args, **kwargs))
+        if self._preload is not None:
+            self._preload.join()
+        job = _ForkJob(name, fn, args, kwargs)
+        self._jobs.append((name, job))
+        return job
 
-        def target():
-            try:
-                fn(*args, **kwargs)
-            except BaseException as e:  # re-raised by wait()
-                errors.append(e)
-
-        t = threading.Thread(target=target, name=name, daemon=True)
-        t.start()
-        self._jobs.append((name, t, errors))
+    def thread(self, name: str, fn, *args, **kwargs) -> Job:
+        """Runs ``fn(*args, **kwargs)`` in a thread (for work that releases the interpreter lock);
+        the :class:`Job` holds its return value."""
+        if not self.enabled:
+            return _DoneJob(name, fn(*args, **kwargs))
+        job = _ThreadJob(name, fn, args, kwargs)
+        self._jobs.append((name, job))
+        return job
 
     def wait(self) -> None:
         """Waits for every job.
@@ -123,11 +291,18 @@ class Background:
         if self._preload is not None:
             self._preload.join()
         jobs, self._jobs = self._jobs, []
-        for name, job, errors in jobs:
+        waited = [job for _, job in jobs]
+        for name, job in jobs:
+            if isinstance(job, Job):
+                error = job.failure()
+                upstream = getattr(job, "_exception", None)
+                if isinstance(upstream, JobFailed) and upstream.job in waited:
+                    continue  # it failed because a job it waited for did: that one is reported
+                if error is not None:
+                    failed.append(f"{name} ({error})")
+                continue
             job.join()
-            if errors:
-                failed.append(f"{name} ({type(errors[0]).__name__}: {errors[0]})")
-            elif errors is None and job.exitcode != 0:
+            if job.exitcode != 0:
                 failed.append(f"{name} (exit code {job.exitcode})")
         if failed:
             raise BenchmarkError(f"background work failed: {'; '.join(failed)}")
@@ -137,8 +312,16 @@ class Background:
         if self._preload is not None:
             self._preload.join()
         jobs, self._jobs = self._jobs, []
-        for _, job, errors in jobs:
-            if errors is None and job.is_alive():
+        for _, job in jobs:
+            if isinstance(job, _ForkJob):
                 job.terminate()
-        for _, job, _ in jobs:
-            job.join()
+            elif isinstance(job, multiprocessing.process.BaseProcess) and job.is_alive():
+                job.terminate()
+        for _, job in jobs:  # a forked job's process first: a thread may be waiting for its result
+            if isinstance(job, _ForkJob):
+                job.failure()
+        for _, job in jobs:
+            if isinstance(job, Job):
+                job.failure()
+            else:
+                job.join()

@@ -31,6 +31,12 @@ def _canonical_array(a) -> np.ndarray:
     return a
 
 
+def _data(a: np.ndarray) -> memoryview:
+    """The bytes of a canonical (C-contiguous) array as they lie in memory: what ``a.tobytes()``
+    holds, without its copy (0.3 GB for a 10 s colour video)."""
+    return memoryview(a.reshape(-1)).cast("B")
+
+
 def _describe(a: np.ndarray) -> list:
     return [a.dtype.str, list(a.shape)]
 
@@ -48,7 +54,7 @@ def array_sha256(array, name: str = "") -> str:
     a = _canonical_array(np.asarray(array))
     h = hashlib.sha256(json.dumps([str(name), *_describe(a)], separators=(",", ":")).encode())
     h.update(b"\0")
-    h.update(a.tobytes())
+    h.update(_data(a))
     return h.hexdigest()
 
 
@@ -81,5 +87,5 @@ def tree_sha256(tree) -> str:
     h = hashlib.sha256(header.encode())
     for a in arrays:
         h.update(b"\0")
-        h.update(a.tobytes())
+        h.update(_data(a))
     return h.hexdigest()

@@ -1,8 +1,10 @@
 """benchmark.background: jobs beside the caller, their failures reported at the end."""
 
 import os
+import sys
 import time
 
+import numpy as np
 import pytest
 
 from benchmark.background import Background
@@ -119,3 +121,108 @@ def test_cancel_stops_a_child_whose_parent_handles_sigterm():
         assert time.perf_counter() - t0 < 10
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def _fill(array, value):
+    array[...] = value
+    return {"sum": int(array.sum())}
+
+
+def _planted(kind):
+    if kind == "benchmark":
+        raise BenchmarkError("planted failure\nover two lines")
+    raise KeyError("a bug")
+
+
+def test_a_forked_job_returns_its_value_and_writes_shared_memory_the_caller_sees():
+    from benchmark.background import shared_empty
+
+    bg = Background()
+    shared = shared_empty((3, 4, 5), "uint16")
+    private = np.zeros((3, 4, 5), dtype=np.uint16)
+    job = bg.fork("fill", _fill, shared, 7)
+    job_private = bg.fork("private", _fill, private, 7)
+    bg.wait()
+    assert job.result() == {"sum": 7 * 60} and job_private.result() == {"sum": 7 * 60}
+    assert shared.dtype == np.uint16 and np.all(shared == 7)  # written by the child, seen here
+    assert np.all(private == 0)  # ordinary memory: the child wrote its own copy
+
+
+def test_a_thread_job_returns_its_value():
+    bg = Background()
+    job = bg.thread("sum", sum, [1, 2, 3])
+    bg.wait()
+    assert job.result() == 6
+
+
+def test_a_forked_jobs_failure_is_one_line_and_a_thread_waiting_for_it_is_not_reported_again(capfd):
+    from benchmark.background import JobFailed
+
+    bg = Background()
+    job = bg.fork("colour", _planted, "benchmark")
+    waiting = bg.thread("episode file", lambda: job.result())
+    with pytest.raises(BenchmarkError) as info:
+        bg.wait()
+    assert str(info.value) == "background work failed: colour (BenchmarkError: planted failure over two lines)"
+    assert "Traceback" not in capfd.readouterr().err  # the command's own error: one line, no traceback
+    with pytest.raises(JobFailed, match="colour failed: BenchmarkError: planted"):
+        waiting.result()
+    bug = bg.fork("colour", _planted, "bug")
+    with pytest.raises(BenchmarkError, match=r"^background work failed: colour \(KeyError: 'a bug'\)$"):
+        bg.wait()
+    assert "Traceback" in capfd.readouterr().err and bug.failure() == "KeyError: 'a bug'"  # a bug shows where
+
+
+def test_cancel_ends_a_forked_job_and_wakes_a_thread_waiting_for_it():
+    import multiprocessing
+
+    bg = Background()
+    job = bg.fork("sleeper", time.sleep, 60)
+    waiting = bg.thread("waiting", lambda: job.result())
+    time.sleep(0.3)
+    t0 = time.perf_counter()
+    bg.cancel()
+    assert time.perf_counter() - t0 < 10
+    assert not job.process.is_alive() and job.process.exitcode == -15  # SIGTERM
+    assert not waiting.thread.is_alive() and "without a result" in job.failure()
+    assert job.process not in multiprocessing.active_children()
+
+
+def test_disabled_forks_at_once_and_returns_the_value():
+    bg = Background(enabled=False)
+    array = np.zeros(4)
+    assert bg.fork("fill", _fill, array, 2).result() == {"sum": 8} and np.all(array == 2)  # the caller's own array
+    assert bg.thread("sum", sum, [1, 2]).result() == 3
+
+
+_PARENT = """
+import sys, time
+from benchmark.background import Background
+job = Background().fork("sleeper", time.sleep, 60)
+print(job.process.pid, flush=True)
+time.sleep(60)
+"""
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="the parent-death signal is Linux's")
+def test_a_forked_job_dies_with_a_killed_parent():
+    """SIGKILL gives the parent no chance to end its children: the child ends itself."""
+    import signal
+    import subprocess
+
+    parent = subprocess.Popen([sys.executable, "-c", _PARENT], stdout=subprocess.PIPE,
+                              env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    child = int(parent.stdout.readline())
+    time.sleep(0.3)
+    os.kill(child, 0)  # alive
+    parent.send_signal(signal.SIGKILL)
+    parent.wait(30)
+    deadline = time.perf_counter() + 10
+    while time.perf_counter() < deadline:
+        try:
+            os.kill(child, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        pytest.fail("the forked job outlived its killed parent")

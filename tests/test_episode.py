@@ -242,3 +242,36 @@ def test_a_version_2_file_still_reads_and_version_3_keeps_the_labels(rendered_li
     v2 = load_episode(write_archive(tmp_path / "v2.npz", FORMAT, 2, meta, arrays))
     assert v2.annotations is None and v2.colour is None and v2.streams == ("depth",)
     np.testing.assert_array_equal(v2.depth.depth_m, ep.depth.depth_m)
+
+
+def _quantise_numpy(depth):
+    """quantise_depth's NumPy path, as it was before its one-pass kernel."""
+    from benchmark.camera.episode_file import DEPTH_QUANTA_M
+    from benchmark.camera.sensor import dequantise
+
+    for i, q in enumerate(DEPTH_QUANTA_M):
+        counts = np.rint(depth.astype(np.float64) / q)
+        if counts.max(initial=0) > np.iinfo(np.uint16).max:
+            continue
+        if i > 0 or np.array_equal(dequantise(counts, q), depth):
+            break
+    return counts.astype(np.uint16), q
+
+
+@pytest.mark.filterwarnings("ignore:invalid value encountered in cast")  # NumPy's path on negative, NaN depth
+def test_the_one_pass_quantiser_gives_the_numpy_paths_counts(rendered_lift_episode):
+    """The renderer's depth goes through one numba pass (0.09 s against 0.32 s for a 10 s lift);
+    whatever it does not take (off the 1 mm grid, beyond 65.535 m, negative, NaN) goes the old way."""
+    from benchmark.camera.episode_file import quantise_depth
+
+    d = rendered_lift_episode.depth.depth_m
+    noisy = d + np.float32(3e-4) * (d > 0)
+    cases = {"on the grid": d, "strided": d[:, ::2], "off the grid": noisy, "far": d * np.float32(70),
+             "negative": -d, "nan": np.where(d > 0, d, np.float32("nan")), "empty": np.zeros((0, 2), np.float32)}
+    quanta = {}
+    for name, depth in cases.items():
+        counts, q = quantise_depth(depth)
+        expected, q_expected = _quantise_numpy(depth)
+        assert q == q_expected and counts.dtype == np.uint16 and np.array_equal(counts, expected), name
+        quanta[name] = q
+    assert quanta["on the grid"] == 0.001 and quanta["off the grid"] == 0.0001 and quanta["far"] == 0.01

@@ -6,6 +6,7 @@ a terminal does: during the imports, the simulation, the rendering, the numba tr
 
 import json
 import os
+import pathlib
 import signal
 import subprocess
 import sys
@@ -174,3 +175,44 @@ def test_an_interrupt_python_cannot_raise_is_left_to_the_watchdog_without_a_trac
                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     assert run.stderr.count("Traceback") == 1 and "ValueError: reported" in run.stderr, run.stderr
     assert "KeyboardInterrupt" not in run.stderr, run.stderr
+
+
+def _children(pid: int) -> list:
+    try:
+        return [int(c) for c in pathlib.Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except OSError:
+        return []
+
+
+def test_ctrl_c_while_the_colour_renders_beside_the_command_ends_the_worker_too(tmp_path):
+    """The colour of a depth-only method renders in a forked child beside the depth and the
+    tracker: Ctrl-C while it runs gives 130 within the limit, the previous output as it was,
+    nothing left beside it, and no process of the command's group alive a moment later."""
+    out = tmp_path / "run"
+    out.mkdir()
+    write_marker(out)
+    (out / "summary.json").write_text('{"previous": true}')
+    cmd = [sys.executable, "-m", "benchmark.commands.entry", "--task", "lift", "--duration", "4", "--streams",
+           "depth,colour", "--quiet", "--no-gif", "--force", "--out", str(out)]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+                            env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    deadline = time.perf_counter() + 60
+    while not _children(proc.pid) and proc.poll() is None and time.perf_counter() < deadline:
+        time.sleep(0.02)  # until the render stage has forked the colour's worker
+    worker = _children(proc.pid)
+    assert worker, "the colour worker never started"
+    time.sleep(0.3)  # inside its rendering
+    assert pathlib.Path(f"/proc/{worker[0]}").exists()
+    sent = time.perf_counter()
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    took = time.perf_counter() - sent
+    assert proc.returncode == 130, (proc.returncode, err.decode()[-2000:])
+    assert took < LIMIT_S, took
+    assert "interrupted" in err.decode() and "Traceback" not in err.decode(), err.decode()
+    deadline = time.perf_counter() + 5.0
+    while _group_alive(proc.pid) and time.perf_counter() < deadline:
+        time.sleep(0.1)
+    assert not _group_alive(proc.pid), "the colour worker outlived the command"
+    assert json.loads((out / "summary.json").read_text()) == {"previous": True}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]

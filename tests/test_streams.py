@@ -1,6 +1,7 @@
 """The camera's streams end to end: the main command, export, the Node reader and a method that reads colour."""
 
 import json
+import multiprocessing
 import pathlib
 import shutil
 import subprocess
@@ -10,10 +11,17 @@ import numpy as np
 import pytest
 from test_evaluate import TINY
 
-from benchmark.camera.episode_file import load_episode
+from benchmark.atomic import OUTPUT_MARKER, write_marker
+from benchmark.camera.episode_file import load_episode, save_episode
+from benchmark.camera.render import render
 from benchmark.commands.cli import main
+from benchmark.commands.digests import colour_digest
+from benchmark.commands.pictures.depth_preview import write_colour_preview
+from benchmark.commands.stages import render as render_stage
+from benchmark.errors import RenderError
 from benchmark.exchange import load_camera_input
 from benchmark.suites import SUITES
+from benchmark.world.simulate import simulate
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 NODE = shutil.which("node")
@@ -42,6 +50,70 @@ def test_the_main_command_records_colour_keypoints_and_masks_when_asked(tmp_path
     assert summary["colour"]["skin_tone_monk"] in range(1, 11) and summary["digests"]["colour"]
     assert json.loads((out / "options.json").read_text())["options"]["streams"] == ["depth", "colour"]
     assert (out / "colour_preview.png").stat().st_size > 10_000
+
+
+def _colour_run(out, *argv) -> int:
+    return main(["--task", "lift", "--duration", "1", "--streams", "depth,colour", "--quiet", "--no-gif",
+                 "--out", str(out), *argv])
+
+
+def test_the_colour_rendered_beside_the_later_stages_has_the_serial_paths_bytes(tmp_path, monkeypatch, capsys):
+    """A depth-only method: the colour is rendered in a forked child beside the depth and the
+    tracker, and the episode file written by a thread; every byte and digest is the serial path's."""
+    started = []
+    real = render_stage._start_colour
+    monkeypatch.setattr(render_stage, "_start_colour", lambda record: started.append(record.scenario) or real(record))
+    out = tmp_path / "run"
+    assert _colour_run(out) in (0, 1)
+    assert len(started) == 1 and not multiprocessing.active_children()  # taken, and no worker outlives the command
+    printed = capsys.readouterr().out.splitlines()
+    depth_line = next(i for i, line in enumerate(printed) if line.startswith("render: 31 depth frames"))
+    assert printed[depth_line + 1].startswith("render: 31 colour frames 640x480")  # in the serial path's place
+    # the serial path: both streams rendered at once in this process, then written
+    scenario = load_episode(out / "episode.npz").scenario
+    episode = render(simulate(scenario), streams=("depth", "colour"))
+    serial = save_episode(episode, tmp_path / "serial" / "episode.npz")
+    write_colour_preview(episode.colour.rgb, episode.colour.fps, tmp_path / "serial")
+    for name in ("episode.npz", "colour_preview.png"):
+        assert (out / name).read_bytes() == (serial.parent / name).read_bytes(), name
+    summary = json.loads((out / "summary.json").read_text())
+    block, _ = render_stage.colour_summary(scenario, episode.colour, out)
+    assert summary["colour"] == json.loads(json.dumps(block))
+    keys = list(summary)
+    assert keys[keys.index("render") + 1] == "colour"  # the block in its place too
+    assert summary["digests"]["colour"] == colour_digest(episode.colour)
+    assert list(summary["digests"]) == ["truth", "depth", "colour", "tracking", "kinematics", "nominal_forces",
+                                        "final_forces"]
+
+
+def test_a_failure_of_the_colour_beside_the_later_stages_is_one_line_and_leaves_the_output_as_it_was(
+        tmp_path, monkeypatch, capsys):
+    def broken(episode, **kwargs):
+        raise RenderError("planted: the colour renderer failed")
+
+    monkeypatch.setattr(render_stage, "render_colour_stream", broken)  # seen by the forked child
+    out = tmp_path / "run"
+    out.mkdir()
+    write_marker(out)
+    (out / "note.txt").write_text("the previous output")
+    assert _colour_run(out, "--force") == 1
+    err = capsys.readouterr().err
+    assert err == "fsv-bench: failed: background work failed: colour (RenderError: planted: the colour renderer failed)\n"
+    assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARKER, "note.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]  # nothing half-written beside it
+    assert not multiprocessing.active_children()
+
+
+def test_a_method_that_reads_colour_gets_it_rendered_before_tracking(tmp_path, monkeypatch):
+    def not_beside(record):
+        raise AssertionError("the colour of a method that reads it was left to render beside the tracker")
+
+    monkeypatch.setattr(render_stage, "_start_colour", not_beside)
+    out = tmp_path / "run"
+    assert _colour_run(out, "--method", f"{ROOT / 'examples' / 'skin_colour.py'}:method") in (0, 1)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["colour"]["frames"] == 31 and summary["digests"]["colour"]
+    assert load_episode(out / "episode.npz").colour.num_frames == 31
 
 
 def test_a_depth_only_run_renders_no_colour(tmp_path):

@@ -330,7 +330,8 @@ def samples_for(shift_px: float, sensor: ColourSensor) -> int:
 
 def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, labels: np.ndarray, appearance,
                         sensor: ColourSensor, fps: float, rng: np.random.Generator | None,
-                        skin: HandSkin | None = None, pulps: tuple | None = None, observe=None) -> ColourFrames:
+                        skin: HandSkin | None = None, pulps: tuple | None = None, observe=None,
+                        out: tuple | None = None) -> ColourFrames:
     """Renders, blurs and measures a colour video of a MuJoCo model.
 
     Args:
@@ -347,9 +348,12 @@ def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, la
         skin, pulps: As :func:`benchmark.camera.render.render_video`.
         observe: Called as ``observe(k, exact_depth, labels)`` per frame with the middle
             sub-render's exact depth (H, W) float32 [m] and labels (nothing keeps a video of depth).
+        out: ``(rgb, labels)``: arrays of shape (T, H, W, 3) and (T, H, W) uint8 to render into
+            (e.g. memory shared with another process); None allocates them.
 
     Returns:
-        The :class:`ColourFrames`.
+        The :class:`ColourFrames`; its ``rgb`` is read-only (so that :attr:`ColourFrames.video`
+        hands it on without a copy).
     """
     import mujoco
 
@@ -363,8 +367,14 @@ def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, la
                              f"{sensor.width}x{sensor.height}")
     data = mujoco.MjData(model)
     H, W = camera.height, camera.width
-    rgb = np.empty((T, H, W, 3), dtype=np.uint8)
-    label_images = np.empty((T, H, W), dtype=np.uint8)
+    if out is None:
+        rgb, label_images = np.empty((T, H, W, 3), dtype=np.uint8), np.empty((T, H, W), dtype=np.uint8)
+    else:
+        rgb, label_images = out
+        if rgb.shape != (T, H, W, 3) or label_images.shape != (T, H, W) or (rgb.dtype, label_images.dtype) != (
+                np.uint8, np.uint8):
+            raise BenchmarkError(f"out must be uint8 arrays of shapes {(T, H, W, 3)} and {(T, H, W)}, got "
+                                 f"{rgb.dtype} {rgb.shape} and {label_images.dtype} {label_images.shape}")
     samples = np.empty(T, dtype=np.int64)
     renderer = ColourRenderer(model, camera, labels, appearance, skin=skin)
     for k in range(T):
@@ -374,6 +384,7 @@ def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, la
             observe(k, depth, label_images[k])
         sensor.measure(radiance, rng, appearance.lighting, out=rgb[k])
     e = float(sensor.exposure_s)
+    rgb.setflags(write=False)  # finished: fsv.ColourVideo takes it as it is (a writable one it would copy, 0.3 GB)
     return ColourFrames(rgb=rgb, labels=label_images, calib=camera.calibration(), fps=float(fps),
                         exposure_s=e, samples=samples, t_s=np.arange(T) / float(fps))
 
@@ -449,7 +460,7 @@ def register_to_depth(rgb: np.ndarray, colour_calib: Calibration, depth_m: np.nd
 
 
 def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=None,
-                  camera: Camera | None = None, observe=None) -> ColourFrames:
+                  camera: Camera | None = None, observe=None, out: tuple | None = None) -> ColourFrames:
     """Renders the colour video of a simulated episode, beside its scenario's depth camera.
 
     Args:
@@ -461,6 +472,7 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
         observe: Called as ``observe(k, exact_depth, labels)`` with each frame's exact depth along
             the colour camera's axis at t_k, (H, W) float32 [m] (0: nothing), and its labels (e.g.
             :meth:`benchmark.camera.labelling.Labeller.see`).
+        out: Arrays to render into, as :func:`render_colour_video`'s.
 
     Returns:
         The :class:`ColourFrames` (T = len(truth.t) frames at the scenario's fps). The noise comes
@@ -486,4 +498,4 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
     skin, pulps = drawn_hand(world, truth, sc.hand_surface)
     return render_colour_video(world.model, set_state, len(truth.t), camera=colour_cam, labels=world_labels(world),
                                appearance=appearance, sensor=sensor, fps=sc.fps, rng=sc.rng("colour"), skin=skin,
-                               pulps=pulps, observe=observe)
+                               pulps=pulps, observe=observe, out=out)

@@ -18,13 +18,15 @@ the camera :mod:`benchmark.camera.camera`, the scene's meshes and labels :mod:`b
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from benchmark.camera.camera import Camera
-from benchmark.camera.colour import render_colour
+from benchmark.camera.colour import ColourFrames, render_colour
 from benchmark.camera.colour_sensor import colour_camera, colour_preset
 from benchmark.camera.depth import DepthRenderer, HandSkin, drawn_hand, hand_skin, pulp_presses  # noqa: F401 (re-exported)
-from benchmark.camera.labelling import Annotations, Labeller
+from benchmark.camera.labelling import Annotations, Labeller, StreamLabels
 from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from benchmark.camera.views import camera_of
@@ -107,18 +109,55 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
     if episode.depth is None:
         episode = _render_depth(episode, sensor, camera)
     if "colour" in streams and episode.colour is None:
-        labeller = None
-        if episode.annotations is not None:  # the colour's labels beside the depth's
-            from benchmark.world.assets import build_world
+        # the colour's labels beside the depth's (an episode read from a file of version 2 has none)
+        stream = render_colour_stream(episode, camera=camera, labelled=episode.annotations is not None)
+        episode = with_colour_stream(episode, stream)
+    return episode
 
-            colour_calib = colour_camera(camera_of(episode.scenario.view) if camera is None else camera,
-                                         colour_preset(episode.scenario.sensor)).calibration()
-            labeller = Labeller(build_world(episode.scenario), episode.truth, colour_calib,
-                                keypoints=episode.annotations.keypoints_world)
-        frames = render_colour(episode, camera=camera, observe=None if labeller is None else labeller.see)
-        episode = episode.with_colour(frames.video, frames.labels)
-        if labeller is not None:
-            episode = episode.with_annotations(episode.annotations.with_stream("colour", labeller.labels()))
+
+@dataclass(frozen=True)
+class ColourStream:
+    """The colour stream of an episode as :func:`render_colour_stream` renders it.
+
+    Attributes:
+        frames: The :class:`benchmark.camera.colour.ColourFrames`.
+        labels: The stream's :class:`benchmark.camera.labelling.StreamLabels`, or None (not labelled).
+    """
+
+    frames: ColourFrames
+    labels: StreamLabels | None = None
+
+
+def render_colour_stream(episode: Episode, *, camera: Camera | None = None, labelled: bool = True,
+                         out: tuple | None = None) -> ColourStream:
+    """Renders the colour stream of a simulated episode and its labels: it needs no depth, so it
+    may be rendered beside it (in another process) and joined to it with :func:`with_colour_stream`,
+    the same bits as :func:`render` gives (the noise comes from the scenario's own "colour" stream;
+    the keypoints are the depth's, else computed from the truth alike).
+
+    Args:
+        episode: A simulated episode (rendered or not).
+        camera: The depth camera the colour camera sits beside; default the scenario's view's.
+        labelled: Label the stream (keypoints, visibility, BOP poses, contacts in its frame).
+        out: ``(rgb, labels)`` arrays to render into (:func:`benchmark.camera.colour.render_colour_video`).
+    """
+    labeller = None
+    if labelled:
+        from benchmark.world.assets import build_world
+
+        colour_calib = colour_camera(camera_of(episode.scenario.view) if camera is None else camera,
+                                     colour_preset(episode.scenario.sensor)).calibration()
+        keypoints = None if episode.annotations is None else episode.annotations.keypoints_world
+        labeller = Labeller(build_world(episode.scenario), episode.truth, colour_calib, keypoints=keypoints)
+    frames = render_colour(episode, camera=camera, observe=None if labeller is None else labeller.see, out=out)
+    return ColourStream(frames=frames, labels=None if labeller is None else labeller.labels())
+
+
+def with_colour_stream(episode: Episode, stream: ColourStream) -> Episode:
+    """``episode`` (rendered: its depth's annotations, if labelled) with the colour stream and its labels."""
+    episode = episode.with_colour(stream.frames.video, stream.frames.labels)
+    if stream.labels is not None and episode.annotations is not None:
+        episode = episode.with_annotations(episode.annotations.with_stream("colour", stream.labels))
     return episode
 
 

@@ -313,3 +313,33 @@ def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
     c = np.empty(z.shape, dtype=np.float32)
     _incidence_cos_kernel(z, ws.w, *_intrinsics(K), c)
     return c
+
+
+@_jit
+def quantise_on_grid(depth, quantum_m, out) -> bool:
+    """Depth as uint16 counts of ``quantum_m`` when it lies on that grid, in one pass.
+
+    Per value, in C order: c = rint(float64(depth) / quantum_m); every c must lie in [0, 65535]
+    and float32(c * quantum_m) equal the depth (what :func:`benchmark.camera.sensor.dequantise`
+    gives back); then ``out = c``. The arithmetic of
+    :func:`benchmark.camera.episode_file.quantise_depth`'s NumPy path, without its five
+    video-sized float64 temporaries.
+
+    Args:
+        depth: Depth, any shape, C-contiguous float32 [m].
+        quantum_m: The quantum [m].
+        out: uint16, the shape of ``depth``, written (partly, when it returns False).
+
+    Returns:
+        Whether every value was on the grid and in range (False: ``out`` is not the answer).
+    """
+    d = depth.ravel()
+    o = out.ravel()
+    for i in range(d.size):
+        c = np.rint(np.float64(d[i]) / quantum_m)
+        if not (c >= 0.0 and c <= 65535.0):
+            return False
+        if np.float32(c * quantum_m) != d[i]:
+            return False
+        o[i] = np.uint16(c)
+    return True

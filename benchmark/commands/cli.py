@@ -30,7 +30,7 @@ from benchmark.atomic import check_out, staging_folder, swap_folder
 from benchmark.background import Background
 from benchmark.commands.digests import stage_digests
 from benchmark.commands.report import write_json
-from benchmark.commands.stage import Run, complete
+from benchmark.commands.stage import Run, StageResult, complete
 from benchmark.commands.stages import STAGES
 from benchmark.errors import BenchmarkError, ScenarioError
 from benchmark.method.protocol import check_people
@@ -298,11 +298,14 @@ def method_spec_from_args(args: argparse.Namespace):
 
 
 def run_stages(record: Run, args: argparse.Namespace, background: Background) -> tuple:
-    """Runs every stage on ``record``; returns ``(summary, lines, timing_s, last record)``.
+    """Runs every stage on ``record``; returns ``(parts, timing_s, last record)``.
 
     Files go into ``record.out``; pictures (and the episode archive) are started on ``background``.
+    ``parts`` holds, in order, each stage's :class:`~benchmark.commands.stage.StageResult` and the
+    jobs it left running (``later``): :func:`finish_stages` joins them once ``background`` is done.
     """
-    summary, lines, timing = {}, [], {}
+    parts, timing = [], {}
+    record = dataclasses.replace(record, background=background)
     for stage in STAGES:
         t0 = time.perf_counter()
         result = stage(record, args)
@@ -310,10 +313,26 @@ def run_stages(record: Run, args: argparse.Namespace, background: Background) ->
         complete(result, record.out, background)
         if result.pictures:  # for the later stages' figures, imported while the next stage works
             background.preload("matplotlib.pyplot")
+        parts += [result, *result.later]
+        timing[stage.name] = time.perf_counter() - t0
+    return parts, timing, dataclasses.replace(record, background=None)
+
+
+def finish_stages(parts: list, record: Run) -> tuple:
+    """``(summary, lines, digests, record)`` of the stages' ``parts`` (:func:`run_stages`), their
+    later jobs' results in their place (call it after the background is done: a failed job raises
+    BenchmarkError); the record holds the episode the last of them completed."""
+    summary, lines, digests = {}, [], {}
+    for part in parts:
+        result = part if isinstance(part, StageResult) else part.result()
+        if not isinstance(result, StageResult):
+            raise TypeError(f"a later job returned {type(result).__name__}, not a StageResult")
         summary.update(result.blocks)
         lines += result.lines
-        timing[stage.name] = time.perf_counter() - t0
-    return summary, lines, timing, record
+        digests.update(result.digests)
+        if result.episode is not None and part is not result:
+            record = dataclasses.replace(record, episode=result.episode)
+    return summary, lines, digests, record
 
 
 def main(argv: list | None = None) -> int:
@@ -350,12 +369,13 @@ def main(argv: list | None = None) -> int:
     start = time.perf_counter()
     try:
         record = Run(scenario=scenario, out=tmp, method_spec=spec, quiet=args.quiet)
-        summary, lines, timing, record = run_stages(record, args, background)
+        parts, timing, record = run_stages(record, args, background)
         t0 = time.perf_counter()
         background.wait()
+        summary, lines, known, record = finish_stages(parts, record)
         timing["wait_background"] = time.perf_counter() - t0
         timing["total"] = time.perf_counter() - start
-        summary["digests"] = stage_digests(record.episode, record.estimate)
+        summary["digests"] = stage_digests(record.episode, record.estimate, known)
         summary["timing_s"] = timing
         summary["provenance"] = provenance()
         write_json(tmp / "summary.json", summary)

@@ -32,19 +32,27 @@ def digest(*records) -> str | None:
             if isinstance(value, np.ndarray) and field.name not in WALL_CLOCK:
                 h.update(field.name.encode())
                 h.update(str(value.dtype).encode())
-                h.update(np.ascontiguousarray(value).tobytes())
+                h.update(memoryview(np.ascontiguousarray(value).reshape(-1)).cast("B"))  # no copy
     return h.hexdigest()[:16]
 
 
-def stage_digests(episode, estimate) -> dict:
+def colour_digest(colour) -> str:
+    """The ``colour`` digest of :func:`stage_digests`: of an ``fsv.ColourVideo`` and its calibration."""
+    return digest(colour, colour.calib)
+
+
+def stage_digests(episode, estimate, known: dict | None = None) -> dict:
     """``{stage: digest}`` for :data:`STAGES` of one run of the main command.
 
     Args:
         episode: The rendered ``benchmark.world.episode.Episode``.
         estimate: The method's ``fsv.method.Estimate`` on it.
+        known: Digests already computed (the colour's, by the job that rendered it beside the
+            later stages): taken as they are.
     """
+    known = known or {}
     tracking = estimate.tracking
-    colour = {} if episode.colour is None else {"colour": digest(episode.colour, episode.colour.calib)}
+    colour = {} if episode.colour is None else {"colour": known.get("colour") or colour_digest(episode.colour)}
     return {
         "truth": digest(episode.truth),
         "depth": digest(episode.depth),

@@ -6,6 +6,13 @@ and the options it declares, and returns a :class:`StageResult`: its blocks of `
 its printed lines, its files, the pictures to draw beside the next stages, and what it makes for the later
 stages. The command builds the next :class:`Run` from it (``dataclasses.replace``); no stage writes
 into another's state or reads an option it did not declare.
+
+A stage may leave part of its work to finish beside the later stages when none of them needs it
+(the colour stream of a method that reads only depth): it starts that work on the command's
+:class:`benchmark.background.Background` (``Run.background``) and returns its
+:class:`benchmark.background.Job` in ``StageResult.later``; the job's result, a
+:class:`StageResult` of its own, takes its place after the stage's own blocks and lines when the
+command ends, and its episode replaces the run's.
 """
 
 from __future__ import annotations
@@ -53,6 +60,9 @@ class Run:
             track stage on.
         inputs: What the method was handed (``fsv.method.CameraInput``: calibration, models, the
             person's grip calibration or None), from the track stage on.
+        background: The command's :class:`benchmark.background.Background`, where a stage may
+            start work that finishes beside the later stages (``StageResult.later``); None (a stage
+            run on its own) does all its work before it returns.
     """
 
     scenario: Scenario
@@ -63,6 +73,7 @@ class Run:
     estimate: Any = None
     knowledge: Any = None
     inputs: Any = None
+    background: Any = None
 
 
 @dataclass(frozen=True)
@@ -78,6 +89,10 @@ class StageResult:
         estimate: The method's estimate, if this stage ran the method, else None.
         knowledge: What the method was told, if this stage ran it, else None.
         inputs: What the method was handed, if this stage ran it, else None.
+        later: Jobs (:class:`benchmark.background.Job`) of this stage's still running beside the
+            later stages; each one's result is a :class:`StageResult` that completes this one at the end.
+        digests: ``((name, digest), ...)``: digests of :data:`benchmark.commands.digests.STAGES`
+            already computed off the command's critical path (a later job's).
     """
 
     blocks: tuple = ()
@@ -88,9 +103,11 @@ class StageResult:
     estimate: Any = None
     knowledge: Any = None
     inputs: Any = None
+    later: tuple = ()
+    digests: tuple = ()
 
     def __post_init__(self):
-        for name in ("blocks", "lines", "files", "pictures"):
+        for name in ("blocks", "lines", "files", "pictures", "later", "digests"):
             if not isinstance(getattr(self, name), tuple):
                 raise TypeError(f"StageResult.{name} must be a tuple, got {type(getattr(self, name)).__name__}")
 

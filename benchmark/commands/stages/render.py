@@ -1,16 +1,29 @@
-"""The render stage: the episode's depth video from its sensor; the ``render`` block and the depth preview."""
+"""The render stage: the episode's depth video from its sensor; the ``render`` block and the depth preview.
+
+The colour stream, when ``--streams`` asks for it and the method does not read it, is rendered
+beside the depth and the later stages: in a child forked at the stage's start (the colour needs
+only the simulated truth, and no later stage reads it) into memory shared with the command
+(:func:`benchmark.background.shared_empty`), while the command renders the depth and runs the
+method on the other core; a thread then joins it to the depth and writes the episode file. The
+``colour`` block, line and digest are those of rendering both streams here, bit for bit (the colour
+has its own random stream). A method that reads colour gets it before the track stage, rendered here.
+"""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
+from benchmark.background import shared_empty
 from benchmark.camera.appearance import appearance_of
 from benchmark.camera.colour_sensor import colour_preset
 from benchmark.camera.depth import RASTERISER
 from benchmark.camera.episode_file import save_episode
-from benchmark.camera.render import render
+from benchmark.camera.render import render, render_colour_stream, with_colour_stream
 from benchmark.camera.scene import LABEL_BOX
 from benchmark.camera.views import view_of
+from benchmark.commands.digests import colour_digest
 from benchmark.commands.pictures.depth_preview import preview_paths, write_colour_preview, write_preview
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 from benchmark.suites.options import add_streams_argument
@@ -25,8 +38,14 @@ def add_arguments(parser) -> None:
 
 def run(record: Run, options) -> StageResult:
     """Renders the run's episode (the streams ``--streams`` asks for and those the method reads);
-    the depth preview is drawn beside the next stages."""
-    episode = render(record.episode, streams=check_streams([*options["streams"], *record.method_spec.streams]))
+    the depth preview is drawn beside the next stages, and so is the colour when the method does
+    not read it and the command runs stages beside each other (``record.background``)."""
+    streams = check_streams([*options["streams"], *record.method_spec.streams])
+    beside = None
+    if "colour" in streams and "colour" not in record.method_spec.streams and record.background is not None:
+        beside = _start_colour(record)
+        streams = tuple(s for s in streams if s != "colour")
+    episode = render(record.episode, streams=streams)
     depth = episode.depth
     gif = not options["no_gif"]
     paths = preview_paths(record.out, gif=gif)
@@ -48,24 +67,68 @@ def run(record: Run, options) -> StageResult:
              f"preview {paths[0]}"]
     pictures = [Picture("depth preview", write_preview, (depth.depth_m, depth.fps, record.out), {"gif": gif})]
     blocks = [("render", block)]
+    if beside is not None:  # the colour, the episode file and the colour block come from the later job
+        job, buffers = beside
+        later = (record.background.thread("episode.npz", _finish_colour, job, buffers, episode, record.scenario,
+                                          record.out),)
+        return StageResult(blocks=tuple(blocks), lines=tuple(lines), pictures=tuple(pictures), episode=episode,
+                           later=later)
     if episode.colour is not None:
-        colour = episode.colour
-        _, Hc, Wc, _ = colour.rgb.shape
-        sensor = colour_preset(record.scenario.sensor)
-        appearance = appearance_of(record.scenario)
-        blocks.append(("colour", {
-            "frames": colour.num_frames, "width": Wc, "height": Hc, "fps": colour.fps, "exposure_s": colour.exposure_s,
-            "sensor": record.scenario.sensor, "offset_from_depth_m": list(sensor.offset_m),
-            "white_balance": sensor.white_balance, "noise": sensor.noise, "skin_tone_monk": appearance.skin_tone,
-            "lights": len(appearance.lighting.kelvin), "light_kelvin": [float(k) for k in appearance.lighting.kelvin],
-            "preview": "colour_preview.png",
-        }))
-        lines.append(f"render: {colour.num_frames} colour frames {Wc}x{Hc}, exposure {1e3 * colour.exposure_s:.1f} ms, "
-                     f"skin tone {appearance.skin_tone} of 10 (Monk); preview {record.out / 'colour_preview.png'}")
-        pictures.append(Picture("colour preview", write_colour_preview, (colour.rgb, colour.fps, record.out)))
+        colour_block, colour_line = colour_summary(record.scenario, episode.colour, record.out)
+        blocks.append(("colour", colour_block))
+        lines.append(colour_line)
+        pictures.append(Picture("colour preview", write_colour_preview, (episode.colour.rgb, episode.colour.fps,
+                                                                         record.out)))
     # the episode is complete: its archive is compressed beside the later stages
     pictures.append(Picture("episode.npz", save_episode, (episode, record.out / "episode.npz"), in_thread=True))
     return StageResult(blocks=tuple(blocks), lines=tuple(lines), pictures=tuple(pictures), episode=episode)
+
+
+def colour_summary(scenario, colour, out) -> tuple:
+    """``(block, line)``: the ``colour`` block of ``summary.json`` and the printed line of a
+    scenario's colour stream (an ``fsv.ColourVideo``) whose preview is in the folder ``out``."""
+    _, Hc, Wc, _ = colour.rgb.shape
+    sensor = colour_preset(scenario.sensor)
+    appearance = appearance_of(scenario)
+    block = {
+        "frames": colour.num_frames, "width": Wc, "height": Hc, "fps": colour.fps, "exposure_s": colour.exposure_s,
+        "sensor": scenario.sensor, "offset_from_depth_m": list(sensor.offset_m),
+        "white_balance": sensor.white_balance, "noise": sensor.noise, "skin_tone_monk": appearance.skin_tone,
+        "lights": len(appearance.lighting.kelvin), "light_kelvin": [float(k) for k in appearance.lighting.kelvin],
+        "preview": "colour_preview.png",
+    }
+    line = (f"render: {colour.num_frames} colour frames {Wc}x{Hc}, exposure {1e3 * colour.exposure_s:.1f} ms, "
+            f"skin tone {appearance.skin_tone} of 10 (Monk); preview {out / 'colour_preview.png'}")
+    return block, line
+
+
+def _start_colour(record: Run) -> tuple:
+    """Forks the colour's rendering (``(job, (rgb, labels))``: the job, and the shared arrays it renders into)."""
+    T = len(record.episode.truth.t)
+    sensor = colour_preset(record.scenario.sensor)
+    buffers = (shared_empty((T, sensor.height, sensor.width, 3), np.uint8),
+               shared_empty((T, sensor.height, sensor.width), np.uint8))
+    return record.background.fork("colour", _render_colour, record.episode, buffers, record.out), buffers
+
+
+def _render_colour(episode, buffers: tuple, out) -> tuple:
+    """In the forked child: renders the colour stream and its labels into ``buffers`` and draws its
+    preview; returns ``(the stream without its two videos, its digest)`` (the videos are shared)."""
+    stream = render_colour_stream(episode, out=buffers)
+    write_colour_preview(stream.frames.rgb, stream.frames.fps, out)
+    return replace(stream, frames=replace(stream.frames, rgb=None, labels=None)), colour_digest(stream.frames.video)
+
+
+def _finish_colour(job, buffers: tuple, episode, scenario, out) -> StageResult:
+    """In a thread of the command: waits for the colour, joins it to the rendered ``episode`` and
+    writes the episode file; returns the ``colour`` block, line and digest and the whole episode."""
+    stream, digest = job.result()
+    rgb, labels = buffers
+    rgb.setflags(write=False)  # done: fsv.ColourVideo takes it without a copy
+    episode = with_colour_stream(episode, replace(stream, frames=replace(stream.frames, rgb=rgb, labels=labels)))
+    save_episode(episode, out / "episode.npz")
+    block, line = colour_summary(scenario, episode.colour, out)
+    return StageResult(blocks=(("colour", block),), lines=(line,), episode=episode, digests=(("colour", digest),))
 
 
 STAGE = Stage(name="render", run=run, options=("no_gif", "streams"), add_arguments=add_arguments)
