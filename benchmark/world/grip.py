@@ -19,7 +19,7 @@ import numpy as np
 from benchmark.world.assets import World, user_of
 from benchmark.world.living import MOVING_ACC, MOVING_ALPHA, LivingGrip
 from benchmark.world.scenario import Scenario
-from fsv.linalg import dot, inv, mm, mv, rows_mt, vm
+from fsv.linalg import dot, inv, mm, mv, rows_mt, solve, vm
 
 
 @dataclass(frozen=True)
@@ -35,7 +35,9 @@ class GripPolicy:
         share: Per finger share of the internal force, thumb first, (K,); the thumb opposes the
             fingers (its share is 1, the active fingers' shares are renormalised to sum to 1).
         min_finger_force_n: Every digit in contact presses with at least this normal force, [N]
-            (people keep each digit of a grasp in firm contact).
+            (a choice: people keep each digit of a grasp in firm contact; the fingers' forces keep
+            their proportions down to light loads, Radwin et al. 1992, so that a floor binds only
+            where a digit carries almost no load).
     """
 
     friction: float
@@ -44,7 +46,7 @@ class GripPolicy:
     anticipation_s: float
     response_s: float
     share: np.ndarray
-    min_finger_force_n: float = 1.0
+    min_finger_force_n: float = 0.5
 
     @staticmethod
     def for_scenario(scenario: Scenario, world: World) -> "GripPolicy":
@@ -93,10 +95,11 @@ class GripPolicy:
         f_nom = np.zeros((len(wrench), K, 3))
         f_nom[:, idx] = rows_mt(wrench, Gp).reshape(len(wrench), -1, 3)
         press = np.zeros((K, K, 3))
+        weights = centred_shares(share, points[idx], normals_in[idx])
         for i, k in enumerate(idx):
             d = np.zeros((len(idx), 3))
             if i == 0:
-                d[:] = share[:, None] * normals_in[idx]
+                d[:] = weights[:, None] * normals_in[idx]
             else:
                 d[i] = normals_in[k]
             d = d.ravel()
@@ -104,50 +107,64 @@ class GripPolicy:
             press[k, idx] = d_int / dot(d_int[i], normals_in[k])
         return (f_nom[0] if single else f_nom), press
 
+    @property
+    def slip_slope(self) -> float:
+        """The normal force per newton of tangential load at which a digit works with the person's
+        safety margin: 1 / (mu (1 - margin)) (the margin is Johansson & Westling's relative one,
+        (G - G_slip) / G)."""
+        return 1.0 / (self.friction * (1.0 - self.safety_margin))
+
     def hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
-             baseline_n, margin=None) -> np.ndarray:
-        """How hard each digit presses: the baseline squeeze, then each digit pressed until it works
-        inside its friction cone shrunk by the safety margin and with at least ``min_finger_force_n``.
+             baseline_n, boost=None) -> np.ndarray:
+        """How hard each digit presses: each digit pressed until it works inside its friction cone
+        shrunk by the safety margin, and with at least ``min_finger_force_n``; the thumb at least
+        with the baseline grip.
 
         A person controls the grip digit by digit (Burstedt, Flanagan & Johansson 1999): a digit that
         carries more of the load presses harder, and the others react, instead of the whole hand
-        squeezing harder. Each pass adds to each digit short of its requirement the press that
+        squeezing harder. Each pass adds to each digit short of its requirement
+        ``max(slip_slope (1 + boost) t, min_finger_force_n)`` (t its tangential load) the press that
         brings its own normal force to it, one digit after the other, the fingers first and then the
         thumb (whose normal force is mostly their reaction: it presses for its own load only where
-        their reactions fall short); the
-        passes repeat (:data:`HOLD_PASSES`) because a press also moves the digits' tangential forces.
+        their reactions fall short); the passes repeat (:data:`HOLD_PASSES`) because a press also
+        moves the digits' tangential forces. The floor and the baseline are lower bounds, not added
+        to the load's requirement: the grip's relative safety margin over the slip limit is the
+        person's wherever the load needs more than them (Johansson & Westling 1984 measured it on
+        the whole grip force).
 
         Args:
             f_nom: Nominal forces, (N, K, 3) [N].
             press: Unit presses per digit, (K, K, 3) (:meth:`nominal_and_compressions`).
             normals_in: Unit normals into the box, (K, 3).
             active: Digits in contact, (K,) bool.
-            baseline_n: The squeeze kept without load, scalar or (N,) [N].
-            margin: The safety margin per tick, (N,); None: the policy's.
+            baseline_n: The thumb's least normal force, scalar or (N,) [N].
+            boost: The requirement's relative raise per tick (the lift-off overshoot), (N,); None: 0.
 
         Returns:
             The press of each digit, (N, K) [N]: the forces are ``f_nom + sum_j c[:, j] press[j]``.
         """
         N, K = f_nom.shape[:2]
         c = np.zeros((N, K))
-        c[:, 0] = baseline_n
-        f = f_nom + np.einsum("nj,jkd->nkd", c, press)
-        margin = np.full(N, self.safety_margin) if margin is None else np.asarray(margin, dtype=float)
-        slope = (1.0 + margin) / self.friction
+        f = f_nom.copy()
+        slope = np.full(N, self.slip_slope)
+        if boost is not None:
+            slope = slope * (1.0 + np.asarray(boost, dtype=float))
+        order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else list(np.flatnonzero(active))
         for _ in range(HOLD_PASSES):
             added = 0.0
-            order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else np.flatnonzero(active)
             for j in order:  # one digit at a time, the fingers before the thumb that opposes them
                 n = np.einsum("nd,d->n", f[:, j], normals_in[j])
                 t = norm_rows(f[:, j] - n[:, None] * normals_in[j])
-                deficit = np.maximum(slope * t + self.min_finger_force_n - n, 0.0)
+                deficit = np.maximum(np.maximum(slope * t, self.min_finger_force_n) - n, 0.0)
                 c[:, j] += deficit
                 f = f + deficit[:, None, None] * press[j]
                 added = max(added, float(np.max(deficit)))
             if added <= HOLD_TOLERANCE_N:
                 break
+        if active[0]:
+            n0 = np.einsum("nd,d->n", f[:, 0], normals_in[0])
+            c[:, 0] += np.maximum(np.asarray(baseline_n, dtype=float) - n0, 0.0)
         return c
-
 
     def whole_hand(self, f_nom: np.ndarray, squeeze: np.ndarray, normals_in: np.ndarray,
                    active: np.ndarray) -> tuple[np.ndarray, float]:
@@ -171,7 +188,7 @@ class GripPolicy:
             no load, [N].
         """
         idx = np.flatnonzero(active)
-        mu = self.friction / (1.0 + self.safety_margin)
+        mu = self.friction * (1.0 - self.safety_margin)
         nrm = normals_in[idx]
         d_int = squeeze[idx]
         n0 = np.einsum("nkj,kj->nk", f_nom[:, idx], nrm)
@@ -189,6 +206,68 @@ class GripPolicy:
         floor = float(np.max(self.min_finger_force_n / np.maximum(n1, 1e-9)))
         return grip, floor
 
+def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray) -> np.ndarray:
+    """The weights of the grasp's squeeze: the thumb's 1 and the fingers' shares of its opposing
+    force, moved as little as needed for the squeeze's normal forces to exert no moment on the box.
+
+    People share the fingers' normal forces so that their moments balance the thumb's (Zatsiorsky,
+    Gregory & Latash 2002, Biol. Cybern. 87; Zatsiorsky & Latash 2008, J. Mot. Behav. 40): pressed
+    in the person's own shares, fingers whose resultant is not opposite the thumb turn the box, and
+    friction along the faces must hold it with a couple that grows with the squeeze. The fingers'
+    weights w minimise sum_j (w_j - s_j)^2 / s_j + CENTRING_WEIGHT |m_0 + sum_j w_j m_j|^2 (m the
+    moment about the centre of mass of a digit's unit normal force, [m]) with the thumb's force
+    balanced along its normal and every w_j >= 0: where the thumb faces a point between the fingers'
+    pads the moment vanishes; elsewhere it is the least the fingers can make it.
+
+    Args:
+        share: The thumb's 1 and the fingers' shares (summing to 1), thumb first, (A,).
+        points: The digits' contact points relative to the centre of mass, thumb first, (A, 3), [m].
+        normals_in: Their unit normals into the box, (A, 3).
+
+    Returns:
+        The weights, thumb first (1), (A,).
+    """
+    A = len(share)
+    out = np.ones(A)
+    if A < 2:
+        return out
+    s = np.asarray(share[1:], dtype=float)
+    moment = np.stack([_cross3(points[k], normals_in[k]) for k in range(A)])
+    m0, M = moment[0], moment[1:]
+    a = -np.einsum("kj,j->k", normals_in[1:], normals_in[0])  # each finger's force opposing the thumb's
+    free = np.ones(A - 1, bool)
+    w = s.copy()
+    for _ in range(A):  # active set: fingers whose weight would be negative are set to 0
+        i = np.flatnonzero(free)
+        F = len(i)
+        H = np.zeros((F + 1, F + 1))
+        rhs = np.zeros(F + 1)
+        for p in range(F):
+            H[p, p] += 2.0 / s[i[p]]
+            rhs[p] += 2.0
+            for q in range(F):
+                H[p, q] += 2.0 * CENTRING_WEIGHT * dot(M[i[p]], M[i[q]])
+            rhs[p] -= 2.0 * CENTRING_WEIGHT * dot(M[i[p]], m0)
+            H[p, F] = H[F, p] = a[i[p]]
+        rhs[F] = 1.0
+        x = solve(H, rhs)
+        w = np.zeros(A - 1)
+        w[i] = x[:F]
+        if np.all(w[i] >= 0.0) or F == 1:
+            break
+        free[i[int(np.argmin(w[i]))]] = False
+    out[1:] = np.maximum(w, 0.0)
+    return out
+
+
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+CENTRING_WEIGHT = 1e6
+"""Cost of the squeeze's moment per newton of the thumb, [1/m^2], against the fingers' departure from
+their shares: 1 mm of unbalanced lever costs as much as moving a finger's share by its own size
+(a choice: the moment vanishes wherever the geometry allows)."""
 HOLD_PASSES = 30
 """Passes of :meth:`GripPolicy.hold` at most (each digit's press moves the others' forces a little)."""
 HOLD_TOLERANCE_N = 1e-6
@@ -204,12 +283,13 @@ latency to stay stable, fast enough to catch a lift's load within a few hundred 
 RELAX_TIME_S = 1.0
 """Time constant with which a digit's correction relaxes once its load is met (a choice: grip
 forces relax over about a second in static holds, Johansson & Westling 1984)."""
-LIFT_OFF_MARGIN = 0.5
-"""Extra safety margin while the load comes onto the hand and just after lift-off: the grip force
-peaks shortly after lift-off and then declines to its static level (Johansson & Westling 1984,
-Exp. Brain Res. 56; the peak is a choice within the overshoots they show)."""
+LIFT_OFF_OVERSHOOT = 0.5
+"""The digits' requirement is raised by this fraction of itself while the load comes onto the hand
+and just after lift-off: the grip force peaks shortly after lift-off and then declines to its static
+level (Johansson & Westling 1984, Exp. Brain Res. 56; the peak is a choice within the overshoots
+they show)."""
 LIFT_OFF_HOLD_S = 0.3
-"""The extra margin is kept this long after lift-off, [s]."""
+"""The raise is kept this long after lift-off, [s]."""
 LIFT_OFF_DECAY_S = 0.5
 """Then it decays with this time constant, [s]."""
 CONTROL_PERIOD_FALLBACK_S = 0.004
@@ -285,7 +365,7 @@ class Human:
         self.on = ~off
         # tactile feedback (see act): each digit's realized load, delayed, presses it further
         self.press = press
-        self.slope = (1.0 + pol.safety_margin) / pol.friction
+        self.slope = pol.slip_slope
         self.active = np.asarray(plan.active, bool)
         self.normals = np.asarray(plan.normal_in, dtype=float)
         self.feedback = np.zeros(len(plan.active))
@@ -341,7 +421,8 @@ class Human:
         digit actually carries, which a statically indeterminate grasp shares among the digits by
         their compliance, not by the plan."""
         n, t = _digit_loads(self.world, data, box_rot, self.normals)
-        self._deficits[self._tick % self._delay] = np.where(self.active, self.slope * t - n, 0.0)
+        need = np.maximum(self.slope * t, self.policy.min_finger_force_n)
+        self._deficits[self._tick % self._delay] = np.where(self.active, need - n, 0.0)
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
         self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
@@ -424,7 +505,7 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
     baseline = pol.baseline_grip_n * living.relaxation(tk, moving)
     if control == "per-digit":
         target = pol.hold(f_nom, press, plan.normal_in, plan.active, baseline,
-                          margin=pol.safety_margin + LIFT_OFF_MARGIN * _lift_off(ta, ph))
+                          boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph))
     else:
         grip_slip, grip_floor = pol.whole_hand(f_nom, press[0], plan.normal_in, plan.active)
         target = np.zeros((len(tk), len(plan.active)))

@@ -25,7 +25,7 @@ GRIP_CONTROLS = ("whole-hand", "per-digit")
 grasp's squeeze as one pattern until the digit closest to slipping holds (every digit presses as
 hard as that one needs); "per-digit" presses each digit for its own load, with tactile feedback on
 the load it carries and the grip's overshoot at lift-off."""
-DEFAULT_GRIP_CONTROL = "whole-hand"
+DEFAULT_GRIP_CONTROL = "per-digit"
 """The grip control of a scenario that names none (episodes with another are named ``...-<control>``)."""
 SENSORS = ("ds325", "kinect-v1", "ideal")
 """The depth-sensor presets a scenario may name (their models: ``benchmark.camera.sensor.PRESETS``)."""
