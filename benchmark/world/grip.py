@@ -96,6 +96,14 @@ class GripPolicy:
         f_nom[:, idx] = rows_mt(wrench, Gp).reshape(len(wrench), -1, 3)
         press = np.zeros((K, K, 3))
         weights = centred_shares(share, points[idx], normals_in[idx])
+        # the presses: nearest internal forces in a metric where a tangential change costs
+        # PRESS_TANGENTIAL_COST times a normal one (a press is balanced by the other digits'
+        # normal forces where it can be, not by couples along the faces)
+        Wp = np.zeros((3 * len(idx), 3 * len(idx)))
+        for i, k in enumerate(idx):
+            nn = np.outer(normals_in[k], normals_in[k])
+            Wp[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = share[i] * (nn + (np.eye(3) - nn) / PRESS_TANGENTIAL_COST)
+        Gq = mm(mm(Wp, G.T), inv(mm(mm(G, Wp), G.T)))
         for i, k in enumerate(idx):
             d = np.zeros((len(idx), 3))
             if i == 0:
@@ -103,7 +111,7 @@ class GripPolicy:
             else:
                 d[i] = normals_in[k]
             d = d.ravel()
-            d_int = (d - mv(Gp, mv(G, d))).reshape(-1, 3)
+            d_int = (d - mv(Gq, mv(G, d))).reshape(-1, 3)
             press[k, idx] = d_int / dot(d_int[i], normals_in[k])
         return (f_nom[0] if single else f_nom), press
 
@@ -115,7 +123,7 @@ class GripPolicy:
         return 1.0 / (self.friction * (1.0 - self.safety_margin))
 
     def hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
-             baseline_n, boost=None) -> np.ndarray:
+             baseline_n, slope=None) -> np.ndarray:
         """How hard each digit presses: each digit pressed until it works inside its friction cone
         shrunk by the safety margin, and with at least ``min_finger_force_n``; the thumb at least
         with the baseline grip.
@@ -138,7 +146,8 @@ class GripPolicy:
             normals_in: Unit normals into the box, (K, 3).
             active: Digits in contact, (K,) bool.
             baseline_n: The thumb's least normal force, scalar or (N,) [N].
-            boost: The requirement's relative raise per tick (the lift-off overshoot), (N,); None: 0.
+            slope: Each digit's normal force per newton of its tangential load, per tick, (N,);
+                None: :attr:`slip_slope`.
 
         Returns:
             The press of each digit, (N, K) [N]: the forces are ``f_nom + sum_j c[:, j] press[j]``.
@@ -146,9 +155,7 @@ class GripPolicy:
         N, K = f_nom.shape[:2]
         c = np.zeros((N, K))
         f = f_nom.copy()
-        slope = np.full(N, self.slip_slope)
-        if boost is not None:
-            slope = slope * (1.0 + np.asarray(boost, dtype=float))
+        slope = np.full(N, self.slip_slope) if slope is None else np.broadcast_to(np.asarray(slope, dtype=float), (N,))
         order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else list(np.flatnonzero(active))
         for _ in range(HOLD_PASSES):
             added = 0.0
@@ -165,6 +172,51 @@ class GripPolicy:
             n0 = np.einsum("nd,d->n", f[:, 0], normals_in[0])
             c[:, 0] += np.maximum(np.asarray(baseline_n, dtype=float) - n0, 0.0)
         return c
+
+    def grasp_hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
+                   baseline_n, boost=None) -> tuple[np.ndarray, np.ndarray]:
+        """How hard each digit presses for the grasp to hold with the person's safety margin: the
+        digit-by-digit presses of :meth:`hold`, at the slope (normal force per newton of a digit's
+        tangential load) at which the grasp as a whole works with the person's relative margin,
+        1 - L / (mu sum N) = margin (L the digits' summed tangential force, sum N their summed
+        normal force; Johansson & Westling 1984 measured the margin on the grip as a whole).
+
+        Each digit's normal force follows its own load (Burstedt, Flanagan & Johansson 1999), but
+        the digits' normal forces must balance across the grasp: the thumb opposes the fingers, so a
+        side that carries less tangential load than the other works with a larger margin than its
+        requirement. Pressing every digit at the person's margin would put the grasp's margin above
+        it; the slope is lowered until the grasp's margin is the person's (:data:`GRASP_ITERATIONS`
+        corrections, each scaling the slope by the summed normal force wanted over the one pressed),
+        but never so far that a digit works with less than :data:`DIGIT_MARGIN_FRACTION` of the
+        person's margin. The floor and the baseline keep the grip above that at light loads.
+
+        Args:
+            f_nom: Nominal forces, (N, K, 3) [N].
+            press: Unit presses per digit, (K, K, 3) (:meth:`nominal_and_compressions`).
+            normals_in: Unit normals into the box, (K, 3).
+            active: Digits in contact, (K,) bool.
+            baseline_n: The thumb's least normal force, scalar or (N,) [N].
+            boost: The grip's relative raise per tick (the lift-off overshoot), (N,); None: 0.
+
+        Returns:
+            ``(c (N, K), slope (N,))``: the presses (as :meth:`hold`'s) and the digits' slope per tick.
+        """
+        N = len(f_nom)
+        raise_ = np.ones(N) if boost is None else 1.0 + np.asarray(boost, dtype=float)
+        person = self.slip_slope * raise_
+        lowest = raise_ / (self.friction * (1.0 - DIGIT_MARGIN_FRACTION * self.safety_margin))
+        idx = np.flatnonzero(active)
+        nrm = normals_in[idx]
+        slope = person
+        for _ in range(GRASP_ITERATIONS):
+            c = self.hold(f_nom, press, normals_in, active, baseline_n, slope)
+            f = (f_nom + np.einsum("nj,jkd->nkd", c, press))[:, idx]
+            n = np.einsum("nkd,kd->nk", f, nrm)
+            tang = f - n[..., None] * nrm
+            load = np.sqrt(np.einsum("nkd,nkd->nk", tang, tang)).sum(axis=1)
+            wanted = person * load
+            slope = np.clip(slope * wanted / np.maximum(n.sum(axis=1), 1e-9), lowest, person)
+        return self.hold(f_nom, press, normals_in, active, baseline_n, slope), slope
 
     def whole_hand(self, f_nom: np.ndarray, squeeze: np.ndarray, normals_in: np.ndarray,
                    active: np.ndarray) -> tuple[np.ndarray, float]:
@@ -268,6 +320,13 @@ CENTRING_WEIGHT = 1e6
 """Cost of the squeeze's moment per newton of the thumb, [1/m^2], against the fingers' departure from
 their shares: 1 mm of unbalanced lever costs as much as moving a finger's share by its own size
 (a choice: the moment vanishes wherever the geometry allows)."""
+GRASP_ITERATIONS = 2
+"""Corrections of the digits' slope in :meth:`GripPolicy.grasp_hold`."""
+DIGIT_MARGIN_FRACTION = 0.5
+"""No digit works with less than this fraction of the person's safety margin (a choice: the grasp's
+margin is the person's, and none of its digits comes close to slipping)."""
+PRESS_TANGENTIAL_COST = 1.0
+"""How much more a press's tangential change costs than a normal one (:meth:`GripPolicy.nominal_and_compressions`)."""
 HOLD_PASSES = 30
 """Passes of :meth:`GripPolicy.hold` at most (each digit's press moves the others' forces a little)."""
 HOLD_TOLERANCE_N = 1e-6
@@ -293,6 +352,8 @@ LIFT_OFF_HOLD_S = 0.3
 LIFT_OFF_DECAY_S = 0.5
 """Then it decays with this time constant, [s]."""
 CONTROL_PERIOD_FALLBACK_S = 0.004
+REPLAN_EVERY = 12
+REPLAN_AFTER_LOAD_S = 0.3
 """The control period assumed for a single control tick, [s]."""
 
 
@@ -343,29 +404,22 @@ class Human:
         self.ctrl = q[:, world.actuator_joint]
         tk = t[::ctrl_every]
         self.control = scenario.grip_control
-        target, f_nom, press = _grip_target(tk, world, motion, plan, pol, living, phases, releases, self.control)
+        self._tk, self._pol, self._living = tk, pol, living
+        target, f_nom, press, self._slope = _grip_target(tk, world, motion, plan, pol, living, phases, releases,
+                                                         self.control)
         self.grip_target = target
-        grip = np.zeros_like(target)
-        keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
-        g = np.zeros(target.shape[1])
-        for i, gt in enumerate(target):
-            g = keep * g + (1 - keep) * gt
-            grip[i] = g
-        grip *= living.modulation(tk, grip_rng)[:, None]
-        if self.control == "per-digit":
-            forces = f_nom + np.einsum("nj,jkd->nkd", grip, press)
-        else:  # the squeeze alone (the same operations as a scalar grip times its pattern)
-            forces = f_nom + grip[:, 0, None, None] * press[0]
-        norm = np.linalg.norm(forces, axis=2, keepdims=True)
-        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
+        self._keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
+        self._modulation = living.modulation(tk, grip_rng)
+        self._filtered = np.zeros_like(target)
+        self.grip = np.zeros_like(target)
+        self.forces_obj = np.zeros(f_nom.shape)
         off = (tk < phases.reach_end) | ((tk >= phases.open_end) if releases else False)
-        forces[off] = 0.0
-        self.forces_obj = forces
-        self.grip = grip
         self.on = ~off
+        self._set_forces(0, target, f_nom, press)
+        # the grasp as it landed: the forces are planned again from the sensed contacts (see act)
+        window = np.flatnonzero((tk >= phases.close_end) & (tk < phases.load_end + REPLAN_AFTER_LOAD_S))
+        self._replan_ticks = set(window[::REPLAN_EVERY].tolist()) if self.control == "per-digit" else set()
         # tactile feedback (see act): each digit's realized load, delayed, presses it further
-        self.press = press
-        self.slope = pol.slip_slope
         self.active = np.asarray(plan.active, bool)
         self.normals = np.asarray(plan.normal_in, dtype=float)
         self.feedback = np.zeros(len(plan.active))
@@ -381,6 +435,40 @@ class Human:
             dofs = world.finger_dofs[k]
             contiguous = np.array_equal(dofs, np.arange(dofs[0], dofs[-1] + 1))
             self._fingers.append((int(k), int(world.tip_site[k]), slice(int(dofs[0]), int(dofs[-1]) + 1) if contiguous else dofs))
+
+    def _set_forces(self, start: int, target: np.ndarray, f_nom: np.ndarray, press: np.ndarray) -> None:
+        """The commanded forces from control tick ``start`` on: the target through the grip's
+        first-order response (continuing from the tick before), times the living modulation,
+        capped at MAX_FINGER_FORCE_N, zero while the hand is off the box."""
+        g = self._filtered[start - 1].copy() if start > 0 else np.zeros(target.shape[1])
+        keep = self._keep
+        for i in range(start, len(target)):
+            g = keep * g + (1 - keep) * target[i]
+            self._filtered[i] = g
+        grip = self._filtered[start:] * self._modulation[start:, None]
+        if self.control == "per-digit":
+            forces = f_nom[start:] + np.einsum("nj,jkd->nkd", grip, press)
+        else:  # the squeeze alone (the same operations as a scalar grip times its pattern)
+            forces = f_nom[start:] + grip[:, 0, None, None] * press[0]
+        norm = np.linalg.norm(forces, axis=2, keepdims=True)
+        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
+        forces[~self.on[start:]] = 0.0
+        self.grip[start:] = grip
+        self.forces_obj[start:] = forces
+        self.press = press
+
+    def _replan(self, data: mujoco.MjData, box_rot: np.ndarray, tick: int) -> None:
+        """Plans the forces again from the ticks on, for the contacts as they landed: a digit's
+        sensed centre of pressure (box frame) replaces its planned spot (people feel where each pad
+        touches and share the forces for that grasp; a pad lands millimetres from its plan, the
+        thumb's about 8 mm, as the digits close under their soft posture control)."""
+        points, touching = _digit_points(self.world, data, box_rot)
+        spot = np.where((touching & self.active)[:, None], points, np.asarray(self.plan.spot, dtype=float))
+        target, f_nom, press, slope = _grip_target(self._tk, self.world, self.motion, self.plan, self._pol,
+                                                   self._living, self.phases, self.releases, self.control, spot=spot)
+        self.grip_target[tick:] = target[tick:]
+        self._slope[tick:] = slope[tick:]
+        self._set_forces(tick, target, f_nom, press)
 
     def palm_start(self) -> tuple[np.ndarray, np.ndarray]:
         """Palm pose at the first step."""
@@ -399,9 +487,11 @@ class Human:
         if step % self.ctrl_every:
             return
         tick = step // self.ctrl_every
+        if tick in self._replan_ticks:
+            self._replan(data, box_rot, tick)
         f_obj = self.forces_obj[tick]
         if self.on[tick] and self.control == "per-digit":
-            self._correct(data, box_rot)
+            self._correct(data, box_rot, tick)
             f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback, self.press)
         else:
             self.feedback[:] = 0.0
@@ -411,7 +501,7 @@ class Human:
             mujoco.mj_jacSite(m, data, jac, None, site)
             qfrc[dofs] = vm(f[k], jac[:, dofs])
 
-    def _correct(self, data: mujoco.MjData, box_rot: np.ndarray) -> None:
+    def _correct(self, data: mujoco.MjData, box_rot: np.ndarray, tick: int) -> None:
         """Tactile feedback: each digit's realized deficit (how far its tangential load, times the
         margin, exceeds its normal force), sensed :data:`REFLEX_LATENCY_S` ago, raises its press
         (time constant :data:`REFLEX_TIME_S`); a met load lets it relax (:data:`RELAX_TIME_S`).
@@ -421,7 +511,7 @@ class Human:
         digit actually carries, which a statically indeterminate grasp shares among the digits by
         their compliance, not by the plan."""
         n, t = _digit_loads(self.world, data, box_rot, self.normals)
-        need = np.maximum(self.slope * t, self.policy.min_finger_force_n)
+        need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
         self._deficits[self._tick % self._delay] = np.where(self.active, need - n, 0.0)
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
@@ -452,6 +542,31 @@ def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals
     return n, t
 
 
+def _digit_points(world: World, data: mujoco.MjData, box_rot: np.ndarray) -> tuple:
+    """Each digit's centre of pressure on the box now, relative to its centre, box frame, (K, 3) [m],
+    and whether it touches, (K,) bool."""
+    m = world.model
+    K = len(world.hand.finger_names)
+    weighted, total = np.zeros((K, 3)), np.zeros(K)
+    f6 = np.zeros(6)
+    con = data.contact
+    for i in range(data.ncon):
+        g1, g2 = int(con.geom1[i]), int(con.geom2[i])
+        if world.box_geom not in (g1, g2) or con.efc_address[i] < 0:
+            continue
+        k = int(world.geom_finger[g1 if g2 == world.box_geom else g2])
+        if k < 0:
+            continue
+        mujoco.mj_contactForce(m, data, i, f6)
+        if f6[0] > 0:
+            weighted[k] += f6[0] * con.pos[i]
+            total[k] += f6[0]
+    touching = total > 0
+    centre = data.xpos[world.box_body]
+    world_points = weighted / np.where(touching, total, 1.0)[:, None]
+    return rows_mt(world_points - centre, box_rot.T), touching
+
+
 def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_obj: np.ndarray, approach: np.ndarray):
     """The palm's target pose and the fingers' posture targets at the times ``t``:
     ``(palm position (N, 3), palm quaternion (N, 4), joint targets (N, J))``."""
@@ -470,7 +585,8 @@ def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_ob
     return palm_pos, np.array([_quat_of(R) for R in palm_rot]), q
 
 
-def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool, control: str) -> tuple:
+def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool, control: str,
+                 spot=None) -> tuple:
     """How hard each digit aims to press on every control tick ``tk``, and the per-finger nominal
     forces and unit presses (object frame) it scales: ``(target (N, K), f_nom (N, K, 3), press (K, K, 3))``.
 
@@ -500,16 +616,17 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
     a_b = np.einsum("nji,nj->ni", rot_a, alpha)
     torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
     wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
-    f_nom, press = pol.nominal_and_compressions(wrench, plan.spot, plan.normal_in, plan.active)
+    f_nom, press = pol.nominal_and_compressions(wrench, plan.spot if spot is None else spot, plan.normal_in, plan.active)
     moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
     baseline = pol.baseline_grip_n * living.relaxation(tk, moving)
     if control == "per-digit":
-        target = pol.hold(f_nom, press, plan.normal_in, plan.active, baseline,
-                          boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph))
+        target, slope = pol.grasp_hold(f_nom, press, plan.normal_in, plan.active, baseline,
+                                       boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph))
     else:
         grip_slip, grip_floor = pol.whole_hand(f_nom, press[0], plan.normal_in, plan.active)
         target = np.zeros((len(tk), len(plan.active)))
         target[:, 0] = baseline + grip_floor + grip_slip
+        slope = np.full(len(tk), pol.slip_slope)
     ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
     closing = tk < ph.close_end
     target[closing] = 0.0
@@ -519,7 +636,7 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
         opening = tk >= ph.unload_end
         target[opening] = 0.0
         target[opening, 0] = pol.baseline_grip_n * fade[opening]
-    return target, f_nom, press
+    return target, f_nom, press, slope
 
 
 def _lift_off(t: np.ndarray, ph) -> np.ndarray:
