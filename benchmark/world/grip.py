@@ -339,10 +339,10 @@ REFLEX_LATENCY_S = 0.07
 REFLEX_TIME_S = 0.1
 """Time constant of a digit's correction of its realized deficit (a choice: slow enough against the
 latency to stay stable, fast enough to catch a lift's load within a few hundred milliseconds)."""
-RELAX_TIME_S = 1.0
+RELAX_TIME_S = 0.5
 """Time constant with which a digit's correction relaxes once its load is met (a choice: grip
 forces relax over about a second in static holds, Johansson & Westling 1984)."""
-LIFT_OFF_OVERSHOOT = 0.5
+LIFT_OFF_OVERSHOOT = 0.25
 """The digits' requirement is raised by this fraction of itself while the load comes onto the hand
 and just after lift-off: the grip force peaks shortly after lift-off and then declines to its static
 level (Johansson & Westling 1984, Exp. Brain Res. 56; the peak is a choice within the overshoots
@@ -620,7 +620,9 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
     moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
     baseline = pol.baseline_grip_n * living.relaxation(tk, moving)
     if control == "per-digit":
-        target, slope = pol.grasp_hold(f_nom, press, plan.normal_in, plan.active, baseline,
+        # the baseline is the grip before the load comes on (the preload, Johansson & Westling 1984):
+        # a lower bound on the thumb that fades as the load comes onto the hand
+        target, slope = pol.grasp_hold(f_nom, press, plan.normal_in, plan.active, baseline * (1.0 - load),
                                        boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph))
     else:
         grip_slip, grip_floor = pol.whole_hand(f_nom, press[0], plan.normal_in, plan.active)

@@ -106,7 +106,7 @@ def episode_humanness(truth, fps: float, friction: float = float("nan")) -> Epis
     acc = np.linalg.norm(truth.box_acc, axis=1)
     omega = np.linalg.norm(truth.box_omega, axis=1)
     grip = thumb_normal_force(truth)
-    still = up & (acc < STILL_ACC) & (omega < STILL_OMEGA) & truth.contact_active[:, 0]
+    still = coupling_frames(truth, fps) & (acc < STILL_ACC) & (omega < STILL_OMEGA) & truth.contact_active[:, 0]
     cvs = [np.std(grip[s]) / np.mean(grip[s]) for s in holds(still, fps)]
     load = np.linalg.norm(truth.mass * (truth.box_acc - truth.gravity), axis=1)
     corr, lead = _best_lag(grip, load, coupling_frames(truth, fps), int(round(MAX_LAG_S * fps)))
