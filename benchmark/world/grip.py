@@ -173,6 +173,12 @@ class GripPolicy:
             c[:, 0] += np.maximum(np.asarray(baseline_n, dtype=float) - n0, 0.0)
         return c
 
+    @property
+    def digit_margin(self) -> float:
+        """The least relative safety margin a digit works with under :meth:`grasp_hold`: the person's
+        times :data:`DIGIT_MARGIN_FRACTION`, at least :data:`DIGIT_MARGIN_MIN` (and at most the person's)."""
+        return min(max(DIGIT_MARGIN_FRACTION * self.safety_margin, DIGIT_MARGIN_MIN), self.safety_margin)
+
     def grasp_hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
                    baseline_n, boost=None) -> tuple[np.ndarray, np.ndarray]:
         """How hard each digit presses for the grasp to hold with the person's safety margin: the
@@ -204,7 +210,7 @@ class GripPolicy:
         N = len(f_nom)
         raise_ = np.ones(N) if boost is None else 1.0 + np.asarray(boost, dtype=float)
         person = self.slip_slope * raise_
-        lowest = raise_ / (self.friction * (1.0 - DIGIT_MARGIN_FRACTION * self.safety_margin))
+        lowest = raise_ / (self.friction * (1.0 - self.digit_margin))
         idx = np.flatnonzero(active)
         nrm = normals_in[idx]
         slope = person
@@ -325,6 +331,8 @@ GRASP_ITERATIONS = 2
 DIGIT_MARGIN_FRACTION = 0.5
 """No digit works with less than this fraction of the person's safety margin (a choice: the grasp's
 margin is the person's, and none of its digits comes close to slipping)."""
+DIGIT_MARGIN_MIN = 0.1
+"""... and never less than this (the least relative margin Johansson & Westling 1984 measured)."""
 PRESS_TANGENTIAL_COST = 1.0
 """How much more a press's tangential change costs than a normal one (:meth:`GripPolicy.nominal_and_compressions`)."""
 HOLD_PASSES = 30
@@ -352,6 +360,10 @@ LIFT_OFF_HOLD_S = 0.3
 LIFT_OFF_DECAY_S = 0.5
 """Then it decays with this time constant, [s]."""
 CONTROL_PERIOD_FALLBACK_S = 0.004
+FEEDBACK_AT = "grasp"
+FEEDBACK_KIND = "integral"
+FEEDBACK_GAIN = 1.0
+STOP_AT_TOUCH = True
 REPLAN_EVERY = 12
 REPLAN_AFTER_LOAD_S = 0.3
 """The control period assumed for a single control tick, [s]."""
@@ -402,6 +414,13 @@ class Human:
         self.palm_pos, self.palm_quat, q = _palm_and_posture(t, motion, plan, phases, releases, self.R_palm_obj,
                                                              self.approach)
         self.ctrl = q[:, world.actuator_joint]
+        # the digits' closing stops at touch (see act): each digit's actuators and the times
+        self._t, self._touched = t, np.zeros(len(plan.active), bool)
+        self._opening = (_mj((t - phases.unload_end) / max(phases.open_end - phases.unload_end, 1e-9))
+                         * (t >= phases.unload_end)) if releases else np.zeros(len(t))
+        names = world.hand.joint_names
+        self._digit_actuators = [np.flatnonzero([names[j].startswith(f + "_") for j in world.actuator_joint])
+                                 for f in world.hand.finger_names]
         tk = t[::ctrl_every]
         self.control = scenario.grip_control
         self._tk, self._pol, self._living = tk, pol, living
@@ -428,6 +447,7 @@ class Human:
         self._gain = dt / REFLEX_TIME_S
         self._leak = float(np.exp(-dt / RELAX_TIME_S))
         self._deficits = np.zeros((self._delay, len(plan.active)))
+        self._feedback_slope = 1.0 / (pol.friction * (1.0 - pol.digit_margin))
         self._tick = 0
         self._views = None
         self._fingers = []
@@ -456,6 +476,27 @@ class Human:
         self.grip[start:] = grip
         self.forces_obj[start:] = forces
         self.press = press
+
+    def _stop_at_touch(self, data: mujoco.MjData, step: int) -> None:
+        """A closing digit stops where it touches the box: its posture target becomes its posture at
+        touch for the rest of the grasp (opening from there on release). People close the digits
+        onto an object and stop at contact, signalled by the fingertips' tactile afferents
+        (Johansson & Westling 1984's contact responses); without it a digit that touches first
+        pushes the box on the table toward the plan's spot, moving it under the others."""
+        _, touching = _digit_points(self.world, data, None)
+        new = touching & self.active & ~self._touched
+        if not new.any():
+            return
+        w, plan = self.world, self.plan
+        later = self._t[step:] < self.phases.close_end
+        for k in np.flatnonzero(new):
+            self._touched[k] = True
+            acts = self._digit_actuators[k]
+            joints = w.actuator_joint[acts]
+            q_touch = data.qpos[w.joint_qadr[joints]]
+            shift = q_touch - plan.q_grasp[joints]
+            moved = self.ctrl[step:, acts] + shift[None, :] * (1.0 - self._opening[step:, None])
+            self.ctrl[step:, acts] = np.where(later[:, None], q_touch[None, :], moved)
 
     def _replan(self, data: mujoco.MjData, box_rot: np.ndarray, tick: int) -> None:
         """Plans the forces again from the ticks on, for the contacts as they landed: a digit's
@@ -487,6 +528,8 @@ class Human:
         if step % self.ctrl_every:
             return
         tick = step // self.ctrl_every
+        if STOP_AT_TOUCH and self.control == "per-digit" and self.phases.reach_end <= self._t[step] < self.phases.close_end:
+            self._stop_at_touch(data, step)
         if tick in self._replan_ticks:
             self._replan(data, box_rot, tick)
         f_obj = self.forces_obj[tick]
@@ -511,11 +554,16 @@ class Human:
         digit actually carries, which a statically indeterminate grasp shares among the digits by
         their compliance, not by the plan."""
         n, t = _digit_loads(self.world, data, box_rot, self.normals)
-        need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
+        slope = self._slope[tick] if FEEDBACK_AT == "grasp" else self._feedback_slope
+        need = np.maximum(slope * t, self.policy.min_finger_force_n)
         self._deficits[self._tick % self._delay] = np.where(self.active, need - n, 0.0)
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
-        self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
+        if FEEDBACK_KIND == "integral":
+            self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
+        else:  # proportional: tracks FEEDBACK_GAIN times the sensed shortfall (the press included)
+            want = FEEDBACK_GAIN * np.maximum(sensed + self.feedback, 0.0)
+            self.feedback = self.feedback + self._gain * (want - self.feedback)
 
 
 def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals_obj: np.ndarray) -> tuple:
@@ -562,6 +610,8 @@ def _digit_points(world: World, data: mujoco.MjData, box_rot: np.ndarray) -> tup
             weighted[k] += f6[0] * con.pos[i]
             total[k] += f6[0]
     touching = total > 0
+    if box_rot is None:
+        return None, touching
     centre = data.xpos[world.box_body]
     world_points = weighted / np.where(touching, total, 1.0)[:, None]
     return rows_mt(world_points - centre, box_rot.T), touching
