@@ -96,14 +96,6 @@ class GripPolicy:
         f_nom[:, idx] = rows_mt(wrench, Gp).reshape(len(wrench), -1, 3)
         press = np.zeros((K, K, 3))
         weights = centred_shares(share, points[idx], normals_in[idx])
-        # the presses: nearest internal forces in a metric where a tangential change costs
-        # PRESS_TANGENTIAL_COST times a normal one (a press is balanced by the other digits'
-        # normal forces where it can be, not by couples along the faces)
-        Wp = np.zeros((3 * len(idx), 3 * len(idx)))
-        for i, k in enumerate(idx):
-            nn = np.outer(normals_in[k], normals_in[k])
-            Wp[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = share[i] * (nn + (np.eye(3) - nn) / PRESS_TANGENTIAL_COST)
-        Gq = mm(mm(Wp, G.T), inv(mm(mm(G, Wp), G.T)))
         for i, k in enumerate(idx):
             d = np.zeros((len(idx), 3))
             if i == 0:
@@ -111,7 +103,7 @@ class GripPolicy:
             else:
                 d[i] = normals_in[k]
             d = d.ravel()
-            d_int = (d - mv(Gq, mv(G, d))).reshape(-1, 3)
+            d_int = (d - mv(Gp, mv(G, d))).reshape(-1, 3)
             press[k, idx] = d_int / dot(d_int[i], normals_in[k])
         return (f_nom[0] if single else f_nom), press
 
@@ -273,7 +265,8 @@ def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray
     in the person's own shares, fingers whose resultant is not opposite the thumb turn the box, and
     friction along the faces must hold it with a couple that grows with the squeeze. The fingers'
     weights w minimise sum_j (w_j - s_j)^2 / s_j + CENTRING_WEIGHT |m_0 + sum_j w_j m_j|^2 (m the
-    moment about the centre of mass of a digit's unit normal force, [m]) with the thumb's force
+    moment about the centre of mass of a digit's unit normal force, [m], its components about the
+    horizontal axes weighted by :data:`HORIZONTAL_MOMENT_WEIGHT`) with the thumb's force
     balanced along its normal and every w_j >= 0: where the thumb faces a point between the fingers'
     pads the moment vanishes; elsewhere it is the least the fingers can make it.
 
@@ -293,6 +286,7 @@ def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray
     moment = np.stack([_cross3(points[k], normals_in[k]) for k in range(A)])
     m0, M = moment[0], moment[1:]
     a = -np.einsum("kj,j->k", normals_in[1:], normals_in[0])  # each finger's force opposing the thumb's
+    axes = np.array([HORIZONTAL_MOMENT_WEIGHT, HORIZONTAL_MOMENT_WEIGHT, 1.0])  # the box's z is up
     free = np.ones(A - 1, bool)
     w = s.copy()
     for _ in range(A):  # active set: fingers whose weight would be negative are set to 0
@@ -304,8 +298,8 @@ def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray
             H[p, p] += 2.0 / s[i[p]]
             rhs[p] += 2.0
             for q in range(F):
-                H[p, q] += 2.0 * CENTRING_WEIGHT * dot(M[i[p]], M[i[q]])
-            rhs[p] -= 2.0 * CENTRING_WEIGHT * dot(M[i[p]], m0)
+                H[p, q] += 2.0 * CENTRING_WEIGHT * dot(M[i[p]] * axes, M[i[q]])
+            rhs[p] -= 2.0 * CENTRING_WEIGHT * dot(M[i[p]] * axes, m0)
             H[p, F] = H[F, p] = a[i[p]]
         rhs[F] = 1.0
         x = solve(H, rhs)
@@ -323,9 +317,14 @@ def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 CENTRING_WEIGHT = 1e6
-"""Cost of the squeeze's moment per newton of the thumb, [1/m^2], against the fingers' departure from
-their shares: 1 mm of unbalanced lever costs as much as moving a finger's share by its own size
-(a choice: the moment vanishes wherever the geometry allows)."""
+"""Cost of the squeeze's moment about the box's vertical per newton of the thumb, [1/m^2], against the
+fingers' departure from their shares: 1 mm of unbalanced lever costs about as much as moving a
+finger's share by its own size (a choice: the moment vanishes wherever the geometry allows)."""
+HORIZONTAL_MOMENT_WEIGHT = 0.01
+"""... and about the horizontal axes, relative to it (a choice): a moment about the vertical must be
+held by a horizontal couple along the faces, which adds to the digits' tangential forces; one about
+a horizontal axis (the thumb above or below the fingers) by a vertical couple, which only shifts
+load between the thumb and the fingers."""
 GRASP_ITERATIONS = 2
 """Corrections of the digits' slope in :meth:`GripPolicy.grasp_hold`."""
 DIGIT_MARGIN_FRACTION = 0.5
@@ -333,8 +332,6 @@ DIGIT_MARGIN_FRACTION = 0.5
 margin is the person's, and none of its digits comes close to slipping)."""
 DIGIT_MARGIN_MIN = 0.1
 """... and never less than this (the least relative margin Johansson & Westling 1984 measured)."""
-PRESS_TANGENTIAL_COST = 1.0
-"""How much more a press's tangential change costs than a normal one (:meth:`GripPolicy.nominal_and_compressions`)."""
 HOLD_PASSES = 30
 """Passes of :meth:`GripPolicy.hold` at most (each digit's press moves the others' forces a little)."""
 HOLD_TOLERANCE_N = 1e-6
@@ -360,9 +357,6 @@ LIFT_OFF_HOLD_S = 0.3
 LIFT_OFF_DECAY_S = 0.5
 """Then it decays with this time constant, [s]."""
 CONTROL_PERIOD_FALLBACK_S = 0.004
-FEEDBACK_AT = "grasp"
-FEEDBACK_KIND = "integral"
-FEEDBACK_GAIN = 1.0
 STOP_AT_TOUCH = True
 REPLAN_EVERY = 12
 REPLAN_AFTER_LOAD_S = 0.3
@@ -447,7 +441,6 @@ class Human:
         self._gain = dt / REFLEX_TIME_S
         self._leak = float(np.exp(-dt / RELAX_TIME_S))
         self._deficits = np.zeros((self._delay, len(plan.active)))
-        self._feedback_slope = 1.0 / (pol.friction * (1.0 - pol.digit_margin))
         self._tick = 0
         self._views = None
         self._fingers = []
@@ -535,7 +528,9 @@ class Human:
         f_obj = self.forces_obj[tick]
         if self.on[tick] and self.control == "per-digit":
             self._correct(data, box_rot, tick)
-            f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback, self.press)
+            # the feedback raises each digit's press in proportion to its planned normal force
+            planned = np.maximum(np.einsum("kd,kd->k", self.forces_obj[tick], self.normals), 0.0)
+            f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback * planned, self.press)
         else:
             self.feedback[:] = 0.0
         f = rows_mt(f_obj, box_rot)
@@ -545,25 +540,25 @@ class Human:
             qfrc[dofs] = vm(f[k], jac[:, dofs])
 
     def _correct(self, data: mujoco.MjData, box_rot: np.ndarray, tick: int) -> None:
-        """Tactile feedback: each digit's realized deficit (how far its tangential load, times the
-        margin, exceeds its normal force), sensed :data:`REFLEX_LATENCY_S` ago, raises its press
-        (time constant :data:`REFLEX_TIME_S`); a met load lets it relax (:data:`RELAX_TIME_S`).
+        """Tactile feedback on each digit's grip-load ratio: a digit's relative shortfall (how far its
+        tangential load times the tick's slope exceeds its normal force, over that requirement),
+        sensed :data:`REFLEX_LATENCY_S` ago, raises the digit's press as a fraction of its planned
+        normal force (integrated with the time constant :data:`REFLEX_TIME_S`); a met load lets it
+        relax (:data:`RELAX_TIME_S`).
 
         Digit by digit, as people adjust each digit's grip to its own load (Burstedt, Flanagan &
         Johansson 1999): the feedforward grip follows the planned load, this follows the load the
         digit actually carries, which a statically indeterminate grasp shares among the digits by
-        their compliance, not by the plan."""
+        their compliance, not by the plan. The correction is of the ratio (the grip-load ratio that
+        Johansson & Westling 1984 saw raised after slips and kept), so it rises and falls with the
+        planned load instead of lagging it as an added force would."""
         n, t = _digit_loads(self.world, data, box_rot, self.normals)
-        slope = self._slope[tick] if FEEDBACK_AT == "grasp" else self._feedback_slope
-        need = np.maximum(slope * t, self.policy.min_finger_force_n)
-        self._deficits[self._tick % self._delay] = np.where(self.active, need - n, 0.0)
+        need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
+        short = (need - n) / np.maximum(need, self.policy.min_finger_force_n)
+        self._deficits[self._tick % self._delay] = np.where(self.active, short, 0.0)
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
-        if FEEDBACK_KIND == "integral":
-            self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
-        else:  # proportional: tracks FEEDBACK_GAIN times the sensed shortfall (the press included)
-            want = FEEDBACK_GAIN * np.maximum(sensed + self.feedback, 0.0)
-            self.feedback = self.feedback + self._gain * (want - self.feedback)
+        self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
 
 
 def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals_obj: np.ndarray) -> tuple:
