@@ -115,7 +115,7 @@ class GripPolicy:
         return 1.0 / (self.friction * (1.0 - self.safety_margin))
 
     def hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
-             baseline_n, slope=None) -> np.ndarray:
+             baseline_n, slope=None, held_load=None) -> np.ndarray:
         """How hard each digit presses: each digit pressed until it works inside its friction cone
         shrunk by the safety margin, and with at least ``min_finger_force_n``; the thumb at least
         with the baseline grip.
@@ -140,6 +140,8 @@ class GripPolicy:
             baseline_n: The thumb's least normal force, scalar or (N,) [N].
             slope: Each digit's normal force per newton of its tangential load, per tick, (N,);
                 None: :attr:`slip_slope`.
+            held_load: A tangential load each digit is pressed for at least, per tick, (N, K) [N]
+                (:func:`load_envelope`); None: its own.
 
         Returns:
             The press of each digit, (N, K) [N]: the forces are ``f_nom + sum_j c[:, j] press[j]``.
@@ -148,12 +150,18 @@ class GripPolicy:
         c = np.zeros((N, K))
         f = f_nom.copy()
         slope = np.full(N, self.slip_slope) if slope is None else np.broadcast_to(np.asarray(slope, dtype=float), (N,))
-        order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else list(np.flatnonzero(active))
+        fingers = list(np.flatnonzero(active[1:]) + 1)
+        if not active[0]:
+            order = list(np.flatnonzero(active))
+        else:
+            order = [0, *fingers] if HOLD_ORDER == "thumb-first" else [*fingers, 0]
         for _ in range(HOLD_PASSES):
             added = 0.0
             for j in order:  # one digit at a time, the fingers before the thumb that opposes them
                 n = np.einsum("nd,d->n", f[:, j], normals_in[j])
                 t = norm_rows(f[:, j] - n[:, None] * normals_in[j])
+                if held_load is not None:
+                    t = np.maximum(t, held_load[:, j])
                 deficit = np.maximum(np.maximum(slope * t, self.min_finger_force_n) - n, 0.0)
                 c[:, j] += deficit
                 f = f + deficit[:, None, None] * press[j]
@@ -172,7 +180,7 @@ class GripPolicy:
         return min(max(DIGIT_MARGIN_FRACTION * self.safety_margin, DIGIT_MARGIN_MIN), self.safety_margin)
 
     def grasp_hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
-                   baseline_n, boost=None) -> tuple[np.ndarray, np.ndarray]:
+                   baseline_n, boost=None, held_load=None) -> tuple[np.ndarray, np.ndarray]:
         """How hard each digit presses for the grasp to hold with the person's safety margin: the
         digit-by-digit presses of :meth:`hold`, at the slope (normal force per newton of a digit's
         tangential load) at which the grasp as a whole works with the person's relative margin,
@@ -195,6 +203,7 @@ class GripPolicy:
             active: Digits in contact, (K,) bool.
             baseline_n: The thumb's least normal force, scalar or (N,) [N].
             boost: The grip's relative raise per tick (the lift-off overshoot), (N,); None: 0.
+            held_load: As :meth:`hold`'s.
 
         Returns:
             ``(c (N, K), slope (N,))``: the presses (as :meth:`hold`'s) and the digits' slope per tick.
@@ -207,14 +216,14 @@ class GripPolicy:
         nrm = normals_in[idx]
         slope = person
         for _ in range(GRASP_ITERATIONS):
-            c = self.hold(f_nom, press, normals_in, active, baseline_n, slope)
+            c = self.hold(f_nom, press, normals_in, active, baseline_n, slope, held_load)
             f = (f_nom + np.einsum("nj,jkd->nkd", c, press))[:, idx]
             n = np.einsum("nkd,kd->nk", f, nrm)
             tang = f - n[..., None] * nrm
             load = np.sqrt(np.einsum("nkd,nkd->nk", tang, tang)).sum(axis=1)
             wanted = person * load
             slope = np.clip(slope * wanted / np.maximum(n.sum(axis=1), 1e-9), lowest, person)
-        return self.hold(f_nom, press, normals_in, active, baseline_n, slope), slope
+        return self.hold(f_nom, press, normals_in, active, baseline_n, slope, held_load), slope
 
     def whole_hand(self, f_nom: np.ndarray, squeeze: np.ndarray, normals_in: np.ndarray,
                    active: np.ndarray) -> tuple[np.ndarray, float]:
@@ -267,8 +276,9 @@ def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray
     weights w minimise sum_j (w_j - s_j)^2 / s_j + CENTRING_WEIGHT |m_0 + sum_j w_j m_j|^2 (m the
     moment about the centre of mass of a digit's unit normal force, [m], its components about the
     horizontal axes weighted by :data:`HORIZONTAL_MOMENT_WEIGHT`) with the thumb's force
-    balanced along its normal and every w_j >= 0: where the thumb faces a point between the fingers'
-    pads the moment vanishes; elsewhere it is the least the fingers can make it.
+    balanced along its normal and every w_j at least :data:`CENTRING_MIN_SHARE` of s_j: where the
+    thumb faces a point well between the fingers' pads the moment vanishes; elsewhere it is the
+    least the fingers can make it.
 
     Args:
         share: The thumb's 1 and the fingers' shares (summing to 1), thumb first, (A,).
@@ -287,11 +297,13 @@ def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray
     m0, M = moment[0], moment[1:]
     a = -np.einsum("kj,j->k", normals_in[1:], normals_in[0])  # each finger's force opposing the thumb's
     axes = np.array([HORIZONTAL_MOMENT_WEIGHT, HORIZONTAL_MOMENT_WEIGHT, 1.0])  # the box's z is up
+    lo = CENTRING_MIN_SHARE * s
     free = np.ones(A - 1, bool)
     w = s.copy()
-    for _ in range(A):  # active set: fingers whose weight would be negative are set to 0
-        i = np.flatnonzero(free)
+    for _ in range(A):  # active set: fingers whose weight would fall below their bound are held at it
+        i, fixed = np.flatnonzero(free), np.flatnonzero(~free)
         F = len(i)
+        held = m0 + (np.einsum("k,kd->d", lo[fixed], M[fixed]) if len(fixed) else 0.0)
         H = np.zeros((F + 1, F + 1))
         rhs = np.zeros(F + 1)
         for p in range(F):
@@ -299,16 +311,16 @@ def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray
             rhs[p] += 2.0
             for q in range(F):
                 H[p, q] += 2.0 * CENTRING_WEIGHT * dot(M[i[p]] * axes, M[i[q]])
-            rhs[p] -= 2.0 * CENTRING_WEIGHT * dot(M[i[p]] * axes, m0)
+            rhs[p] -= 2.0 * CENTRING_WEIGHT * dot(M[i[p]] * axes, held)
             H[p, F] = H[F, p] = a[i[p]]
-        rhs[F] = 1.0
+        rhs[F] = 1.0 - (dot(a[fixed], lo[fixed]) if len(fixed) else 0.0)
         x = solve(H, rhs)
-        w = np.zeros(A - 1)
+        w = lo.copy()
         w[i] = x[:F]
-        if np.all(w[i] >= 0.0) or F == 1:
+        if np.all(w[i] >= lo[i]) or F == 1:
             break
-        free[i[int(np.argmin(w[i]))]] = False
-    out[1:] = np.maximum(w, 0.0)
+        free[i[int(np.argmin(w[i] - lo[i]))]] = False
+    out[1:] = np.maximum(w, lo)
     return out
 
 
@@ -320,6 +332,10 @@ CENTRING_WEIGHT = 1e6
 """Cost of the squeeze's moment about the box's vertical per newton of the thumb, [1/m^2], against the
 fingers' departure from their shares: 1 mm of unbalanced lever costs about as much as moving a
 finger's share by its own size (a choice: the moment vanishes wherever the geometry allows)."""
+CENTRING_MIN_SHARE = 0.5
+"""No finger's weight falls below this fraction of its own share (a choice: the fingers' forces keep
+their proportions, Radwin et al. 1992; a finger pressed with almost nothing leaves the box to pivot
+about the line from the thumb to the others)."""
 HORIZONTAL_MOMENT_WEIGHT = 0.01
 """... and about the horizontal axes, relative to it (a choice): a moment about the vertical must be
 held by a horizontal couple along the faces, which adds to the digits' tangential forces; one about
@@ -327,11 +343,13 @@ a horizontal axis (the thumb above or below the fingers) by a vertical couple, w
 load between the thumb and the fingers."""
 GRASP_ITERATIONS = 2
 """Corrections of the digits' slope in :meth:`GripPolicy.grasp_hold`."""
-DIGIT_MARGIN_FRACTION = 0.5
+DIGIT_MARGIN_FRACTION = 0.75
 """No digit works with less than this fraction of the person's safety margin (a choice: the grasp's
 margin is the person's, and none of its digits comes close to slipping)."""
 DIGIT_MARGIN_MIN = 0.1
 """... and never less than this (the least relative margin Johansson & Westling 1984 measured)."""
+HOLD_ORDER = "fingers-first"
+FEEDBACK_SCALE = "planned"
 HOLD_PASSES = 30
 """Passes of :meth:`GripPolicy.hold` at most (each digit's press moves the others' forces a little)."""
 HOLD_TOLERANCE_N = 1e-6
@@ -352,6 +370,10 @@ LIFT_OFF_OVERSHOOT = 0.25
 and just after lift-off: the grip force peaks shortly after lift-off and then declines to its static
 level (Johansson & Westling 1984, Exp. Brain Res. 56; the peak is a choice within the overshoots
 they show)."""
+ENVELOPE_FRACTION = 0.6
+"""A digit is pressed for at least this fraction of its peak load nearby (a choice: :func:`load_envelope`)."""
+ENVELOPE_S = 0.5
+"""... within this before or after, [s] (a choice: a cycle of the 1-2 Hz movements Flanagan & Wing studied)."""
 LIFT_OFF_HOLD_S = 0.3
 """The raise is kept this long after lift-off, [s]."""
 LIFT_OFF_DECAY_S = 0.5
@@ -432,6 +454,7 @@ class Human:
         # the grasp as it landed: the forces are planned again from the sensed contacts (see act)
         window = np.flatnonzero((tk >= phases.close_end) & (tk < phases.load_end + REPLAN_AFTER_LOAD_S))
         self._replan_ticks = set(window[::REPLAN_EVERY].tolist()) if self.control == "per-digit" else set()
+        self._sensed = np.asarray(plan.spot, dtype=float).copy()
         # tactile feedback (see act): each digit's realized load, delayed, presses it further
         self.active = np.asarray(plan.active, bool)
         self.normals = np.asarray(plan.normal_in, dtype=float)
@@ -441,6 +464,8 @@ class Human:
         self._gain = dt / REFLEX_TIME_S
         self._leak = float(np.exp(-dt / RELAX_TIME_S))
         self._deficits = np.zeros((self._delay, len(plan.active)))
+        self._needs = np.zeros((self._delay, len(plan.active)))
+        self._need = np.zeros(len(plan.active))
         self._tick = 0
         self._views = None
         self._fingers = []
@@ -497,7 +522,8 @@ class Human:
         touches and share the forces for that grasp; a pad lands millimetres from its plan, the
         thumb's about 8 mm, as the digits close under their soft posture control)."""
         points, touching = _digit_points(self.world, data, box_rot)
-        spot = np.where((touching & self.active)[:, None], points, np.asarray(self.plan.spot, dtype=float))
+        self._sensed = np.where((touching & self.active)[:, None], points, self._sensed)  # a digit off for a tick keeps its last
+        spot = self._sensed
         target, f_nom, press, slope = _grip_target(self._tk, self.world, self.motion, self.plan, self._pol,
                                                    self._living, self.phases, self.releases, self.control, spot=spot)
         self.grip_target[tick:] = target[tick:]
@@ -530,6 +556,8 @@ class Human:
             self._correct(data, box_rot, tick)
             # the feedback raises each digit's press in proportion to its planned normal force
             planned = np.maximum(np.einsum("kd,kd->k", self.forces_obj[tick], self.normals), 0.0)
+            if FEEDBACK_SCALE == "need":
+                planned = np.maximum(planned, self._need)
             f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback * planned, self.press)
         else:
             self.feedback[:] = 0.0
@@ -556,8 +584,10 @@ class Human:
         need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
         short = (need - n) / np.maximum(need, self.policy.min_finger_force_n)
         self._deficits[self._tick % self._delay] = np.where(self.active, short, 0.0)
+        self._needs[self._tick % self._delay] = need
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
+        self._need = self._needs[self._tick % self._delay]
         self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
 
 
@@ -668,7 +698,8 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
         # the baseline is the grip before the load comes on (the preload, Johansson & Westling 1984):
         # a lower bound on the thumb that fades as the load comes onto the hand
         target, slope = pol.grasp_hold(f_nom, press, plan.normal_in, plan.active, baseline * (1.0 - load),
-                                       boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph))
+                                       boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph),
+                                       held_load=load_envelope(f_nom, plan.normal_in, tk))
     else:
         grip_slip, grip_floor = pol.whole_hand(f_nom, press[0], plan.normal_in, plan.active)
         target = np.zeros((len(tk), len(plan.active)))
@@ -684,6 +715,27 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
         target[opening] = 0.0
         target[opening, 0] = pol.baseline_grip_n * fade[opening]
     return target, f_nom, press, slope
+
+
+def load_envelope(f_nom: np.ndarray, normals_in: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The tangential load each digit is pressed for at least: :data:`ENVELOPE_FRACTION` of the
+    largest planned load it carries within :data:`ENVELOPE_S` before or after, (N, K) [N].
+
+    In cyclic movements the grip follows the load in phase but falls less than the load at its
+    minima, where the grip-load ratio is highest (Flanagan & Wing 1993, Exp. Brain Res. 95; 1995):
+    people do not relax a digit to nothing between the load's peaks."""
+    n = np.einsum("nkd,kd->nk", f_nom, normals_in)
+    tang = f_nom - n[..., None] * normals_in
+    load = np.sqrt(np.einsum("nkd,nkd->nk", tang, tang))
+    if len(t) < 2:
+        return ENVELOPE_FRACTION * load
+    half = max(1, int(round(ENVELOPE_S / (t[1] - t[0]))))
+    N = len(load)
+    peak = load.copy()
+    for shift in range(1, half + 1):  # a running maximum over +-half ticks
+        peak[:-shift] = np.maximum(peak[:-shift], load[shift:])
+        peak[shift:] = np.maximum(peak[shift:], load[:N - shift])
+    return ENVELOPE_FRACTION * peak
 
 
 def _lift_off(t: np.ndarray, ph) -> np.ndarray:
