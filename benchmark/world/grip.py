@@ -1,13 +1,16 @@
 """The synthetic human: how hard each finger squeezes, and the hand it moves.
 
 :class:`GripPolicy` turns the load the hand must carry into fingertip forces, following the
-motor-control literature: the grip (normal) force tracks the load force in parallel with a
-user-specific safety margin over the slip limit (Johansson & Westling 1984), from a baseline grip,
-anticipating the planned load rather than reacting to it (Flanagan & Wing 1995), with a per-finger
-share of the internal force (Radwin et al. 1992), varying within a hold and from trial to trial
-(:mod:`benchmark.world.living`). The forces become joint torques through the fingertip Jacobians,
-tau = J^T f; MuJoCo's contact solver then produces the true contact forces. Where the hand goes
-for a grasp is :mod:`benchmark.world.grasp_plan`."""
+motor-control literature: the grip (normal) force tracks the load force with a user-specific
+relative safety margin over the slip limit, (G - G_slip) / G (Johansson & Westling 1984),
+anticipating the planned load rather than reacting to it (Flanagan & Wing 1995), digit by digit
+(Burstedt, Flanagan & Johansson 1999) with a per-finger share of the internal force (Radwin et al.
+1992), varying within a hold and from trial to trial (:mod:`benchmark.world.living`). The forces
+become joint torques through the fingertip Jacobians, tau = J^T f; MuJoCo's contact solver then
+produces the true contact forces. Where the hand goes for a grasp is
+:mod:`benchmark.world.grasp_plan`; how the grip is scaled, the scenario's ``grip_control``:
+"per-digit" (:meth:`GripPolicy.grasp_hold`, the world's) or "whole-hand"
+(:meth:`GripPolicy.whole_hand`, the world of earlier versions)."""
 
 from __future__ import annotations
 
@@ -28,7 +31,8 @@ class GripPolicy:
 
     Attributes:
         friction: Skin-box friction coefficient the user expects.
-        safety_margin: Grip exceeds the slip limit by this fraction of it.
+        safety_margin: The relative safety margin (G - G_slip) / G: the fraction of the grip force
+            above the slip limit (Johansson & Westling 1984), in [0, 1).
         baseline_grip_n: Internal force kept without load, [N] (thumb-side normal force).
         anticipation_s: The grip follows the load planned this far ahead, [s].
         response_s: Time constant of the grip force's first-order response, [s].
@@ -73,7 +77,8 @@ class GripPolicy:
             the inverse grip shares (a digit carries load in proportion to its grip), (K, 3) or
             (N, K, 3); and per digit j the internal (workless) forces that press it with a unit
             normal force, (K, K, 3): ``press[0]`` is the squeeze of the grasp as a whole (the thumb
-            against the fingers in their shares), ``press[j]`` for a finger the internal forces
+            against the fingers in their shares, moved so that the fingers' normal forces balance
+            the thumb's moment: :func:`centred_shares`), ``press[j]`` for a finger the internal forces
             nearest to finger j pressing alone (the thumb and the others react), zero rows for
             digits not in contact.
         """
@@ -150,11 +155,7 @@ class GripPolicy:
         c = np.zeros((N, K))
         f = f_nom.copy()
         slope = np.full(N, self.slip_slope) if slope is None else np.broadcast_to(np.asarray(slope, dtype=float), (N,))
-        fingers = list(np.flatnonzero(active[1:]) + 1)
-        if not active[0]:
-            order = list(np.flatnonzero(active))
-        else:
-            order = [0, *fingers] if HOLD_ORDER == "thumb-first" else [*fingers, 0]
+        order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else list(np.flatnonzero(active))
         for _ in range(HOLD_PASSES):
             added = 0.0
             for j in order:  # one digit at a time, the fingers before the thumb that opposes them
@@ -348,8 +349,6 @@ DIGIT_MARGIN_FRACTION = 0.75
 margin is the person's, and none of its digits comes close to slipping)."""
 DIGIT_MARGIN_MIN = 0.1
 """... and never less than this (the least relative margin Johansson & Westling 1984 measured)."""
-HOLD_ORDER = "fingers-first"
-FEEDBACK_SCALE = "planned"
 HOLD_PASSES = 30
 """Passes of :meth:`GripPolicy.hold` at most (each digit's press moves the others' forces a little)."""
 HOLD_TOLERANCE_N = 1e-6
@@ -381,7 +380,10 @@ LIFT_OFF_DECAY_S = 0.5
 CONTROL_PERIOD_FALLBACK_S = 0.004
 STOP_AT_TOUCH = True
 REPLAN_EVERY = 12
+"""While the load comes on, the forces are planned again for the sensed contacts every this many
+control ticks (48 ms)."""
 REPLAN_AFTER_LOAD_S = 0.3
+"""... until this long after the load phase ends, [s] (the pads settle as the box leaves the table)."""
 """The control period assumed for a single control tick, [s]."""
 
 
@@ -400,7 +402,12 @@ class Human:
     planned load by the user's anticipation time and low-pass filtered by the user's response
     time. At run time :meth:`act` writes ``data.mocap_pos/quat``, ``data.ctrl`` (position
     actuators of the fingers) and, on control ticks, ``data.qfrc_applied`` on the finger joints:
-    tau = J^T (R f), with R the box's actual orientation.
+    tau = J^T (R f), with R the box's actual orientation. Under the "per-digit" control it also
+    senses the grasp: a closing digit stops where it touches (:meth:`_stop_at_touch`), the forces
+    are planned again for the pads' sensed contacts while the load comes on (:meth:`_replan`,
+    :data:`REPLAN_EVERY`, :data:`REPLAN_AFTER_LOAD_S`), and each digit's grip-load ratio is
+    corrected from the load it carries (:meth:`_correct`). All of it is read from the simulation's
+    own state, so the world stays the same bits on every machine.
 
     Args:
         scenario: The scenario (its user's grip style and its seed).
@@ -464,8 +471,6 @@ class Human:
         self._gain = dt / REFLEX_TIME_S
         self._leak = float(np.exp(-dt / RELAX_TIME_S))
         self._deficits = np.zeros((self._delay, len(plan.active)))
-        self._needs = np.zeros((self._delay, len(plan.active)))
-        self._need = np.zeros(len(plan.active))
         self._tick = 0
         self._views = None
         self._fingers = []
@@ -556,8 +561,6 @@ class Human:
             self._correct(data, box_rot, tick)
             # the feedback raises each digit's press in proportion to its planned normal force
             planned = np.maximum(np.einsum("kd,kd->k", self.forces_obj[tick], self.normals), 0.0)
-            if FEEDBACK_SCALE == "need":
-                planned = np.maximum(planned, self._need)
             f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback * planned, self.press)
         else:
             self.feedback[:] = 0.0
@@ -584,10 +587,8 @@ class Human:
         need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
         short = (need - n) / np.maximum(need, self.policy.min_finger_force_n)
         self._deficits[self._tick % self._delay] = np.where(self.active, short, 0.0)
-        self._needs[self._tick % self._delay] = need
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
-        self._need = self._needs[self._tick % self._delay]
         self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
 
 
@@ -662,17 +663,19 @@ def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_ob
 
 def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool, control: str,
                  spot=None) -> tuple:
-    """How hard each digit aims to press on every control tick ``tk``, and the per-finger nominal
-    forces and unit presses (object frame) it scales: ``(target (N, K), f_nom (N, K, 3), press (K, K, 3))``.
+    """How hard each digit aims to press on every control tick ``tk``, the per-finger nominal forces
+    and unit presses (object frame) it scales, and the digits' slope: ``(target (N, K), f_nom
+    (N, K, 3), press (K, K, 3), slope (N,))``.
 
     The grip follows the load planned anticipation_s ahead of its own response (an internal model of
-    the grip's lag), so that it leads or matches the load. Under ``control`` "per-digit" it is the
-    baseline squeeze (relaxing in holds), then each digit pressed until it works within its friction
-    cone shrunk by the safety margin (raised around lift-off, :func:`_lift_off`) plus
-    min_finger_force_n (:meth:`GripPolicy.hold`): the digits' presses follow their own share of the
-    load. Under "whole-hand" only the grasp's squeeze (column 0) is set: the sum of the baseline,
-    the grip at which every digit presses with min_finger_force_n without load, and the grip the
-    load's slip limit needs (:meth:`GripPolicy.whole_hand`).
+    the grip's lag), so that it leads or matches the load. Under ``control`` "per-digit" the digits
+    press for their own loads, the grasp as a whole at the person's margin (raised around lift-off,
+    :func:`_lift_off`; :meth:`GripPolicy.grasp_hold`), each for at least part of its nearby peak
+    load (:func:`load_envelope`), the thumb at least the baseline before the load comes on. Under
+    "whole-hand" only the grasp's squeeze (column 0) is set: the sum of the baseline (relaxing in
+    holds), the grip at which every digit presses with min_finger_force_n without load, and the grip
+    the load's slip limit needs (:meth:`GripPolicy.whole_hand`). ``spot``: the contact points to plan
+    for, (K, 3) [m]; None: the plan's.
     """
     m = world.model
     mass = float(m.body_mass[world.box_body])

@@ -2,11 +2,13 @@
 
     python -m benchmark.commands.humanness [--suite standard] [--out results/world]
 
-simulates every episode of a suite (no rendering); the command writes ``humanness.md`` and
-``humanness.json``: per task the distribution of the box's peak acceleration and angular velocity
-while lifted beside the ranges of :mod:`benchmark.world.tasks.human`, the thumb's grip-force
-coefficient of variation in holds, the grip-load correlation and lead on ``shake``, and the
-largest Newton-Euler residual of the truth.
+simulates every episode of a suite (no rendering); the command writes ``humanness.md``,
+``humanness.json`` and ``humanness_margins.png``: per task the distribution of the box's peak
+acceleration and angular velocity while lifted beside the ranges of
+:mod:`benchmark.world.tasks.human`, the thumb's grip-force coefficient of variation in holds, the
+grip-load correlation and lead on ``shake``, the effective safety margin and the thumb's force per
+weight, and the largest Newton-Euler residual of the truth; per episode the person's drawn margin
+against the realised one, and the grip in holds against the slip limit.
 """
 
 from __future__ import annotations
@@ -40,8 +42,9 @@ class EpisodeHumanness:
     Attributes:
         peak_acc: Largest |box acceleration| while lifted (held, no table contact), [m/s^2].
         peak_omega: Largest |box angular velocity| while lifted, [rad/s].
-        grip_cv: Median over holds (>= MIN_HOLD_S, lifted, still) of the thumb normal force's
-            coefficient of variation; nan without such a hold.
+        grip_cv: Median over holds (>= MIN_HOLD_S, lifted, still, from LIFT_OFF_TRANSIENT_S after
+            lift-off: :func:`coupling_frames`) of the thumb normal force's coefficient of variation;
+            nan without such a hold.
         grip_load_corr: Largest correlation of the thumb normal force with the load force |m (a - g)|
             over lags within +- MAX_LAG_S while lifted, from LIFT_OFF_TRANSIENT_S after each
             lift-off (:func:`coupling_frames`).
