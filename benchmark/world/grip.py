@@ -369,7 +369,7 @@ LIFT_OFF_OVERSHOOT = 0.25
 and just after lift-off: the grip force peaks shortly after lift-off and then declines to its static
 level (Johansson & Westling 1984, Exp. Brain Res. 56; the peak is a choice within the overshoots
 they show)."""
-ENVELOPE_FRACTION = 0.6
+ENVELOPE_FRACTION = 0.7
 """A digit is pressed for at least this fraction of its peak load nearby (a choice: :func:`load_envelope`)."""
 ENVELOPE_S = 0.5
 """... within this before or after, [s] (a choice: a cycle of the 1-2 Hz movements Flanagan & Wing studied)."""
