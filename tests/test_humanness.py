@@ -1,9 +1,10 @@
 """The world is human: lift peaks, grip fluctuation in holds, grip-load coupling, Newton-Euler.
 
-Measured on this machine (standard suite's seeds, truth only): lift peak acceleration MEASURED
-m/s^2; thumb grip coefficient of variation in holds (from 1 s after lift-off) MEASURED %; shake
-grip-load correlation MEASURED (per-digit, the world's control) and MEASURED (whole-hand) from 1 s
-after lift-off, the grip leading by MEASURED ms; Newton-Euler residuals below 2e-14 N.
+Measured on this machine (standard suite's seeds, truth only; results/world): lift peak acceleration
+2.8-5.5 m/s^2; thumb grip coefficient of variation in holds (from 1 s after lift-off) 2.3-4.8 % on
+lift; shake grip-load correlation 0.50-0.82 (per-digit, the world's control) and 0.53-0.91
+(whole-hand) from 1 s after lift-off, the grip leading by 0-133 ms; Newton-Euler residuals below
+2e-14 N.
 """
 
 from dataclasses import replace
@@ -41,9 +42,12 @@ def test_grip_follows_the_load_on_shake_and_leads_it(control):
     scenarios = [sc for name in ("standard", "dev") for sc in get_suite(name).scenarios if sc.task == "shake"]
     hs = [episode_humanness(simulate(replace(sc, grip_control=control)).truth, sc.fps) for sc in scenarios]
     assert len(hs) == 8
-    # measured medians: whole-hand 0.90 (0.69-0.94), per-digit 0.86 (0.61-0.94)
-    assert np.median([h.grip_load_corr for h in hs]) >= 0.8
-    assert all(h.grip_lead_s >= 0 for h in hs)
+    # measured medians: whole-hand 0.85 (0.53-0.91), per-digit 0.63 (0.50-0.82). The per-digit grip
+    # presses each digit for at least 0.7 of its nearby peak load (benchmark.world.grip.load_envelope),
+    # so it is modulated less than the whole-hand one and the living fluctuations weigh more: a
+    # weaker coupling than the 0.86 the per-digit control had before (docs/findings.md)
+    assert np.median([h.grip_load_corr for h in hs]) >= (0.8 if control == "whole-hand" else 0.55)
+    assert all(h.grip_lead_s >= 0 for h in hs)  # measured leads 0-133 ms under both
 
 
 @pytest.mark.parametrize("task", sorted(TASKS))

@@ -370,7 +370,10 @@ and just after lift-off: the grip force peaks shortly after lift-off and then de
 level (Johansson & Westling 1984, Exp. Brain Res. 56; the peak is a choice within the overshoots
 they show)."""
 ENVELOPE_FRACTION = 0.7
-"""A digit is pressed for at least this fraction of its peak load nearby (a choice: :func:`load_envelope`)."""
+"""A digit is pressed for at least this fraction of its peak load nearby (a choice, :func:`load_envelope`:
+with 0.4-0.6 the index of the named grasps 0 and 1, 12 mm off the centre of mass, lost its contact
+at the load's minima in a `shake` or a `free` of the cohort suite and the box turned into the palm;
+Flanagan & Wing 1995's grip fell to about half its peak at the load's minima)."""
 ENVELOPE_S = 0.5
 """... within this before or after, [s] (a choice: a cycle of the 1-2 Hz movements Flanagan & Wing studied)."""
 LIFT_OFF_HOLD_S = 0.3
