@@ -39,9 +39,10 @@ class GripPolicy:
         share: Per finger share of the internal force, thumb first, (K,); the thumb opposes the
             fingers (its share is 1, the active fingers' shares are renormalised to sum to 1).
         min_finger_force_n: Every digit in contact presses with at least this normal force, [N]
-            (a choice: people keep each digit of a grasp in firm contact; the fingers' forces keep
-            their proportions down to light loads, Radwin et al. 1992, so that a floor binds only
-            where a digit carries almost no load).
+            (a choice, the floor both controls have always used: people keep each digit of a grasp
+            in firm contact; as a lower bound on the digit's requirement, not added to it, it binds
+            only where a digit carries little load. With 0.5-0.75 N a digit's force fell below the
+            task contract's 0.5 N where the table took the box's weight before the hand let go).
     """
 
     friction: float
@@ -50,7 +51,7 @@ class GripPolicy:
     anticipation_s: float
     response_s: float
     share: np.ndarray
-    min_finger_force_n: float = 0.5
+    min_finger_force_n: float = 1.0
 
     @staticmethod
     def for_scenario(scenario: Scenario, world: World) -> "GripPolicy":
@@ -589,7 +590,7 @@ class Human:
         n, t = _digit_loads(self.world, data, box_rot, self.normals)
         need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
         short = (need - n) / np.maximum(need, self.policy.min_finger_force_n)
-        self._deficits[self._tick % self._delay] = np.where(self.active, short, 0.0)
+        self._deficits[self._tick % self._delay] = np.where(self.active & (n > 0), short, 0.0)  # touch senses only contact
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
         self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
