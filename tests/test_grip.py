@@ -130,8 +130,10 @@ def test_grip_rises_with_load_and_margin():
     assert thumb[2] >= 6.0 * pol.slip_slope / 2 - 1e-9
     careful = _hold(_policy(safety_margin=0.6), np.array([0, 0, 6.0, 0, 0, 0]))[3][0]
     assert careful > thumb[2] * 1.3
-    # the baseline is a lower bound on the thumb, not added to the load's need
-    assert _hold(pol, np.zeros(6), baseline=2.0)[3][0] == pytest.approx(2.0, abs=0.05)
+    # the baseline is a lower bound on the thumb, not added to the load's need: without load the
+    # three fingers' floors press the thumb with 3 N, a 4 N baseline raises it to 4 N, a 2 N one not
+    assert _hold(pol, np.zeros(6), baseline=2.0)[3][0] == pytest.approx(3 * pol.min_finger_force_n, abs=0.05)
+    assert _hold(pol, np.zeros(6), baseline=4.0)[3][0] == pytest.approx(4.0, abs=1e-6)
     assert _hold(pol, np.array([0, 0, 6.0, 0, 0, 0]), baseline=2.0)[3][0] == pytest.approx(thumb[2], rel=1e-9)
 
 
