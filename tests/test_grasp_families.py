@@ -5,7 +5,7 @@ import pytest
 from openblas_kernels import KERNEL_FLAGS, runnable_kernels
 
 from benchmark.world.assets import build_world
-from benchmark.world.grasp_families import FAMILIES, FINGER_GAP_M, PAD_HEIGHT_M, draw_candidate
+from benchmark.world.grasp_families import FAMILIES, FINGER_GAP_M, PAD_HEIGHT_M, ROW_CENTRE_M, draw_candidate
 from benchmark.world.grasp_plan import MAX_TIP_ERROR_M, MIN_CLEARANCE_M, feasible, grasp_spec, plan_grasp
 from benchmark.world.scenario import Scenario
 
@@ -33,6 +33,10 @@ def test_candidates_put_every_pad_on_its_face_a_pad_breadth_apart():
             assert spots[f]["face"] == "+y" and p[1] == HALF[1] and abs(p[0]) < HALF[0]
             assert PAD_HEIGHT_M[0] <= p[2] <= PAD_HEIGHT_M[1]
         assert spec["palm_x"] == pytest.approx(np.mean(xs))
+        # the thumb faces the fingers' centre, and that grip axis passes near the box's centre of mass
+        zs = [spots[f]["point"][2] for f in fingers]
+        assert spots["thumb"]["point"][0] == pytest.approx(np.mean(xs)) and abs(np.mean(xs)) <= ROW_CENTRE_M
+        assert spots["thumb"]["point"][2] == pytest.approx(np.mean(zs))
     assert seen == set(FAMILIES)
 
 

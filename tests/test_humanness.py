@@ -1,9 +1,10 @@
 """The world is human: lift peaks, grip fluctuation in holds, grip-load coupling, Newton-Euler.
 
-Measured on this machine (standard suite's seeds, truth only): lift peak acceleration 2.9-4.9
-m/s^2; thumb grip coefficient of variation in holds 2.1-4.8 %; shake grip-load correlation
-0.69-0.94 (whole-hand grip control) and 0.61-0.94 (per-digit) from 1 s after lift-off, the grip
-leading by 33-133 ms; Newton-Euler residuals below 2e-14 N.
+Measured on this machine (standard suite's seeds, truth only; results/world): lift peak acceleration
+2.8-5.5 m/s^2; thumb grip coefficient of variation in holds (from 1 s after lift-off) 2.3-4.8 % on
+lift; shake grip-load correlation 0.50-0.82 (per-digit, the world's control) and 0.53-0.91
+(whole-hand) from 1 s after lift-off, the grip leading by 0-133 ms; Newton-Euler residuals below
+2e-14 N.
 """
 
 from dataclasses import replace
@@ -41,9 +42,12 @@ def test_grip_follows_the_load_on_shake_and_leads_it(control):
     scenarios = [sc for name in ("standard", "dev") for sc in get_suite(name).scenarios if sc.task == "shake"]
     hs = [episode_humanness(simulate(replace(sc, grip_control=control)).truth, sc.fps) for sc in scenarios]
     assert len(hs) == 8
-    # measured medians: whole-hand 0.90 (0.69-0.94), per-digit 0.86 (0.61-0.94)
-    assert np.median([h.grip_load_corr for h in hs]) >= 0.8
-    assert all(h.grip_lead_s >= 0 for h in hs)
+    # measured medians: whole-hand 0.85 (0.53-0.91), per-digit 0.63 (0.50-0.82). The per-digit grip
+    # presses each digit for at least 0.7 of its nearby peak load (benchmark.world.grip.load_envelope),
+    # so it is modulated less than the whole-hand one and the living fluctuations weigh more: a
+    # weaker coupling than the 0.86 the per-digit control had before (docs/findings.md)
+    assert np.median([h.grip_load_corr for h in hs]) >= (0.8 if control == "whole-hand" else 0.55)
+    assert all(h.grip_lead_s >= 0 for h in hs)  # measured leads 0-133 ms under both
 
 
 @pytest.mark.parametrize("task", sorted(TASKS))
@@ -78,6 +82,19 @@ def test_per_digit_control_squeezes_closer_to_the_margin_than_the_whole_hand():
         return episode_humanness(ep.truth, 30.0, ep.object_model.friction)
 
     whole, digits = stats("whole-hand"), stats("per-digit")
-    # measured: margin 0.83 -> 0.61, thumb 3.8 -> 1.8 times the box's weight (user 0's drawn margin: 0.4)
+    # measured: margin MEASURED_WH -> MEASURED_PD, thumb MEASURED_TWH -> MEASURED_TPD times the box's weight
+    # (user 0's drawn margin: 0.29)
     assert digits.effective_margin < whole.effective_margin - 0.1
     assert digits.thumb_per_weight < 0.7 * whole.thumb_per_weight
+
+
+@pytest.mark.parametrize("user", [0, 2, 3])
+def test_the_realised_margin_is_the_persons(user):
+    """The world's grip (per-digit) realises the person's drawn relative margin on the named users'
+    lifts (drawn 0.29, 0.20, 0.47; the trial's within 10 % of it)."""
+    from benchmark.world.people import person
+
+    ep = simulate(Scenario(task="lift", user=user, grasp=0, mass=2, seed=920 + user))
+    h = episode_humanness(ep.truth, 30.0, ep.object_model.friction)
+    # measured MEASURED_REAL
+    assert h.effective_margin == pytest.approx(person(user)["safety_margin"], abs=0.1)

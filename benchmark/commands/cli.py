@@ -181,8 +181,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "compress and flatten on the box), skin-rigid (its pulps rigid) or capsules (the collision "
                         "primitives, an ablation)")
     p.add_argument("--grip-control", default=DEFAULT_GRIP_CONTROL,
-                   help="how the simulated person controls the grip: whole-hand (the grasp's squeeze scaled as one "
-                        "pattern) or per-digit (each digit pressed for its own load, with tactile feedback)")
+                   help="how the simulated person controls the grip: per-digit (the default: each digit pressed for "
+                        "its own load, the grasp at the person's safety margin, with tactile feedback) or whole-hand "
+                        "(the grasp's squeeze scaled as one pattern, the world of earlier versions)")
     p.add_argument("--user", type=int, default=0, help="the person: 0-4 the named cohort (sim_assets/users.yaml), N >= 5 drawn with seed N (anatomy and grip style)")
     p.add_argument("--grasp", type=int, default=0, help="the grasp: 0-3 the named ones (sim_assets/grasps.yaml), N >= 4 drawn with seed N for the person's hand")
     p.add_argument("--mass", type=int, default=0, help="index into sim_assets/masses.yaml")

@@ -22,7 +22,7 @@ def add_suite_arguments(p: argparse.ArgumentParser, *, out_help: str, sensor: bo
                        help="what the camera sees of the hand, replacing the suite's: capsules (the collision "
                             "primitives), skin (the person's skin, benchmark.world.skin) or skin-rigid (its pulps rigid)")
         p.add_argument("--grip-control", default=None,
-                       help="how the simulated people control the grip, replacing the suite's: whole-hand or per-digit "
+                       help="how the simulated people control the grip, replacing the suite's: per-digit (the world's) or whole-hand "
                             "(benchmark.world.grip)")
     p.add_argument("--out", required=True, type=pathlib.Path, help=out_help)
     p.add_argument("--cache", default=None, type=folder,

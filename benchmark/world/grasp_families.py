@@ -17,11 +17,15 @@ not a family: the model hand cannot make it (with the hand turned, the planned p
 short even for 205 mm hands; the thumb's reach from above is too short).
 
 Within a family the spots are drawn, all uniformly (the ranges are choices that keep every pad
-on its face and reproduce the named grasps' spread): the fingers' row is centred anywhere within
-:data:`ROW_CENTRE_M` of the face's centre, neighbouring fingers lie a pad breadth apart plus a gap
-of up to :data:`FINGER_GAP_M`, each pad's height on the face is within :data:`PAD_HEIGHT_M`, and
-the thumb faces the point between the index and the middle finger, shifted by up to
-:data:`THUMB_SHIFT_M` along the row.
+on its face): neighbouring fingers lie a pad breadth apart plus a gap of up to
+:data:`FINGER_GAP_M`, each finger pad's height on the face is within :data:`PAD_HEIGHT_M`, and the
+thumb faces the fingers' centre (their mean position along the row and in height), so that the
+fingers' resultant is opposite the thumb; that grip axis passes within :data:`ROW_CENTRE_M` of the
+box's centre of mass. People place their digits by an object's centre of mass where they can
+predict it (Lukos, Ansuini & Santello 2007, J. Neurosci. 27), so that the load needs no torque
+about the grip axis; the box's is at its centre. (Grasps off the centre of mass, as the named
+grasps are by 10-15 mm, must hold that torque with a couple of the fingers' tangential forces,
+which the grip must squeeze against: docs/findings.md, "How hard the simulated people squeeze".)
 """
 
 from __future__ import annotations
@@ -32,14 +36,13 @@ _DIGITS = {"width-four": ("index", "middle", "ring"), "width-five": ("index", "m
            "width-tripod": ("index", "middle")}
 FAMILIES = tuple(_DIGITS)
 """The grasp families a drawn grasp comes from (with the fingers each opposes to the thumb)."""
-ROW_CENTRE_M = 0.030
-"""Half-range of the fingers' row centre along the face, [m]."""
+ROW_CENTRE_M = 0.005
+"""Half-range of the grip axis's offset from the box's centre along the face, [m] (a choice: the
+grasp's scatter about the centre of mass)."""
 FINGER_GAP_M = (0.0, 0.004)
 """Range of the gap between neighbouring pads along the row, [m]."""
 PAD_HEIGHT_M = (-0.010, 0.008)
-"""Range of a pad's height on its face, from the box's mid-height, [m] (the box is 60 mm tall)."""
-THUMB_SHIFT_M = 0.010
-"""Half-range of the thumb's shift along the row, [m]."""
+"""Range of a finger pad's height on its face, from the box's mid-height, [m] (the box is 60 mm tall)."""
 
 
 def draw_candidate(rng: np.random.Generator, index: int, hand, half_extents) -> dict:
@@ -63,10 +66,9 @@ def draw_candidate(rng: np.random.Generator, index: int, hand, half_extents) -> 
     for a, b in zip(fingers[:-1], fingers[1:]):
         row.append(row[-1] + radius[a] + radius[b] + float(rng.uniform(*FINGER_GAP_M)))
     row = np.array(row) - np.mean(row) + centre  # along the box's x: the index most radial (-x)
-    heights = rng.uniform(*PAD_HEIGHT_M, size=len(fingers) + 1)
-    thumb_row = 0.5 * (row[0] + row[1]) + float(rng.uniform(-THUMB_SHIFT_M, THUMB_SHIFT_M))
+    heights = rng.uniform(*PAD_HEIGHT_M, size=len(fingers))
     hy = float(half_extents[1])
-    spots = {"thumb": {"face": "-y", "point": [thumb_row, -hy, float(heights[0])]}}
-    for f, x, z in zip(fingers, row, heights[1:]):
+    spots = {"thumb": {"face": "-y", "point": [float(np.mean(row)), -hy, float(np.mean(heights))]}}
+    for f, x, z in zip(fingers, row, heights):
         spots[f] = {"face": "+y", "point": [float(x), hy, float(z)]}
     return {"name": f"d{index}-{family}", "family": family, "palm_x": float(np.mean(row)), "spots": spots}

@@ -1,13 +1,16 @@
 """The synthetic human: how hard each finger squeezes, and the hand it moves.
 
 :class:`GripPolicy` turns the load the hand must carry into fingertip forces, following the
-motor-control literature: the grip (normal) force tracks the load force in parallel with a
-user-specific safety margin over the slip limit (Johansson & Westling 1984), from a baseline grip,
-anticipating the planned load rather than reacting to it (Flanagan & Wing 1995), with a per-finger
-share of the internal force (Radwin et al. 1992), varying within a hold and from trial to trial
-(:mod:`benchmark.world.living`). The forces become joint torques through the fingertip Jacobians,
-tau = J^T f; MuJoCo's contact solver then produces the true contact forces. Where the hand goes
-for a grasp is :mod:`benchmark.world.grasp_plan`."""
+motor-control literature: the grip (normal) force tracks the load force with a user-specific
+relative safety margin over the slip limit, (G - G_slip) / G (Johansson & Westling 1984),
+anticipating the planned load rather than reacting to it (Flanagan & Wing 1995), digit by digit
+(Burstedt, Flanagan & Johansson 1999) with a per-finger share of the internal force (Radwin et al.
+1992), varying within a hold and from trial to trial (:mod:`benchmark.world.living`). The forces
+become joint torques through the fingertip Jacobians, tau = J^T f; MuJoCo's contact solver then
+produces the true contact forces. Where the hand goes for a grasp is
+:mod:`benchmark.world.grasp_plan`; how the grip is scaled, the scenario's ``grip_control``:
+"per-digit" (:meth:`GripPolicy.grasp_hold`, the world's) or "whole-hand"
+(:meth:`GripPolicy.whole_hand`, the world of earlier versions)."""
 
 from __future__ import annotations
 
@@ -19,7 +22,7 @@ import numpy as np
 from benchmark.world.assets import World, user_of
 from benchmark.world.living import MOVING_ACC, MOVING_ALPHA, LivingGrip
 from benchmark.world.scenario import Scenario
-from fsv.linalg import dot, inv, mm, mv, rows_mt, vm
+from fsv.linalg import dot, inv, mm, mv, rows_mt, solve, vm
 
 
 @dataclass(frozen=True)
@@ -28,14 +31,18 @@ class GripPolicy:
 
     Attributes:
         friction: Skin-box friction coefficient the user expects.
-        safety_margin: Grip exceeds the slip limit by this fraction of it.
+        safety_margin: The relative safety margin (G - G_slip) / G: the fraction of the grip force
+            above the slip limit (Johansson & Westling 1984), in [0, 1).
         baseline_grip_n: Internal force kept without load, [N] (thumb-side normal force).
         anticipation_s: The grip follows the load planned this far ahead, [s].
         response_s: Time constant of the grip force's first-order response, [s].
         share: Per finger share of the internal force, thumb first, (K,); the thumb opposes the
             fingers (its share is 1, the active fingers' shares are renormalised to sum to 1).
         min_finger_force_n: Every digit in contact presses with at least this normal force, [N]
-            (people keep each digit of a grasp in firm contact).
+            (a choice, the floor both controls have always used: people keep each digit of a grasp
+            in firm contact; as a lower bound on the digit's requirement, not added to it, it binds
+            only where a digit carries little load. With 0.5-0.75 N a digit's force fell below the
+            task contract's 0.5 N where the table took the box's weight before the hand let go).
     """
 
     friction: float
@@ -71,7 +78,8 @@ class GripPolicy:
             the inverse grip shares (a digit carries load in proportion to its grip), (K, 3) or
             (N, K, 3); and per digit j the internal (workless) forces that press it with a unit
             normal force, (K, K, 3): ``press[0]`` is the squeeze of the grasp as a whole (the thumb
-            against the fingers in their shares), ``press[j]`` for a finger the internal forces
+            against the fingers in their shares, moved so that the fingers' normal forces balance
+            the thumb's moment: :func:`centred_shares`), ``press[j]`` for a finger the internal forces
             nearest to finger j pressing alone (the thumb and the others react), zero rows for
             digits not in contact.
         """
@@ -93,10 +101,11 @@ class GripPolicy:
         f_nom = np.zeros((len(wrench), K, 3))
         f_nom[:, idx] = rows_mt(wrench, Gp).reshape(len(wrench), -1, 3)
         press = np.zeros((K, K, 3))
+        weights = centred_shares(share, points[idx], normals_in[idx])
         for i, k in enumerate(idx):
             d = np.zeros((len(idx), 3))
             if i == 0:
-                d[:] = share[:, None] * normals_in[idx]
+                d[:] = weights[:, None] * normals_in[idx]
             else:
                 d[i] = normals_in[k]
             d = d.ravel()
@@ -104,50 +113,119 @@ class GripPolicy:
             press[k, idx] = d_int / dot(d_int[i], normals_in[k])
         return (f_nom[0] if single else f_nom), press
 
+    @property
+    def slip_slope(self) -> float:
+        """The normal force per newton of tangential load at which a digit works with the person's
+        safety margin: 1 / (mu (1 - margin)) (the margin is Johansson & Westling's relative one,
+        (G - G_slip) / G)."""
+        return 1.0 / (self.friction * (1.0 - self.safety_margin))
+
     def hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
-             baseline_n, margin=None) -> np.ndarray:
-        """How hard each digit presses: the baseline squeeze, then each digit pressed until it works
-        inside its friction cone shrunk by the safety margin and with at least ``min_finger_force_n``.
+             baseline_n, slope=None, held_load=None) -> np.ndarray:
+        """How hard each digit presses: each digit pressed until it works inside its friction cone
+        shrunk by the safety margin, and with at least ``min_finger_force_n``; the thumb at least
+        with the baseline grip.
 
         A person controls the grip digit by digit (Burstedt, Flanagan & Johansson 1999): a digit that
         carries more of the load presses harder, and the others react, instead of the whole hand
-        squeezing harder. Each pass adds to each digit short of its requirement the press that
+        squeezing harder. Each pass adds to each digit short of its requirement
+        ``max(slip_slope (1 + boost) t, min_finger_force_n)`` (t its tangential load) the press that
         brings its own normal force to it, one digit after the other, the fingers first and then the
         thumb (whose normal force is mostly their reaction: it presses for its own load only where
-        their reactions fall short); the
-        passes repeat (:data:`HOLD_PASSES`) because a press also moves the digits' tangential forces.
+        their reactions fall short); the passes repeat (:data:`HOLD_PASSES`) because a press also
+        moves the digits' tangential forces. The floor and the baseline are lower bounds, not added
+        to the load's requirement: the grip's relative safety margin over the slip limit is the
+        person's wherever the load needs more than them (Johansson & Westling 1984 measured it on
+        the whole grip force).
 
         Args:
             f_nom: Nominal forces, (N, K, 3) [N].
             press: Unit presses per digit, (K, K, 3) (:meth:`nominal_and_compressions`).
             normals_in: Unit normals into the box, (K, 3).
             active: Digits in contact, (K,) bool.
-            baseline_n: The squeeze kept without load, scalar or (N,) [N].
-            margin: The safety margin per tick, (N,); None: the policy's.
+            baseline_n: The thumb's least normal force, scalar or (N,) [N].
+            slope: Each digit's normal force per newton of its tangential load, per tick, (N,);
+                None: :attr:`slip_slope`.
+            held_load: A tangential load each digit is pressed for at least, per tick, (N, K) [N]
+                (:func:`load_envelope`); None: its own.
 
         Returns:
             The press of each digit, (N, K) [N]: the forces are ``f_nom + sum_j c[:, j] press[j]``.
         """
         N, K = f_nom.shape[:2]
         c = np.zeros((N, K))
-        c[:, 0] = baseline_n
-        f = f_nom + np.einsum("nj,jkd->nkd", c, press)
-        margin = np.full(N, self.safety_margin) if margin is None else np.asarray(margin, dtype=float)
-        slope = (1.0 + margin) / self.friction
+        f = f_nom.copy()
+        slope = np.full(N, self.slip_slope) if slope is None else np.broadcast_to(np.asarray(slope, dtype=float), (N,))
+        order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else list(np.flatnonzero(active))
         for _ in range(HOLD_PASSES):
             added = 0.0
-            order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else np.flatnonzero(active)
             for j in order:  # one digit at a time, the fingers before the thumb that opposes them
                 n = np.einsum("nd,d->n", f[:, j], normals_in[j])
                 t = norm_rows(f[:, j] - n[:, None] * normals_in[j])
-                deficit = np.maximum(slope * t + self.min_finger_force_n - n, 0.0)
+                if held_load is not None:
+                    t = np.maximum(t, held_load[:, j])
+                deficit = np.maximum(np.maximum(slope * t, self.min_finger_force_n) - n, 0.0)
                 c[:, j] += deficit
                 f = f + deficit[:, None, None] * press[j]
                 added = max(added, float(np.max(deficit)))
             if added <= HOLD_TOLERANCE_N:
                 break
+        if active[0]:
+            n0 = np.einsum("nd,d->n", f[:, 0], normals_in[0])
+            c[:, 0] += np.maximum(np.asarray(baseline_n, dtype=float) - n0, 0.0)
         return c
 
+    @property
+    def digit_margin(self) -> float:
+        """The least relative safety margin a digit works with under :meth:`grasp_hold`: the person's
+        times :data:`DIGIT_MARGIN_FRACTION`, at least :data:`DIGIT_MARGIN_MIN` (and at most the person's)."""
+        return min(max(DIGIT_MARGIN_FRACTION * self.safety_margin, DIGIT_MARGIN_MIN), self.safety_margin)
+
+    def grasp_hold(self, f_nom: np.ndarray, press: np.ndarray, normals_in: np.ndarray, active: np.ndarray,
+                   baseline_n, boost=None, held_load=None) -> tuple[np.ndarray, np.ndarray]:
+        """How hard each digit presses for the grasp to hold with the person's safety margin: the
+        digit-by-digit presses of :meth:`hold`, at the slope (normal force per newton of a digit's
+        tangential load) at which the grasp as a whole works with the person's relative margin,
+        1 - L / (mu sum N) = margin (L the digits' summed tangential force, sum N their summed
+        normal force; Johansson & Westling 1984 measured the margin on the grip as a whole).
+
+        Each digit's normal force follows its own load (Burstedt, Flanagan & Johansson 1999), but
+        the digits' normal forces must balance across the grasp: the thumb opposes the fingers, so a
+        side that carries less tangential load than the other works with a larger margin than its
+        requirement. Pressing every digit at the person's margin would put the grasp's margin above
+        it; the slope is lowered until the grasp's margin is the person's (:data:`GRASP_ITERATIONS`
+        corrections, each scaling the slope by the summed normal force wanted over the one pressed),
+        but never so far that a digit works with less than :data:`DIGIT_MARGIN_FRACTION` of the
+        person's margin. The floor and the baseline keep the grip above that at light loads.
+
+        Args:
+            f_nom: Nominal forces, (N, K, 3) [N].
+            press: Unit presses per digit, (K, K, 3) (:meth:`nominal_and_compressions`).
+            normals_in: Unit normals into the box, (K, 3).
+            active: Digits in contact, (K,) bool.
+            baseline_n: The thumb's least normal force, scalar or (N,) [N].
+            boost: The grip's relative raise per tick (the lift-off overshoot), (N,); None: 0.
+            held_load: As :meth:`hold`'s.
+
+        Returns:
+            ``(c (N, K), slope (N,))``: the presses (as :meth:`hold`'s) and the digits' slope per tick.
+        """
+        N = len(f_nom)
+        raise_ = np.ones(N) if boost is None else 1.0 + np.asarray(boost, dtype=float)
+        person = self.slip_slope * raise_
+        lowest = raise_ / (self.friction * (1.0 - self.digit_margin))
+        idx = np.flatnonzero(active)
+        nrm = normals_in[idx]
+        slope = person
+        for _ in range(GRASP_ITERATIONS):
+            c = self.hold(f_nom, press, normals_in, active, baseline_n, slope, held_load)
+            f = (f_nom + np.einsum("nj,jkd->nkd", c, press))[:, idx]
+            n = np.einsum("nkd,kd->nk", f, nrm)
+            tang = f - n[..., None] * nrm
+            load = np.sqrt(np.einsum("nkd,nkd->nk", tang, tang)).sum(axis=1)
+            wanted = person * load
+            slope = np.clip(slope * wanted / np.maximum(n.sum(axis=1), 1e-9), lowest, person)
+        return self.hold(f_nom, press, normals_in, active, baseline_n, slope, held_load), slope
 
     def whole_hand(self, f_nom: np.ndarray, squeeze: np.ndarray, normals_in: np.ndarray,
                    active: np.ndarray) -> tuple[np.ndarray, float]:
@@ -171,7 +249,7 @@ class GripPolicy:
             no load, [N].
         """
         idx = np.flatnonzero(active)
-        mu = self.friction / (1.0 + self.safety_margin)
+        mu = self.friction * (1.0 - self.safety_margin)
         nrm = normals_in[idx]
         d_int = squeeze[idx]
         n0 = np.einsum("nkj,kj->nk", f_nom[:, idx], nrm)
@@ -189,6 +267,89 @@ class GripPolicy:
         floor = float(np.max(self.min_finger_force_n / np.maximum(n1, 1e-9)))
         return grip, floor
 
+def centred_shares(share: np.ndarray, points: np.ndarray, normals_in: np.ndarray) -> np.ndarray:
+    """The weights of the grasp's squeeze: the thumb's 1 and the fingers' shares of its opposing
+    force, moved as little as needed for the squeeze's normal forces to exert no moment on the box.
+
+    People share the fingers' normal forces so that their moments balance the thumb's (Zatsiorsky,
+    Gregory & Latash 2002, Biol. Cybern. 87; Zatsiorsky & Latash 2008, J. Mot. Behav. 40): pressed
+    in the person's own shares, fingers whose resultant is not opposite the thumb turn the box, and
+    friction along the faces must hold it with a couple that grows with the squeeze. The fingers'
+    weights w minimise sum_j (w_j - s_j)^2 / s_j + CENTRING_WEIGHT |m_0 + sum_j w_j m_j|^2 (m the
+    moment about the centre of mass of a digit's unit normal force, [m], its components about the
+    horizontal axes weighted by :data:`HORIZONTAL_MOMENT_WEIGHT`) with the thumb's force
+    balanced along its normal and every w_j at least :data:`CENTRING_MIN_SHARE` of s_j: where the
+    thumb faces a point well between the fingers' pads the moment vanishes; elsewhere it is the
+    least the fingers can make it.
+
+    Args:
+        share: The thumb's 1 and the fingers' shares (summing to 1), thumb first, (A,).
+        points: The digits' contact points relative to the centre of mass, thumb first, (A, 3), [m].
+        normals_in: Their unit normals into the box, (A, 3).
+
+    Returns:
+        The weights, thumb first (1), (A,).
+    """
+    A = len(share)
+    out = np.ones(A)
+    if A < 2:
+        return out
+    s = np.asarray(share[1:], dtype=float)
+    moment = np.stack([_cross3(points[k], normals_in[k]) for k in range(A)])
+    m0, M = moment[0], moment[1:]
+    a = -np.einsum("kj,j->k", normals_in[1:], normals_in[0])  # each finger's force opposing the thumb's
+    axes = np.array([HORIZONTAL_MOMENT_WEIGHT, HORIZONTAL_MOMENT_WEIGHT, 1.0])  # the box's z is up
+    lo = CENTRING_MIN_SHARE * s
+    free = np.ones(A - 1, bool)
+    w = s.copy()
+    for _ in range(A):  # active set: fingers whose weight would fall below their bound are held at it
+        i, fixed = np.flatnonzero(free), np.flatnonzero(~free)
+        F = len(i)
+        held = m0 + (np.einsum("k,kd->d", lo[fixed], M[fixed]) if len(fixed) else 0.0)
+        H = np.zeros((F + 1, F + 1))
+        rhs = np.zeros(F + 1)
+        for p in range(F):
+            H[p, p] += 2.0 / s[i[p]]
+            rhs[p] += 2.0
+            for q in range(F):
+                H[p, q] += 2.0 * CENTRING_WEIGHT * dot(M[i[p]] * axes, M[i[q]])
+            rhs[p] -= 2.0 * CENTRING_WEIGHT * dot(M[i[p]] * axes, held)
+            H[p, F] = H[F, p] = a[i[p]]
+        rhs[F] = 1.0 - (dot(a[fixed], lo[fixed]) if len(fixed) else 0.0)
+        x = solve(H, rhs)
+        w = lo.copy()
+        w[i] = x[:F]
+        if np.all(w[i] >= lo[i]) or F == 1:
+            break
+        free[i[int(np.argmin(w[i] - lo[i]))]] = False
+    out[1:] = np.maximum(w, lo)
+    return out
+
+
+def _cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+CENTRING_WEIGHT = 1e6
+"""Cost of the squeeze's moment about the box's vertical per newton of the thumb, [1/m^2], against the
+fingers' departure from their shares: 1 mm of unbalanced lever costs about as much as moving a
+finger's share by its own size (a choice: the moment vanishes wherever the geometry allows)."""
+CENTRING_MIN_SHARE = 0.5
+"""No finger's weight falls below this fraction of its own share (a choice: the fingers' forces keep
+their proportions, Radwin et al. 1992; a finger pressed with almost nothing leaves the box to pivot
+about the line from the thumb to the others)."""
+HORIZONTAL_MOMENT_WEIGHT = 0.01
+"""... and about the horizontal axes, relative to it (a choice): a moment about the vertical must be
+held by a horizontal couple along the faces, which adds to the digits' tangential forces; one about
+a horizontal axis (the thumb above or below the fingers) by a vertical couple, which only shifts
+load between the thumb and the fingers."""
+GRASP_ITERATIONS = 2
+"""Corrections of the digits' slope in :meth:`GripPolicy.grasp_hold`."""
+DIGIT_MARGIN_FRACTION = 0.75
+"""No digit works with less than this fraction of the person's safety margin (a choice: the grasp's
+margin is the person's, and none of its digits comes close to slipping)."""
+DIGIT_MARGIN_MIN = 0.1
+"""... and never less than this (the least relative margin Johansson & Westling 1984 measured)."""
 HOLD_PASSES = 30
 """Passes of :meth:`GripPolicy.hold` at most (each digit's press moves the others' forces a little)."""
 HOLD_TOLERANCE_N = 1e-6
@@ -201,18 +362,32 @@ REFLEX_LATENCY_S = 0.07
 REFLEX_TIME_S = 0.1
 """Time constant of a digit's correction of its realized deficit (a choice: slow enough against the
 latency to stay stable, fast enough to catch a lift's load within a few hundred milliseconds)."""
-RELAX_TIME_S = 1.0
+RELAX_TIME_S = 0.5
 """Time constant with which a digit's correction relaxes once its load is met (a choice: grip
 forces relax over about a second in static holds, Johansson & Westling 1984)."""
-LIFT_OFF_MARGIN = 0.5
-"""Extra safety margin while the load comes onto the hand and just after lift-off: the grip force
-peaks shortly after lift-off and then declines to its static level (Johansson & Westling 1984,
-Exp. Brain Res. 56; the peak is a choice within the overshoots they show)."""
+LIFT_OFF_OVERSHOOT = 0.25
+"""The digits' requirement is raised by this fraction of itself while the load comes onto the hand
+and just after lift-off: the grip force peaks shortly after lift-off and then declines to its static
+level (Johansson & Westling 1984, Exp. Brain Res. 56; the peak is a choice within the overshoots
+they show)."""
+ENVELOPE_FRACTION = 0.7
+"""A digit is pressed for at least this fraction of its peak load nearby (a choice, :func:`load_envelope`:
+with 0.4-0.6 the index of the named grasps 0 and 1, 12 mm off the centre of mass, lost its contact
+at the load's minima in a `shake` or a `free` of the cohort suite and the box turned into the palm;
+Flanagan & Wing 1995's grip fell to about half its peak at the load's minima)."""
+ENVELOPE_S = 0.5
+"""... within this before or after, [s] (a choice: a cycle of the 1-2 Hz movements Flanagan & Wing studied)."""
 LIFT_OFF_HOLD_S = 0.3
-"""The extra margin is kept this long after lift-off, [s]."""
+"""The raise is kept this long after lift-off, [s]."""
 LIFT_OFF_DECAY_S = 0.5
 """Then it decays with this time constant, [s]."""
 CONTROL_PERIOD_FALLBACK_S = 0.004
+STOP_AT_TOUCH = True
+REPLAN_EVERY = 12
+"""While the load comes on, the forces are planned again for the sensed contacts every this many
+control ticks (48 ms)."""
+REPLAN_AFTER_LOAD_S = 0.3
+"""... until this long after the load phase ends, [s] (the pads settle as the box leaves the table)."""
 """The control period assumed for a single control tick, [s]."""
 
 
@@ -231,7 +406,12 @@ class Human:
     planned load by the user's anticipation time and low-pass filtered by the user's response
     time. At run time :meth:`act` writes ``data.mocap_pos/quat``, ``data.ctrl`` (position
     actuators of the fingers) and, on control ticks, ``data.qfrc_applied`` on the finger joints:
-    tau = J^T (R f), with R the box's actual orientation.
+    tau = J^T (R f), with R the box's actual orientation. Under the "per-digit" control it also
+    senses the grasp: a closing digit stops where it touches (:meth:`_stop_at_touch`), the forces
+    are planned again for the pads' sensed contacts while the load comes on (:meth:`_replan`,
+    :data:`REPLAN_EVERY`, :data:`REPLAN_AFTER_LOAD_S`), and each digit's grip-load ratio is
+    corrected from the load it carries (:meth:`_correct`). All of it is read from the simulation's
+    own state, so the world stays the same bits on every machine.
 
     Args:
         scenario: The scenario (its user's grip style and its seed).
@@ -261,31 +441,32 @@ class Human:
         self.palm_pos, self.palm_quat, q = _palm_and_posture(t, motion, plan, phases, releases, self.R_palm_obj,
                                                              self.approach)
         self.ctrl = q[:, world.actuator_joint]
+        # the digits' closing stops at touch (see act): each digit's actuators and the times
+        self._t, self._touched = t, np.zeros(len(plan.active), bool)
+        self._opening = (_mj((t - phases.unload_end) / max(phases.open_end - phases.unload_end, 1e-9))
+                         * (t >= phases.unload_end)) if releases else np.zeros(len(t))
+        names = world.hand.joint_names
+        self._digit_actuators = [np.flatnonzero([names[j].startswith(f + "_") for j in world.actuator_joint])
+                                 for f in world.hand.finger_names]
         tk = t[::ctrl_every]
         self.control = scenario.grip_control
-        target, f_nom, press = _grip_target(tk, world, motion, plan, pol, living, phases, releases, self.control)
+        self._tk, self._pol, self._living = tk, pol, living
+        target, f_nom, press, self._slope = _grip_target(tk, world, motion, plan, pol, living, phases, releases,
+                                                         self.control)
         self.grip_target = target
-        grip = np.zeros_like(target)
-        keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
-        g = np.zeros(target.shape[1])
-        for i, gt in enumerate(target):
-            g = keep * g + (1 - keep) * gt
-            grip[i] = g
-        grip *= living.modulation(tk, grip_rng)[:, None]
-        if self.control == "per-digit":
-            forces = f_nom + np.einsum("nj,jkd->nkd", grip, press)
-        else:  # the squeeze alone (the same operations as a scalar grip times its pattern)
-            forces = f_nom + grip[:, 0, None, None] * press[0]
-        norm = np.linalg.norm(forces, axis=2, keepdims=True)
-        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
+        self._keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
+        self._modulation = living.modulation(tk, grip_rng)
+        self._filtered = np.zeros_like(target)
+        self.grip = np.zeros_like(target)
+        self.forces_obj = np.zeros(f_nom.shape)
         off = (tk < phases.reach_end) | ((tk >= phases.open_end) if releases else False)
-        forces[off] = 0.0
-        self.forces_obj = forces
-        self.grip = grip
         self.on = ~off
+        self._set_forces(0, target, f_nom, press)
+        # the grasp as it landed: the forces are planned again from the sensed contacts (see act)
+        window = np.flatnonzero((tk >= phases.close_end) & (tk < phases.load_end + REPLAN_AFTER_LOAD_S))
+        self._replan_ticks = set(window[::REPLAN_EVERY].tolist()) if self.control == "per-digit" else set()
+        self._sensed = np.asarray(plan.spot, dtype=float).copy()
         # tactile feedback (see act): each digit's realized load, delayed, presses it further
-        self.press = press
-        self.slope = (1.0 + pol.safety_margin) / pol.friction
         self.active = np.asarray(plan.active, bool)
         self.normals = np.asarray(plan.normal_in, dtype=float)
         self.feedback = np.zeros(len(plan.active))
@@ -301,6 +482,62 @@ class Human:
             dofs = world.finger_dofs[k]
             contiguous = np.array_equal(dofs, np.arange(dofs[0], dofs[-1] + 1))
             self._fingers.append((int(k), int(world.tip_site[k]), slice(int(dofs[0]), int(dofs[-1]) + 1) if contiguous else dofs))
+
+    def _set_forces(self, start: int, target: np.ndarray, f_nom: np.ndarray, press: np.ndarray) -> None:
+        """The commanded forces from control tick ``start`` on: the target through the grip's
+        first-order response (continuing from the tick before), times the living modulation,
+        capped at MAX_FINGER_FORCE_N, zero while the hand is off the box."""
+        g = self._filtered[start - 1].copy() if start > 0 else np.zeros(target.shape[1])
+        keep = self._keep
+        for i in range(start, len(target)):
+            g = keep * g + (1 - keep) * target[i]
+            self._filtered[i] = g
+        grip = self._filtered[start:] * self._modulation[start:, None]
+        if self.control == "per-digit":
+            forces = f_nom[start:] + np.einsum("nj,jkd->nkd", grip, press)
+        else:  # the squeeze alone (the same operations as a scalar grip times its pattern)
+            forces = f_nom[start:] + grip[:, 0, None, None] * press[0]
+        norm = np.linalg.norm(forces, axis=2, keepdims=True)
+        forces *= np.minimum(1.0, MAX_FINGER_FORCE_N / np.maximum(norm, 1e-12))
+        forces[~self.on[start:]] = 0.0
+        self.grip[start:] = grip
+        self.forces_obj[start:] = forces
+        self.press = press
+
+    def _stop_at_touch(self, data: mujoco.MjData, step: int) -> None:
+        """A closing digit stops where it touches the box: its posture target becomes its posture at
+        touch for the rest of the grasp (opening from there on release). People close the digits
+        onto an object and stop at contact, signalled by the fingertips' tactile afferents
+        (Johansson & Westling 1984's contact responses); without it a digit that touches first
+        pushes the box on the table toward the plan's spot, moving it under the others."""
+        _, touching = _digit_points(self.world, data, None)
+        new = touching & self.active & ~self._touched
+        if not new.any():
+            return
+        w, plan = self.world, self.plan
+        later = self._t[step:] < self.phases.close_end
+        for k in np.flatnonzero(new):
+            self._touched[k] = True
+            acts = self._digit_actuators[k]
+            joints = w.actuator_joint[acts]
+            q_touch = data.qpos[w.joint_qadr[joints]]
+            shift = q_touch - plan.q_grasp[joints]
+            moved = self.ctrl[step:, acts] + shift[None, :] * (1.0 - self._opening[step:, None])
+            self.ctrl[step:, acts] = np.where(later[:, None], q_touch[None, :], moved)
+
+    def _replan(self, data: mujoco.MjData, box_rot: np.ndarray, tick: int) -> None:
+        """Plans the forces again from the ticks on, for the contacts as they landed: a digit's
+        sensed centre of pressure (box frame) replaces its planned spot (people feel where each pad
+        touches and share the forces for that grasp; a pad lands millimetres from its plan, the
+        thumb's about 8 mm, as the digits close under their soft posture control)."""
+        points, touching = _digit_points(self.world, data, box_rot)
+        self._sensed = np.where((touching & self.active)[:, None], points, self._sensed)  # a digit off for a tick keeps its last
+        spot = self._sensed
+        target, f_nom, press, slope = _grip_target(self._tk, self.world, self.motion, self.plan, self._pol,
+                                                   self._living, self.phases, self.releases, self.control, spot=spot)
+        self.grip_target[tick:] = target[tick:]
+        self._slope[tick:] = slope[tick:]
+        self._set_forces(tick, target, f_nom, press)
 
     def palm_start(self) -> tuple[np.ndarray, np.ndarray]:
         """Palm pose at the first step."""
@@ -319,10 +556,16 @@ class Human:
         if step % self.ctrl_every:
             return
         tick = step // self.ctrl_every
+        if STOP_AT_TOUCH and self.control == "per-digit" and self.phases.reach_end <= self._t[step] < self.phases.close_end:
+            self._stop_at_touch(data, step)
+        if tick in self._replan_ticks:
+            self._replan(data, box_rot, tick)
         f_obj = self.forces_obj[tick]
         if self.on[tick] and self.control == "per-digit":
-            self._correct(data, box_rot)
-            f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback, self.press)
+            self._correct(data, box_rot, tick)
+            # the feedback raises each digit's press in proportion to its planned normal force
+            planned = np.maximum(np.einsum("kd,kd->k", self.forces_obj[tick], self.normals), 0.0)
+            f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback * planned, self.press)
         else:
             self.feedback[:] = 0.0
         f = rows_mt(f_obj, box_rot)
@@ -331,17 +574,23 @@ class Human:
             mujoco.mj_jacSite(m, data, jac, None, site)
             qfrc[dofs] = vm(f[k], jac[:, dofs])
 
-    def _correct(self, data: mujoco.MjData, box_rot: np.ndarray) -> None:
-        """Tactile feedback: each digit's realized deficit (how far its tangential load, times the
-        margin, exceeds its normal force), sensed :data:`REFLEX_LATENCY_S` ago, raises its press
-        (time constant :data:`REFLEX_TIME_S`); a met load lets it relax (:data:`RELAX_TIME_S`).
+    def _correct(self, data: mujoco.MjData, box_rot: np.ndarray, tick: int) -> None:
+        """Tactile feedback on each digit's grip-load ratio: a digit's relative shortfall (how far its
+        tangential load times the tick's slope exceeds its normal force, over that requirement),
+        sensed :data:`REFLEX_LATENCY_S` ago, raises the digit's press as a fraction of its planned
+        normal force (integrated with the time constant :data:`REFLEX_TIME_S`); a met load lets it
+        relax (:data:`RELAX_TIME_S`).
 
         Digit by digit, as people adjust each digit's grip to its own load (Burstedt, Flanagan &
         Johansson 1999): the feedforward grip follows the planned load, this follows the load the
         digit actually carries, which a statically indeterminate grasp shares among the digits by
-        their compliance, not by the plan."""
+        their compliance, not by the plan. The correction is of the ratio (the grip-load ratio that
+        Johansson & Westling 1984 saw raised after slips and kept), so it rises and falls with the
+        planned load instead of lagging it as an added force would."""
         n, t = _digit_loads(self.world, data, box_rot, self.normals)
-        self._deficits[self._tick % self._delay] = np.where(self.active, self.slope * t - n, 0.0)
+        need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
+        short = (need - n) / np.maximum(need, self.policy.min_finger_force_n)
+        self._deficits[self._tick % self._delay] = np.where(self.active & (n > 0), short, 0.0)  # touch senses only contact
         self._tick += 1
         sensed = self._deficits[self._tick % self._delay]
         self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
@@ -371,6 +620,33 @@ def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals
     return n, t
 
 
+def _digit_points(world: World, data: mujoco.MjData, box_rot: np.ndarray) -> tuple:
+    """Each digit's centre of pressure on the box now, relative to its centre, box frame, (K, 3) [m],
+    and whether it touches, (K,) bool."""
+    m = world.model
+    K = len(world.hand.finger_names)
+    weighted, total = np.zeros((K, 3)), np.zeros(K)
+    f6 = np.zeros(6)
+    con = data.contact
+    for i in range(data.ncon):
+        g1, g2 = int(con.geom1[i]), int(con.geom2[i])
+        if world.box_geom not in (g1, g2) or con.efc_address[i] < 0:
+            continue
+        k = int(world.geom_finger[g1 if g2 == world.box_geom else g2])
+        if k < 0:
+            continue
+        mujoco.mj_contactForce(m, data, i, f6)
+        if f6[0] > 0:
+            weighted[k] += f6[0] * con.pos[i]
+            total[k] += f6[0]
+    touching = total > 0
+    if box_rot is None:
+        return None, touching
+    centre = data.xpos[world.box_body]
+    world_points = weighted / np.where(touching, total, 1.0)[:, None]
+    return rows_mt(world_points - centre, box_rot.T), touching
+
+
 def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_obj: np.ndarray, approach: np.ndarray):
     """The palm's target pose and the fingers' posture targets at the times ``t``:
     ``(palm position (N, 3), palm quaternion (N, 4), joint targets (N, J))``."""
@@ -389,18 +665,21 @@ def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_ob
     return palm_pos, np.array([_quat_of(R) for R in palm_rot]), q
 
 
-def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool, control: str) -> tuple:
-    """How hard each digit aims to press on every control tick ``tk``, and the per-finger nominal
-    forces and unit presses (object frame) it scales: ``(target (N, K), f_nom (N, K, 3), press (K, K, 3))``.
+def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool, control: str,
+                 spot=None) -> tuple:
+    """How hard each digit aims to press on every control tick ``tk``, the per-finger nominal forces
+    and unit presses (object frame) it scales, and the digits' slope: ``(target (N, K), f_nom
+    (N, K, 3), press (K, K, 3), slope (N,))``.
 
     The grip follows the load planned anticipation_s ahead of its own response (an internal model of
-    the grip's lag), so that it leads or matches the load. Under ``control`` "per-digit" it is the
-    baseline squeeze (relaxing in holds), then each digit pressed until it works within its friction
-    cone shrunk by the safety margin (raised around lift-off, :func:`_lift_off`) plus
-    min_finger_force_n (:meth:`GripPolicy.hold`): the digits' presses follow their own share of the
-    load. Under "whole-hand" only the grasp's squeeze (column 0) is set: the sum of the baseline,
-    the grip at which every digit presses with min_finger_force_n without load, and the grip the
-    load's slip limit needs (:meth:`GripPolicy.whole_hand`).
+    the grip's lag), so that it leads or matches the load. Under ``control`` "per-digit" the digits
+    press for their own loads, the grasp as a whole at the person's margin (raised around lift-off,
+    :func:`_lift_off`; :meth:`GripPolicy.grasp_hold`), each for at least part of its nearby peak
+    load (:func:`load_envelope`), the thumb at least the baseline before the load comes on. Under
+    "whole-hand" only the grasp's squeeze (column 0) is set: the sum of the baseline (relaxing in
+    holds), the grip at which every digit presses with min_finger_force_n without load, and the grip
+    the load's slip limit needs (:meth:`GripPolicy.whole_hand`). ``spot``: the contact points to plan
+    for, (K, 3) [m]; None: the plan's.
     """
     m = world.model
     mass = float(m.body_mass[world.box_body])
@@ -419,16 +698,20 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
     a_b = np.einsum("nji,nj->ni", rot_a, alpha)
     torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
     wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
-    f_nom, press = pol.nominal_and_compressions(wrench, plan.spot, plan.normal_in, plan.active)
+    f_nom, press = pol.nominal_and_compressions(wrench, plan.spot if spot is None else spot, plan.normal_in, plan.active)
     moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
     baseline = pol.baseline_grip_n * living.relaxation(tk, moving)
     if control == "per-digit":
-        target = pol.hold(f_nom, press, plan.normal_in, plan.active, baseline,
-                          margin=pol.safety_margin + LIFT_OFF_MARGIN * _lift_off(ta, ph))
+        # the baseline is the grip before the load comes on (the preload, Johansson & Westling 1984):
+        # a lower bound on the thumb that fades as the load comes onto the hand
+        target, slope = pol.grasp_hold(f_nom, press, plan.normal_in, plan.active, baseline * (1.0 - load),
+                                       boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph),
+                                       held_load=load_envelope(f_nom, plan.normal_in, tk))
     else:
         grip_slip, grip_floor = pol.whole_hand(f_nom, press[0], plan.normal_in, plan.active)
         target = np.zeros((len(tk), len(plan.active)))
         target[:, 0] = baseline + grip_floor + grip_slip
+        slope = np.full(len(tk), pol.slip_slope)
     ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
     closing = tk < ph.close_end
     target[closing] = 0.0
@@ -438,7 +721,28 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
         opening = tk >= ph.unload_end
         target[opening] = 0.0
         target[opening, 0] = pol.baseline_grip_n * fade[opening]
-    return target, f_nom, press
+    return target, f_nom, press, slope
+
+
+def load_envelope(f_nom: np.ndarray, normals_in: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The tangential load each digit is pressed for at least: :data:`ENVELOPE_FRACTION` of the
+    largest planned load it carries within :data:`ENVELOPE_S` before or after, (N, K) [N].
+
+    In cyclic movements the grip follows the load in phase but falls less than the load at its
+    minima, where the grip-load ratio is highest (Flanagan & Wing 1993, Exp. Brain Res. 95; 1995):
+    people do not relax a digit to nothing between the load's peaks."""
+    n = np.einsum("nkd,kd->nk", f_nom, normals_in)
+    tang = f_nom - n[..., None] * normals_in
+    load = np.sqrt(np.einsum("nkd,nkd->nk", tang, tang))
+    if len(t) < 2:
+        return ENVELOPE_FRACTION * load
+    half = max(1, int(round(ENVELOPE_S / (t[1] - t[0]))))
+    N = len(load)
+    peak = load.copy()
+    for shift in range(1, half + 1):  # a running maximum over +-half ticks
+        peak[:-shift] = np.maximum(peak[:-shift], load[shift:])
+        peak[shift:] = np.maximum(peak[shift:], load[:N - shift])
+    return ENVELOPE_FRACTION * peak
 
 
 def _lift_off(t: np.ndarray, ph) -> np.ndarray:

@@ -2,19 +2,23 @@
 
     python -m benchmark.commands.humanness [--suite standard] [--out results/world]
 
-simulates every episode of a suite (no rendering); the command writes ``humanness.md`` and
-``humanness.json``: per task the distribution of the box's peak acceleration and angular velocity
-while lifted beside the ranges of :mod:`benchmark.world.tasks.human`, the thumb's grip-force
-coefficient of variation in holds, the grip-load correlation and lead on ``shake``, and the
-largest Newton-Euler residual of the truth.
+simulates every episode of a suite (no rendering); the command writes ``humanness.md``,
+``humanness.json`` and ``humanness_margins.png``: per task the distribution of the box's peak
+acceleration and angular velocity while lifted beside the ranges of
+:mod:`benchmark.world.tasks.human`, the thumb's grip-force coefficient of variation in holds, the
+grip-load correlation and lead on ``shake``, the effective safety margin and the thumb's force per
+weight, and the largest Newton-Euler residual of the truth; per episode the person's drawn margin
+against the realised one, and the grip in holds against the slip limit.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from benchmark.world.living import LivingGrip
+from benchmark.world.people import person
 from fsv.linalg import norm
 
 STILL_ACC = 0.3
@@ -39,8 +43,9 @@ class EpisodeHumanness:
     Attributes:
         peak_acc: Largest |box acceleration| while lifted (held, no table contact), [m/s^2].
         peak_omega: Largest |box angular velocity| while lifted, [rad/s].
-        grip_cv: Median over holds (>= MIN_HOLD_S, lifted, still) of the thumb normal force's
-            coefficient of variation; nan without such a hold.
+        grip_cv: Median over holds (>= MIN_HOLD_S, lifted, still, from LIFT_OFF_TRANSIENT_S after
+            lift-off: :func:`coupling_frames`) of the thumb normal force's coefficient of variation;
+            nan without such a hold.
         grip_load_corr: Largest correlation of the thumb normal force with the load force |m (a - g)|
             over lags within +- MAX_LAG_S while lifted, from LIFT_OFF_TRANSIENT_S after each
             lift-off (:func:`coupling_frames`).
@@ -52,6 +57,16 @@ class EpisodeHumanness:
             without a lifted frame or a friction coefficient.
         thumb_per_weight: Median over lifted frames of the thumb's normal force over the box's
             weight m |g|.
+        hold_grip_n: Median over the holds' frames (those of ``grip_cv``) of the thumb's normal force,
+            [N]; nan without a hold.
+        hold_slip_n: Median over the same frames of the slip limit L / (2 mu), the grip at which the
+            digits' summed tangential force L would make the grasp slip (a thumb against the fingers:
+            each side's normal force times mu carries its half), [N]; nan without a hold.
+        max_slip_mm: Largest drift of a digit's centre of pressure on the box (box frame) while held,
+            from where it was at the first held frame, over the digits in contact throughout, [mm].
+        drawn_margin: The person's drawn safety margin (``benchmark.world.people``); nan if not given.
+        trial_margin: This trial's margin (the drawn one times the living grip's trial factor,
+            ``benchmark.world.living``); nan if not given.
     """
 
     peak_acc: float
@@ -62,6 +77,11 @@ class EpisodeHumanness:
     newton_euler_n: float
     effective_margin: float = float("nan")
     thumb_per_weight: float = float("nan")
+    hold_grip_n: float = float("nan")
+    hold_slip_n: float = float("nan")
+    max_slip_mm: float = float("nan")
+    drawn_margin: float = float("nan")
+    trial_margin: float = float("nan")
 
 
 def lifted(truth) -> np.ndarray:
@@ -91,6 +111,26 @@ def holds(mask: np.ndarray, fps: float) -> list:
     return [slice(a, b) for a, b in zip(edges[::2], edges[1::2]) if (b - a) / fps >= MIN_HOLD_S]
 
 
+def tangential_load(truth) -> np.ndarray:
+    """The digits' summed tangential force L on every frame, (T,), [N]."""
+    normal = truth.normal_force()
+    return np.linalg.norm(truth.contact_force - normal[..., None] * truth.contact_normal, axis=2).sum(axis=1)
+
+
+def max_drift_m(truth) -> float:
+    """Largest drift of a digit's centre of pressure on the box (box frame) while held, from where it
+    was at the first held frame, over the digits in contact throughout the held frames, [m]."""
+    held = truth.held if truth.held is not None else np.ones(len(truth.t), bool)
+    if not held.any():
+        return 0.0
+    cp, act = truth.contact_point[held], truth.contact_active[held]
+    drift = 0.0
+    for k in range(act.shape[1]):
+        if act[:, k].all():
+            drift = max(drift, float(np.linalg.norm(cp[:, k] - cp[0, k], axis=1).max()))
+    return drift
+
+
 def effective_margin(truth, friction: float) -> np.ndarray:
     """The grip's effective safety margin 1 - L / (mu sum N) on every frame, (T,) (nan where no
     digit presses): L the digits' summed tangential force, sum N their summed normal force."""
@@ -108,8 +148,13 @@ def episode_humanness(truth, fps: float, friction: float = float("nan")) -> Epis
     acc = np.linalg.norm(truth.box_acc, axis=1)
     omega = np.linalg.norm(truth.box_omega, axis=1)
     grip = thumb_normal_force(truth)
-    still = up & (acc < STILL_ACC) & (omega < STILL_OMEGA) & truth.contact_active[:, 0]
-    cvs = [np.std(grip[s]) / np.mean(grip[s]) for s in holds(still, fps)]
+    still = coupling_frames(truth, fps) & (acc < STILL_ACC) & (omega < STILL_OMEGA) & truth.contact_active[:, 0]
+    runs = holds(still, fps)
+    cvs = [np.std(grip[s]) / np.mean(grip[s]) for s in runs]
+    in_holds = np.zeros(len(grip), bool)
+    for s in runs:
+        in_holds[s] = True
+    slip_limit = tangential_load(truth) / (2.0 * friction)
     load = np.linalg.norm(truth.mass * (truth.box_acc - truth.gravity), axis=1)
     corr, lead = _best_lag(grip, load, coupling_frames(truth, fps), int(round(MAX_LAG_S * fps)))
     force, _ = truth.newton_euler_residual()
@@ -123,6 +168,9 @@ def episode_humanness(truth, fps: float, friction: float = float("nan")) -> Epis
         newton_euler_n=float(np.max(np.linalg.norm(force, axis=1))),
         effective_margin=margin,
         thumb_per_weight=float(np.median(grip[up]) / weight) if up.any() else float("nan"),
+        hold_grip_n=float(np.median(grip[in_holds])) if in_holds.any() else float("nan"),
+        hold_slip_n=float(np.median(slip_limit[in_holds])) if in_holds.any() and np.isfinite(friction) else float("nan"),
+        max_slip_mm=1000.0 * max_drift_m(truth),
     )
 
 
@@ -143,7 +191,8 @@ def _best_lag(grip: np.ndarray, load: np.ndarray, mask: np.ndarray, max_lag: int
 
 
 def suite_humanness(suite, progress: bool = True) -> list:
-    """``(scenario, EpisodeHumanness)`` for every episode of a suite (simulated, not rendered)."""
+    """``(scenario, EpisodeHumanness)`` for every episode of a suite (simulated, not rendered), with the
+    person's drawn margin and the trial's."""
     from benchmark.world.simulate import simulate
 
     scenarios = suite.scenarios
@@ -154,5 +203,8 @@ def suite_humanness(suite, progress: bool = True) -> list:
     rows = []
     for sc in scenarios:
         ep = simulate(sc)
-        rows.append((sc, episode_humanness(ep.truth, sc.fps, ep.object_model.friction)))
+        h = episode_humanness(ep.truth, sc.fps, ep.object_model.friction)
+        drawn = float(person(sc.user)["safety_margin"])
+        trial = drawn * LivingGrip.draw(sc.rng("grip")).trial_scale  # the draws the simulation made
+        rows.append((sc, replace(h, drawn_margin=drawn, trial_margin=trial)))
     return rows

@@ -5,9 +5,10 @@ User N >= 5 is a person drawn from a generator seeded with N (the same person fo
 that names N): sex, then a hand (:func:`benchmark.world.anatomy.draw_anatomy`), then a grip style,
 each quantity independently from the spreads below:
 
-- **safety margin** (:data:`SAFETY_MARGIN`): log-normal around 40 %; Johansson & Westling (1984,
-  Exp. Brain Res. 56) and Westling & Johansson (1984, Exp. Brain Res. 53) report 10-40 % over the
-  slip limit for fingertip grips, more for cautious and older people (Cole 1991, J. Neurophysiol. 65);
+- **safety margin** (:data:`SAFETY_MARGIN`): the relative safety margin (G - G_slip) / G, the part
+  of the grip force G above the slip limit G_slip, log-normal around 25 %: Johansson & Westling
+  (1984, Exp. Brain Res. 56) and Westling & Johansson (1984, Exp. Brain Res. 53) measured 10-40 %
+  for fingertip grips, more for cautious and older people (Cole 1991, J. Neurophysiol. 65);
 - **baseline grip** (:data:`BASELINE_GRIP_N`): the squeeze kept without load, uniform;
 - **anticipation** (:data:`ANTICIPATION_S`): how far the grip leads the load, uniform; the grip
   leads or coincides with the load in self-paced moves (Flanagan & Wing 1995, Exp. Brain Res. 105);
@@ -36,8 +37,11 @@ from benchmark.world.anatomy import (
     sized,
 )
 
-SAFETY_MARGIN = (0.40, 0.40, (0.10, 1.00))
-"""Median, log-standard deviation and the range it is clipped to of the safety margin (a fraction)."""
+SAFETY_MARGIN = (0.25, 0.40, (0.10, 0.60))
+"""Median, log-standard deviation and the range it is clipped to of the relative safety margin (a
+fraction of the grip force): the median is the middle of Johansson & Westling's 10-40 %; the spread
+(95 % of people within 11-55 %) and the upper clip (a grip 2.5 times the slip limit) are choices that
+keep a cautious tail."""
 BASELINE_GRIP_N = (0.5, 3.5)
 """Range of the baseline grip, [N]."""
 ANTICIPATION_S = (0.0, 0.10)

@@ -21,11 +21,12 @@ ablation: only what would pass into the box is flattened onto it)."""
 DEFAULT_HAND_SURFACE = "skin"
 """The hand surface of a scenario that names none (episodes with another are named ``...-<surface>``)."""
 GRIP_CONTROLS = ("whole-hand", "per-digit")
-"""How the simulated person controls the grip (``benchmark.world.grip``): "whole-hand" scales the
-grasp's squeeze as one pattern until the digit closest to slipping holds (every digit presses as
-hard as that one needs); "per-digit" presses each digit for its own load, with tactile feedback on
-the load it carries and the grip's overshoot at lift-off."""
-DEFAULT_GRIP_CONTROL = "whole-hand"
+"""How the simulated person controls the grip (``benchmark.world.grip``): "per-digit" (the world's)
+presses each digit for its own load, the grasp as a whole at the person's safety margin, with
+tactile feedback on the load each digit carries and the grip's overshoot at lift-off; "whole-hand"
+(the world of earlier versions) scales the grasp's squeeze as one pattern until the digit closest
+to slipping holds (every digit presses as hard as that one needs)."""
+DEFAULT_GRIP_CONTROL = "per-digit"
 """The grip control of a scenario that names none (episodes with another are named ``...-<control>``)."""
 SENSORS = ("ds325", "kinect-v1", "ideal")
 """The depth-sensor presets a scenario may name (their models: ``benchmark.camera.sensor.PRESETS``)."""
@@ -53,8 +54,8 @@ class Scenario:
             the simulation's collision primitives, "skin", the person's smooth skin with pulps
             that compress and flatten on the box, or "skin-rigid", that skin with rigid pulps
             (the simulation is the same).
-        grip_control: How the person controls the grip (:data:`GRIP_CONTROLS`): "whole-hand"
-            or "per-digit".
+        grip_control: How the person controls the grip (:data:`GRIP_CONTROLS`): "per-digit"
+            (the default) or "whole-hand".
     """
 
     task: str = "lift"
