@@ -66,3 +66,24 @@ def test_aggregate_all_groups_by_a_key():
     by = aggregate_all(rows, ["m"], by="task")
     assert by["lift"]["m"]["median"]["value"] == 2.0 and by["rotate"]["m"]["mean"]["value"] == 10.0
     assert aggregate_all(rows, ["m"])["m"]["median"]["value"] == 3.0
+
+
+def test_the_tail_is_the_nearest_rank_90th_percentile_and_a_lost_episode_reaches_it():
+    """p90 over n episodes is the ceil(0.9 n)-th smallest: of four the largest, of twenty the 18th;
+    an episode at its infinite worst value makes the tail +inf, never NaN."""
+    x = [0.1, 0.2, 0.3, 0.9]
+    assert aggregate(x, "p90")["value"] == 0.9  # the median (0.25) hides the 0.9
+    twenty = list(np.arange(1.0, 21.0))
+    tail = aggregate(twenty, "p90")
+    assert tail["value"] == 18.0 and tail["ci_low"] <= 18.0 <= tail["ci_high"] <= 20.0
+    lost = aggregate([0.1, 0.2, 0.3, float("nan")], "p90", float("inf"))
+    assert lost["value"] == float("inf") and lost["at_worst"] == 1
+    one = aggregate_all([{"net_force_err_n_rms": v} for v in [0.2] * 9 + [1.1]], ["net_force_err_n_rms"])
+    assert one["net_force_err_n_rms"]["p90"]["value"] == 0.2  # one episode in ten may miss
+    rows = [{"net_force_err_n_rms": v} for v in [0.2] * 8 + [1.1, 1.2]]
+    (median, tail) = check_gates([Gate("net_force_err_n_rms", "<=", 0.3),
+                                  Gate("net_force_err_n_rms", "<=", 0.75, statistic="p90")],
+                                 aggregate_all(rows, ["net_force_err_n_rms"]))
+    assert median.passed and not tail.passed and tail.value == 1.1 and tail.name == "p90 net_force_err_n_rms <= 0.75"
+    with np.testing.assert_raises(ValueError):
+        aggregate(x, "max")

@@ -1,5 +1,6 @@
-"""Aggregates of per-episode metrics over a suite: medians and means with 95 % bootstrap intervals,
-over every episode (a metric that could not be computed counts at its worst value)."""
+"""Aggregates of per-episode metrics over a suite: medians, means and 90th percentiles (the tail) with
+95 % bootstrap intervals, over every episode (a metric that could not be computed counts at its worst
+value)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,22 @@ from benchmark.scores.metrics import WORST
 CONFIDENCE = 0.95
 RESAMPLES = 2000
 BOOTSTRAP_SEED = 0  # the intervals are a deterministic function of the scores
+
+
+def p90(x, axis=None):
+    """The 90th percentile by nearest rank (the smallest value with at least 90 % of the values at or
+    below it: no interpolation, so an episode at an infinite worst value gives +inf, never NaN).
+
+    Args:
+        x: Values, any shape.
+        axis: Reduced axis (None: all).
+    """
+    return np.percentile(x, 90, axis=axis, method="inverted_cdf")
+
+
+STATISTICS = {"median": np.median, "mean": np.mean, "p90": p90}
+"""The statistics a gate or a report takes over a suite's episodes, by name: the median (a typical
+episode), the mean, and the 90th percentile (the tail: one episode in ten is worse)."""
 
 
 def span(values, missing: str = "-") -> str:
@@ -28,7 +45,7 @@ def aggregate(values, statistic: str, worst: float | None = None) -> dict:
     Args:
         values: One value per episode. None or NaN (a metric that could not be computed) counts as
             ``worst``, never left out; so does an infinite value where ``worst`` is finite (a rate).
-        statistic: ``"median"`` or ``"mean"``.
+        statistic: A name of :data:`STATISTICS` (``"median"``, ``"mean"``, ``"p90"``).
         worst: The metric's worst value (:data:`benchmark.scores.episode.WORST`); None: the
             statistic is undefined when any value is missing.
 
@@ -39,7 +56,9 @@ def aggregate(values, statistic: str, worst: float | None = None) -> dict:
         a missing one without a worst value). An infinite ``worst`` keeps the statistic and interval
         deterministic: +inf where the worst values reach them.
     """
-    fn = {"median": np.median, "mean": np.mean}[statistic]
+    if statistic not in STATISTICS:
+        raise ValueError(f"statistic {statistic!r} is not one of {', '.join(STATISTICS)}")
+    fn = STATISTICS[statistic]
     raw = np.asarray([np.nan if v is None else v for v in values], dtype=float)
     missing = np.isnan(raw) if worst is None or np.isinf(worst) else ~np.isfinite(raw)
     n, at_worst = int(raw.size), int((~np.isfinite(raw)).sum())
@@ -80,16 +99,18 @@ def _bootstrap_with_infinities(x: np.ndarray, fn) -> tuple:
 
 
 def aggregate_all(rows: list[dict], metrics, by: str | None = None) -> dict:
-    """Median and mean of every metric over ``rows`` (per-episode dicts), optionally per ``by`` value;
-    every row counts, a missing metric at its :data:`~benchmark.scores.episode.WORST` value.
+    """Every statistic of :data:`STATISTICS` of every metric over ``rows`` (per-episode dicts),
+    optionally per ``by`` value; every row counts, a missing metric at its
+    :data:`~benchmark.scores.episode.WORST` value.
 
     Returns:
-        ``{metric: {"median": aggregate, "mean": aggregate}}``, or ``{group: that}`` with ``by``.
+        ``{metric: {"median": aggregate, "mean": aggregate, "p90": aggregate}}``, or ``{group: that}``
+        with ``by``.
     """
     if by is not None:
         groups = sorted({r[by] for r in rows})
         return {g: aggregate_all([r for r in rows if r[by] == g], metrics) for g in groups}
-    return {m: {s: aggregate([r.get(m) for r in rows], s, WORST.get(m)) for s in ("median", "mean")} for m in metrics}
+    return {m: {s: aggregate([r.get(m) for r in rows], s, WORST.get(m)) for s in STATISTICS} for m in metrics}
 
 
 MIN_PAIRED_EPISODES = 6

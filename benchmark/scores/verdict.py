@@ -6,7 +6,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-from benchmark.scores.aggregate import FEW_EPISODES, aggregate_all
+from benchmark.scores.aggregate import FEW_EPISODES, STATISTICS, aggregate_all
 from benchmark.scores.units import labelled
 
 
@@ -18,7 +18,8 @@ class Gate:
         metric: Per-episode metric name (see :mod:`benchmark.scores.episode`).
         op: ``"<="`` or ``">="``.
         limit: The threshold, in the metric's unit.
-        statistic: ``"median"`` or ``"mean"`` over the suite's episodes.
+        statistic: ``"median"``, ``"mean"`` or ``"p90"`` (the 90th percentile: the tail) over the
+            suite's episodes (:data:`benchmark.scores.aggregate.STATISTICS`).
         measured: What the reference method measured when the gate was set (documentation).
     """
 
@@ -31,8 +32,8 @@ class Gate:
     def __post_init__(self):
         if self.op not in ("<=", ">="):
             raise ValueError(f"Gate.op must be '<=' or '>=', got {self.op!r}")
-        if self.statistic not in ("median", "mean"):
-            raise ValueError(f"Gate.statistic must be 'median' or 'mean', got {self.statistic!r}")
+        if self.statistic not in STATISTICS:
+            raise ValueError(f"Gate.statistic must be one of {', '.join(map(repr, STATISTICS))}, got {self.statistic!r}")
 
     @property
     def name(self) -> str:
@@ -134,12 +135,13 @@ def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_
         table = skill_table(entries, {name: b["stage"] for name, b in baselines.items()})
         lines += ["", "## Skill against the trivial baselines", "",
                   "The baselines (`fsv.method.baselines`) ran on the same episodes."] + table
-    lines += ["", f"## Aggregates over {len(rows)} episodes (median [95 % CI], mean)", "",
-              "| metric | median | 95 % CI | mean |", "|---|---|---|---|"]
+    lines += ["", f"## Aggregates over {len(rows)} episodes (median [95 % CI], mean, 90th percentile: the tail)", "",
+              "| metric | median | 95 % CI | mean | 90th percentile |", "|---|---|---|---|---|"]
     for m in metrics:
         med, mean = aggregates[m]["median"], aggregates[m]["mean"]
         ci = (med["ci_low"], med["ci_high"]) if med["value"] is not None else None
-        lines.append(f"| {labelled(m)} | {_fmt(med['value'])} | {_interval(ci)} | {_fmt(mean['value'])} |")
+        tail = aggregates[m].get("p90", {}).get("value")
+        lines.append(f"| {labelled(m)} | {_fmt(med['value'])} | {_interval(ci)} | {_fmt(mean['value'])} | {_fmt(tail)} |")
     lines += ["", "## Per task (median)", "", "| task | " + " | ".join(labelled(m) for m in metrics) + " |",
               "|---|" + "---|" * len(metrics)]
     for task, agg in per_task.items():

@@ -8,7 +8,7 @@ from benchmark.world.scenario import Scenario
 
 SMOKE = Suite(
     name="smoke",
-    version=7,  # 7: the camera sees the person's skin (benchmark.world.skin), not the primitives
+    version=8,  # 8: people grip at their drawn margins (benchmark.world.grip); the tail's gate
     scenarios=(
         Scenario(task="lift", user=0, grasp=0, mass=0, seed=11, duration_s=4.0),
         Scenario(task="place", user=2, grasp=2, mass=1, seed=12, duration_s=4.0),
@@ -25,6 +25,10 @@ SMOKE = Suite(
     # box gate moved from 2 to 8 mm; version 5's other gates are kept (the learned forces' 60 % was
     # set for the mean-line model; the user-blind model errs by 30 %, no internal forces by 84).
     # Version 7 sees the person's skin; the gates are version 6's, the measured values version 7's.
+    # Version 8: the people grip at their drawn margins, and a gate on the tail: the worst episode's
+    # net force (the 90th percentile of four is the largest) within 0.5 N, set from the reference's
+    # 0.26 N on version 7's world with the method's tail mends (benchmark/CHANGELOG), a regression
+    # bar that gravity-only forces fail (their mean over version 7's four is 0.53 N).
     gates=(
         Gate("box_pos_err_mm", "<=", 8.0, measured="median 4.00 mm (1.59-4.95), lab knowledge; "
                                                    "the static box 127 mm"),
@@ -33,6 +37,9 @@ SMOKE = Suite(
         Gate("contact_precision", ">=", 0.85, measured="median 0.96 (0.91-0.99)"),
         Gate("acc_err_rms", "<=", 0.5, measured="median 0.39 m/s^2 (0.21-0.45)"),
         Gate("net_force_err_n_rms", "<=", 0.3, measured="median 0.18 N (0.08-0.29); gravity-only forces 0.49"),
+        Gate("net_force_err_n_rms", "<=", 0.5, statistic="p90",
+             measured="largest 0.26 N (version 7's world, the tail mends); gravity-only forces' mean "
+                      "0.53 N, so their largest is above the bar"),
         Gate("least_violation_frac", "<=", 0.25, statistic="mean", measured="mean 0 (no frame on any task)"),
         Gate("learned_rel_err_pct", "<=", 60.0,
              measured="median 28.6 % over every contact frame, blind (33.6 % calibrated); no internal forces "
@@ -77,15 +84,21 @@ STANDARD_GATES = (  # the bar a method should reach away from the default lift (
     Gate("contact_precision", ">=", 0.9),
     Gate("acc_err_rms", "<=", 0.45),  # set on version 3 after measuring, so that zero kinematics fails its stage
     Gate("net_force_err_n_rms", "<=", 0.3),
+    # the tail (standard v7, dev v6, cohort v4): one episode in ten may miss the net force by more than
+    # 0.75 N (2.5 times the median's bar), set from dev (the tuning split: 0.45 N, bootstrap 0.31-0.72,
+    # with the method's tail mends) before standard was measured; more than one episode in ten over
+    # it fails (standard v6's reference: 1.07 N)
+    Gate("net_force_err_n_rms", "<=", 0.75, statistic="p90"),
     Gate("least_violation_frac", "<=", 0.01, statistic="mean"),
     Gate("learned_rel_err_pct", "<=", 15.0),
 )
 """The gates of ``standard``, ``dev`` and ``cohort``: version 3's, kept for version 4 before measuring
-it; version 5 widened the box's for the lab's calibration (above), before measuring."""
+it; version 5 widened the box's for the lab's calibration (above), before measuring; version 7 (dev 6,
+cohort 4) added the tail's."""
 
 STANDARD = Suite(
     name="standard",
-    version=6,  # 6: the camera sees the person's skin (benchmark.world.skin), not the primitives
+    version=7,  # 7: people grip at their drawn margins (benchmark.world.grip); the tail's gate
     scenarios=split_scenarios("test", STANDARD_TASKS, 4, seed=STANDARD_FIRST_SEED, masses=MASS_COUNT),
     gates=STANDARD_GATES,
     description=(
@@ -95,14 +108,14 @@ STANDARD = Suite(
         "drawn at random, seeds 300-347; the whole method from 1 cm depth noise, under the blind protocol "
         "(the calibrated one beside it on the leaderboard) and lab knowledge (exact knowledge beside it). "
         "Its gates are the bar a method should reach (box 6 mm with the lab's calibration, contact std 4 mm, "
-        "net force 0.3 N, 1 % least-violation frames, learned forces 15 %), set before measuring, not to "
+        "net force 0.3 N (0.75 N for one episode in ten), 1 % least-violation frames, learned forces 15 %), set before measuring, not to "
         "make the reference pass."
     ),
 )
 
 COHORT = Suite(
     name="cohort",
-    version=3,  # 3: the camera sees the person's skin (benchmark.world.skin), not the primitives
+    version=4,  # 4: people grip at their drawn margins (benchmark.world.grip); the tail's gate
     scenarios=_grid_scenarios(STANDARD_FIRST_SEED, STANDARD_DRAW_SEED),
     gates=STANDARD_GATES,
     description=(
@@ -115,7 +128,7 @@ COHORT = Suite(
 
 DEV = Suite(
     name="dev",
-    version=5,  # 5: the camera sees the person's skin (benchmark.world.skin), not the primitives
+    version=6,  # 6: people grip at their drawn margins (benchmark.world.grip); the tail's gate
     scenarios=split_scenarios("dev", STANDARD_TASKS, 4, seed=DEV_FIRST_SEED, masses=MASS_COUNT),
     gates=STANDARD_GATES,
     description=(
