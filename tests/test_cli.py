@@ -21,7 +21,8 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     options = json.loads((out / "options.json").read_text())["options"]  # what a later run to this folder must match
     assert options["seed"] == 2 and options["duration"] == 1.5 and options["protocol"] == "blind" and "out" not in options
     verdict = summary["verdict"]  # the smoke suite's gates on this episode; the exit status follows them
-    assert len(verdict["gates"]) == 8 and code == (0 if verdict["verdict"] == "pass" else 1)
+    assert len(verdict["gates"]) == 9 and "p90 net_force_err_n_rms <= 0.5" in [g["name"] for g in verdict["gates"]]
+    assert code == (0 if verdict["verdict"] == "pass" else 1)
     assert verdict["method"]["tracker"] == "reference tracker" and f"verdict: {verdict['verdict'].upper()}" in \
         text.replace("verdict: pass", "verdict: PASS")
     # one set of gates in the printout: the verdict's, each with its limit beside the episode's value

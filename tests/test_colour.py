@@ -285,7 +285,7 @@ for a in (frames.rgb, frames.labels, np.stack(depth), frames.samples):
 print(h.hexdigest())
 """
 
-PINNED_COLOUR_SHA256 = "8f01bb2246860d3a24525ecaaaecd7e92200f462cd7f80f8afec2392ae18e070"
+PINNED_COLOUR_SHA256 = "68079aa7237a0682bd4e4a002185e4bfa6dfa3a92a488f86418a6a0577720f24"
 """The colour video (rgb, labels, depth, sub-renders) of ``Scenario(task="lift", duration_s=1.0)``
 with the ds325 colour preset: blur, noise and white balance included."""
 

@@ -207,11 +207,11 @@ def test_a_suite_with_another_grip_control_is_its_own_suite_named_after_it(tmp_p
     from benchmark.world.scenario import episode_name
 
     smoke = get_suite("smoke")
-    assert get_suite("smoke", grip_control="whole-hand") is smoke  # the suite's own control
-    digits = get_suite("smoke", "kinect-v1", "capsules", "per-digit")
-    assert digits.name == "smoke-kinect-v1-capsules-per-digit" and digits.gates == smoke.gates
-    assert {(sc.sensor, sc.hand_surface, sc.grip_control) for sc in digits.scenarios} == {("kinect-v1", "capsules", "per-digit")}
-    assert episode_name(digits.scenarios[0]) == episode_name(smoke.scenarios[0]) + "-capsules-per-digit"
+    assert get_suite("smoke", grip_control="per-digit") is smoke  # the suite's own control
+    hand = get_suite("smoke", "kinect-v1", "capsules", "whole-hand")
+    assert hand.name == "smoke-kinect-v1-capsules-whole-hand" and hand.gates == smoke.gates
+    assert {(sc.sensor, sc.hand_surface, sc.grip_control) for sc in hand.scenarios} == {("kinect-v1", "capsules", "whole-hand")}
+    assert episode_name(hand.scenarios[0]) == episode_name(smoke.scenarios[0]) + "-capsules-whole-hand"
     assert main(["eval", "--suite", "smoke", "--grip-control", "fist", "--out", str(tmp_path / "o"),
                  "--cache", str(tmp_path / "c")]) == 2
     err = capsys.readouterr().err

@@ -188,4 +188,4 @@ def test_frame_mean_wrench_is_the_momentum_change_over_each_frame_interval(lift_
     diff = np.linalg.norm(w[:, :3] - inst, axis=1)
     assert np.median(diff[tr.held]) < 0.1  # measured 0.0015 N
     # ... but not at the grasp's onset, whose contact transients last a few milliseconds
-    assert diff.max() > 1.0  # measured 2.67 N (frame 13, the grasp closing)
+    assert diff.max() > 0.25  # measured 0.52 N (the grasp closing until the digits touch)
