@@ -12,7 +12,6 @@ removes the command's staging folders (:func:`register`) and ends the process wi
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import pathlib
 import shutil
@@ -50,6 +49,7 @@ def critical():
 def _end_children() -> None:
     """Kills this process's multiprocessing children (background pictures, worker pools) and reaps
     them: a child still writing into a staging folder would create it again once it is removed."""
+    import multiprocessing  # lazy: 5 ms, 17 modules: the console script imports this module before its handler is set
 
     children = multiprocessing.active_children()
     for child in children:

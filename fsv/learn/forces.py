@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import gaussian_filter1d
 
 from fsv._check import positive
 from fsv.errors import InputError
@@ -84,6 +83,7 @@ def smooth_over_time(values: np.ndarray, t: np.ndarray, defined: np.ndarray, sig
         The averaged signal, shape (T,); 0 where no defined frame lies within the window or where
         ``defined`` is False.
     """
+    from scipy.ndimage import gaussian_filter1d  # lazy: scipy.ndimage, 40 ms, off `import fsv`
 
     v = np.asarray(values, dtype=np.float64)
     t = np.asarray(t, dtype=np.float64)
