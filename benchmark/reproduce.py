@@ -200,7 +200,7 @@ def _compare_run(new: pathlib.Path, old: pathlib.Path) -> list[str]:
 
 
 def _compare_model(new: pathlib.Path, old: pathlib.Path) -> list[str]:
-    from fsv.learn import load  # lazy: clarabel, numba, scipy (0.65 s) off `fsv-bench reproduce --list`
+    from fsv.learn import load  # lazy: scipy, numba, clarabel (0.65 s) off `fsv-bench reproduce --list`
 
     a, b = load(new), load(old)
     diffs = compare_values(a.metadata.get("cross_validation"), b.metadata.get("cross_validation"), "cross_validation")
@@ -395,7 +395,7 @@ def run(args: argparse.Namespace) -> list[str]:
             for c in r.commands:
                 print("  " + " ".join(c))
         return []
-    from fsv.provenance import provenance  # lazy: clarabel, numba, scipy (0.65 s) off `fsv-bench reproduce --list`
+    from fsv.provenance import provenance  # lazy: scipy, numba, clarabel (0.65 s) off `fsv-bench reproduce --list`
 
     data = pathlib.Path(args.data).resolve()
     data.mkdir(parents=True, exist_ok=True)

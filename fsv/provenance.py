@@ -222,7 +222,7 @@ def blas_libraries() -> list[dict]:
         ``num_threads`` and ``filepath`` (the file's basename); [] without threadpoolctl.
     """
     try:
-        from threadpoolctl import threadpool_info  # lazy: threadpoolctl, only for the provenance of a run
+        from threadpoolctl import threadpool_info  # lazy: threadpoolctl, only for a run's provenance
 
         info = threadpool_info()
     except Exception:  # threadpoolctl missing or failing: provenance never fails

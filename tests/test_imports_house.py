@@ -74,10 +74,10 @@ def test_every_import_inside_a_function_says_why_it_is_there():
 
 
 def test_the_imports_kept_inside_functions_are_few():
-    # 433 on 71a8218, before the imports moved to the top; 117 stay (heavy libraries off a start-up,
+    # 433 on 71a8218, before the imports moved to the top; 135 stay (heavy libraries off a start-up,
     # optional ones, the sub-commands' dispatch, an order to keep). One more needs its reason and this ceiling raised.
     rows = function_imports(ROOT)
-    assert len(rows) <= 117, len(rows)
+    assert len(rows) <= 135, len(rows)
 
 
 def test_an_unmarked_import_inside_a_function_is_found(tmp_path):

@@ -204,8 +204,6 @@ def test_the_cache_is_refused_before_any_rendering_where_it_meets_the_output(tmp
     from benchmark.suites import evaluate
 
     monkeypatch.setattr(evaluate, "cached_episode", lambda *a, **k: _stop())
-    monkeypatch.setattr("benchmark.exchange.export.cached_episode", lambda *a, **k: _stop())  # bound at their tops
-    monkeypatch.setattr("benchmark.exchange.score.cached_episode", lambda *a, **k: _stop())
     (tmp_path / "file").write_text("mine")
     (tmp_path / "owned").mkdir()  # an earlier output of fsv-bench's, which the swap would replace, cache and all
     (tmp_path / "owned" / ".fsv-bench-output").write_text(LEGACY_MARKER)

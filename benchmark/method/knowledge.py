@@ -226,7 +226,7 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
         ``(hand_model, object_model, calib, knowledge)``: the method's models and calibration and
         the :class:`Knowledge` record.
     """
-    from benchmark.world.assets import user_of  # lazy: MuJoCo (0.25 s) off `fsv-bench calibration`'s start-up
+    from benchmark.world.assets import user_of  # lazy: MuJoCo (0.25 s) off `fsv-bench calibrate`'s start-up
 
     check_knowledge(name)
     person = user_of(episode.scenario)

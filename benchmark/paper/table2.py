@@ -304,10 +304,10 @@ def markdown(result: dict) -> str:
 def plot_fig6(result: dict, path: str) -> None:
     """A plot like the paper's Fig. 6: reconstructed per-finger normal forces against the truth over time
     for the first evaluation episode of the all-changed row (×××)."""
-    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench training`'s start-up
+    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench train`'s start-up
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench training`'s start-up
+    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench train`'s start-up
 
     full, part = result["fig6"]["full"], result["fig6"]["partial"]
     ep = full["episode"][0]

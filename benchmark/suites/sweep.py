@@ -52,10 +52,10 @@ PLOTTED = ("box_pos_err_mm", "contact_err_mm_std", "acc_err_rms", "net_force_err
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.evaluate import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from benchmark.suites.evaluate import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
         add_method_arguments,
     )
-    from benchmark.suites.options import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from benchmark.suites.options import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
         add_suite_arguments,
     )
 
@@ -115,7 +115,7 @@ def parse_values(axis: str, text: str) -> list:
             except ScenarioError as e:
                 raise ValueError(f"--values {text!r}: {v!r} is not a mass index: {e}") from None
     if axis == "knowledge":
-        from benchmark.method.knowledge import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+        from benchmark.method.knowledge import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
             check_knowledge,
         )
 
@@ -125,7 +125,7 @@ def parse_values(axis: str, text: str) -> list:
             except ValueError as e:
                 raise ValueError(f"--values {text!r}: {v!r} is not a knowledge: {e}") from None
     if axis == "protocol":
-        from benchmark.method.protocol import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+        from benchmark.method.protocol import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
             check_protocol,
         )
 
@@ -200,19 +200,21 @@ def _capped(v, lo, hi) -> tuple:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.method.knowledge import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from benchmark.method.knowledge import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
         DEFAULT_KNOWLEDGE,
     )
-    from benchmark.method.protocol import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from benchmark.method.protocol import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
         DEFAULT_PROTOCOL,
     )
-    from benchmark.suites.evaluate import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from benchmark.suites.evaluate import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
         check_cache_args,
         evaluate,
         spec_from_args,
         strict,
     )
-    from fsv.provenance import provenance  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from fsv.provenance import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        provenance,
+    )
 
     suite = get_suite(args.suite)
     values = parse_values(args.axis, args.values)
@@ -226,7 +228,7 @@ def run(args: argparse.Namespace) -> dict:
     check_out(args.out)
     check_cache_args(args)
     spec = spec_from_args(args)
-    from benchmark.method.protocol import (  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from benchmark.method.protocol import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
         check_people,
     )
 
@@ -239,7 +241,9 @@ def run(args: argparse.Namespace) -> dict:
         results.append(evaluate(s, spec=told, cache=args.cache, progress=not args.quiet, workers=args.workers,
                                 init_scale=scale))
         print(f"  {args.axis} = {value}: done ({results[-1]['seconds']:.0f} s)")
-    from benchmark.method.run import method_label  # lazy: clarabel, numba (0.25 s) off `fsv-bench sweep`'s start-up
+    from benchmark.method.run import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        method_label,
+    )
 
     # the suite and the method swept (not the first value's: "dev", not "dev-noise-0.005"; the method
     # without the knowledge or protocol the sweep sets per value)

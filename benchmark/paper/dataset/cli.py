@@ -34,8 +34,6 @@ from benchmark.paper.dataset.frames import FramesSpec, check_training_people, ge
 from benchmark.paper.dataset.shards import COLOUR_ENCODINGS
 from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, DatasetSpec
 from benchmark.parallel import check_ray_address
-from benchmark.suites.options import add_streams_argument
-from benchmark.suites.splits import SPLITS
 
 
 def parse_ints(text: str, option: str = "") -> tuple:
@@ -95,6 +93,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="write the rendered frames and every per-frame label (forces, contacts, box and hand state, "
                         "keypoints, masks) as one HDF5 shard per episode, with index.parquet, README.md and "
                         "croissant.json, instead of the networks' features (training data: dev and test people refused)")
+    from benchmark.suites.options import (  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
+        add_streams_argument,
+    )
 
     add_streams_argument(p)
     p.add_argument("--colour-encoding", default="raw", choices=COLOUR_ENCODINGS,
@@ -109,6 +110,8 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         check_ray_address(args.ray_address)
     users, grasps, views = (parse_ints(getattr(args, name), f"--{name}") for name in ("users", "grasps", "views"))
     if args.split is not None:
+        from benchmark.suites.splits import SPLITS  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
+
         if args.split not in SPLITS or args.split == "cohort":
             raise DatasetError(f"--split {args.split!r}: accepted: train, dev, test")
         split = SPLITS[args.split]

@@ -43,7 +43,6 @@ from benchmark.paper.dataset.shards import check_colour_encoding, failed_shard, 
 from benchmark.paper.dataset.spec import DatasetSpec
 from benchmark.parallel import RayUnavailable, check_ray_address, run_jobs
 from benchmark.sealed_table import read_sealed
-from benchmark.suites.splits import SPLITS, split_of
 from benchmark.world.people import person_record
 from benchmark.world.scenario import Scenario, episode_name
 from fsv.provenance import provenance
@@ -93,6 +92,7 @@ class FramesSpec:
 def check_training_people(spec: DatasetSpec) -> None:
     """Refuses a grid holding a ``dev`` or ``test`` person, grasp or view (they choose and score,
     never train): DatasetError naming the first, before any work."""
+    from benchmark.suites.splits import SPLITS  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
 
     for sc in spec.scenarios():
         for kind in ("user", "grasp", "view"):
@@ -116,6 +116,7 @@ def render_episode(scenario: Scenario, streams: tuple):
 def build_shard(scenario: Scenario, spec: FramesSpec, make=render_episode) -> bytes:
     """One scenario's shard bytes (:func:`benchmark.paper.dataset.shards.write_shard`), with its
     person and grasp descriptors as privileged; a world failure gives a failed shard."""
+    from benchmark.suites.splits import split_of  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
     from benchmark.world.grasp_plan import grasp_spec  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
     split = split_of(scenario)
@@ -243,7 +244,7 @@ def generate_frames(spec: FramesSpec, out, *, workers: int | None = None, ray_ad
     rel = lambda sc: os.path.join("episodes", episode_name(sc) + SHARD_SUFFIX)
     todo = [sc for sc in spec.grid.scenarios() if rel(sc) not in written]
     total = spec.grid.size()
-    from tqdm.auto import tqdm  # lazy: tqdm off `fsv-bench generate`'s start-up
+    from tqdm.auto import tqdm  # lazy: tqdm (30 ms) off `fsv-bench generate`'s start-up
 
     bar = tqdm(total=total, initial=total - len(todo), unit="episode", desc="generate --frames", disable=not progress,
                file=sys.stderr)
