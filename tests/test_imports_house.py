@@ -1,10 +1,11 @@
 """Where the house keeps its imports: at the top of each module, unless a stated reason keeps one inside a function.
 
-The standard (``docs/design.md``, "Imports at top of module unless heavy"): an import statement
+The house's standard: keep imports at the top of modules unless a heavy library's start-up cost (or
+another stated need: an optional dependency, an order to keep, a cycle) is the reason. An import statement
 anywhere inside a function (or a method, or a class or function nested in one) of ``benchmark/``,
 ``fsv/`` or ``examples/`` carries a trailing ``# lazy: <reason>`` comment on its first line, e.g.
-``# lazy: torch, 1.2 s, off `import fsv```, ``# lazy: optional pyrender ...``,
-``# lazy: after the interrupt handler: ...``. An import the module's top already makes is never
+``# lazy: torch (1.2 s) off `import fsv```, ``# lazy: optional pyrender (0.8 s)``,
+``# lazy: after the interrupt handler (...)``. An import the module's top already makes is never
 repeated inside a function. Read from the syntax trees and the comments, never by importing.
 """
 
