@@ -31,7 +31,7 @@ HDF5_SUFFIX = ".h5"
 
 def _h5py():
     try:
-        import h5py
+        import h5py  # lazy: h5py (0.1 s), only for .h5 archives
     except ImportError as e:  # pragma: no cover - h5py is installed with fsv-bench
         raise ImportError("HDF5 files need h5py: pip install h5py") from e
     return h5py

@@ -24,6 +24,8 @@ woken by the closed pipe).
 
 from __future__ import annotations
 
+import ctypes
+import importlib
 import mmap
 import multiprocessing
 import os
@@ -74,7 +76,6 @@ def _end_with_parent(parent: int) -> None:  # pragma: no cover - runs in the for
     no cleanup code of the parent sees), so that no worker outlives its command."""
     if sys.platform != "linux":
         return
-    import ctypes
 
     try:
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
@@ -236,8 +237,6 @@ class Background:
             return
 
         def target():
-            import importlib
-
             for name in modules:
                 try:
                     importlib.import_module(name)

@@ -12,7 +12,14 @@ ended before the error goes on. Results arrive as they are done, with the index 
 
 from __future__ import annotations
 
+import multiprocessing
+import os
 import pickle
+import queue
+import socket
+import threading
+import time
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable, Iterator
 
 from benchmark.errors import BenchmarkError, DatasetError
@@ -39,7 +46,6 @@ core in every worker, and the workers would compete for the cores the pool divid
 
 def one_core_worker() -> None:
     """Limits this process's native thread pools to one thread (:data:`ONE_CORE_ENV`)."""
-    import os
 
     os.environ.update(ONE_CORE_ENV)
 
@@ -61,9 +67,6 @@ def report_progress(count: int = 1) -> None:
 def _worker(parent_pid: int, progress_queue) -> None:
     """Local worker initializer: one core's work, :func:`report_progress` to the parent's queue, and
     the worker ends when its parent dies (even by SIGKILL, which no cleanup code sees)."""
-    import os
-    import threading
-    import time
 
     global _REPORT
     one_core_worker()
@@ -138,11 +141,6 @@ def _stop(pool, processes: list) -> None:
 
 
 def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple]:
-    import multiprocessing
-    import os
-    import queue
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
     check_picklable(fn, jobs)
     ctx = multiprocessing.get_context("spawn")
     manager = ctx.Manager() if on_progress is not None else None
@@ -177,7 +175,7 @@ def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple
 
 def _ray(fn: Callable, jobs: list, address: str) -> Iterator[tuple]:
     check_ray_address(address)
-    import ray
+    import ray  # lazy: optional Ray (0.3 s)
 
     host = (address[len("ray://"):] if address.startswith("ray://") else address).rpartition(":")[0]
     local = {"_node_ip_address": "127.0.0.1"} if host in ("127.0.0.1", "localhost") else {}  # stay on loopback
@@ -219,16 +217,15 @@ def check_ray_address(address: str) -> None:
         RayAddressError: Naming the address when it is malformed, nothing answers there, what
             answers is not a Ray cluster, or ``auto`` finds no cluster.
     """
-    import socket
 
     try:
-        import ray  # noqa: F401
+        import ray  # lazy: optional Ray (0.3 s)  # noqa: F401
     except ImportError as e:
         raise RayUnavailable(f"--ray-address {address!r} needs Ray, which is not installed: pip install 'fsv-bench[ray]' "
                              "(or run without --ray-address to use the local process pool)") from e
     shown = address
     if address == "auto":
-        from ray._private.services import get_ray_address_from_environment
+        from ray._private.services import get_ray_address_from_environment  # lazy: optional Ray (0.3 s)
 
         try:
             address = get_ray_address_from_environment("auto", None) or "auto"

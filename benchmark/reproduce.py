@@ -30,6 +30,7 @@ import argparse
 import json
 import math
 import pathlib
+import runpy
 import shutil
 import sys
 import tempfile
@@ -40,6 +41,7 @@ from typing import Callable
 import numpy as np
 
 from benchmark.atomic import atomic_path, staging_folder, swap_folder, write_bytes, write_text
+from benchmark.commands.digests import STAGES, first_difference
 from benchmark.errors import BenchmarkError
 from benchmark.fingerprint import results_fingerprint
 from benchmark.limits import MAX_WORKERS, integer
@@ -169,7 +171,7 @@ def _compare_json(name: str):
 
 def _compare_csv(name: str):
     def compare(new: pathlib.Path, old: pathlib.Path) -> list[str]:
-        import pandas as pd
+        import pandas as pd  # lazy: pandas (0.3 s) off `fsv-bench reproduce --list`
 
         if not (old / name).exists():
             return [f"{old / name}: not committed"]
@@ -181,7 +183,6 @@ def _compare_csv(name: str):
 def _compare_run(new: pathlib.Path, old: pathlib.Path) -> list[str]:
     """The main command's run: first the first stage whose output differs (from the runs'
     ``digests``), then every value that moved and Table 1's table."""
-    from benchmark.commands.digests import STAGES, first_difference
 
     diffs = _compare_json("summary.json")(new, old) + _compare_csv("table1.csv")(new, old)
     if not (old / "summary.json").exists():
@@ -199,7 +200,7 @@ def _compare_run(new: pathlib.Path, old: pathlib.Path) -> list[str]:
 
 
 def _compare_model(new: pathlib.Path, old: pathlib.Path) -> list[str]:
-    from fsv.learn import load
+    from fsv.learn import load  # lazy: scipy, numba, clarabel (0.65 s) off `fsv-bench reproduce --list`
 
     a, b = load(new), load(old)
     diffs = compare_values(a.metadata.get("cross_validation"), b.metadata.get("cross_validation"), "cross_validation")
@@ -317,7 +318,7 @@ def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: 
     argv = [c.format(data=data, out=out, root=ROOT) for c in command]
     print("$ " + " ".join(argv), file=log, flush=True)
     if argv[0] == "fsv-bench":
-        from benchmark.commands.cli import main
+        from benchmark.commands.cli import main  # lazy: MuJoCo (0.25 s) off `fsv-bench reproduce --list`
 
         saved = sys.argv  # what a model records as its command: the documented one
         sys.argv = [c.format(data="data", out=documented_out, root=".") for c in command]
@@ -326,8 +327,6 @@ def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: 
         finally:
             sys.argv = saved
     else:
-        import runpy
-
         module = argv[2]
         saved = sys.argv
         sys.argv = [module] + argv[3:]
@@ -344,7 +343,7 @@ def _run(command: tuple, data: pathlib.Path, out: pathlib.Path, documented_out: 
 
 
 def _generate(name: str, data: pathlib.Path, workers: int | None, log) -> None:
-    from benchmark.commands.cli import main
+    from benchmark.commands.cli import main  # lazy: MuJoCo (0.25 s) off `fsv-bench reproduce --list`
 
     argv = ["generate", "--out", str(data / name), *DATASETS[name], "--no-progress"]
     if workers:
@@ -396,7 +395,7 @@ def run(args: argparse.Namespace) -> list[str]:
             for c in r.commands:
                 print("  " + " ".join(c))
         return []
-    from fsv.provenance import provenance
+    from fsv.provenance import provenance  # lazy: scipy, numba, clarabel (0.65 s) off `fsv-bench reproduce --list`
 
     data = pathlib.Path(args.data).resolve()
     data.mkdir(parents=True, exist_ok=True)

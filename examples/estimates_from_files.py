@@ -15,10 +15,12 @@ import json
 import pathlib
 import sys
 
+from benchmark.exchange import load_camera_input, rng_generator, save_estimate
+from benchmark.method import MethodSpec, method_label
+
 
 def write_estimates(inputs_dir, out_dir, method, label: str) -> list:
     """Runs ``method`` (an ``fsv.method.Method``) on every camera-input file; returns the files written."""
-    from benchmark.exchange import load_camera_input, rng_generator, save_estimate
 
     inputs_dir, out_dir = pathlib.Path(inputs_dir), pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -32,8 +34,6 @@ def write_estimates(inputs_dir, out_dir, method, label: str) -> list:
 
 
 def main(argv=None) -> int:
-    from benchmark.method import MethodSpec, method_label
-
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("inputs", help="folder written by fsv-bench export")
     p.add_argument("out", help="folder for the estimates files")

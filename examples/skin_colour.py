@@ -94,7 +94,7 @@ method = make_method(tracker=SkinConfirmedTracker())
 
 def main(argv=None) -> int:
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-    from estimates_from_files import write_estimates
+    from estimates_from_files import write_estimates  # lazy: after sys.path has its folder
 
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("inputs", help="folder written by fsv-bench export --streams depth,colour")

@@ -45,6 +45,7 @@ import platform
 import re
 import subprocess
 import sys
+from importlib import metadata
 
 DISTRIBUTION = "fsv-bench"
 SIMD_FLAGS = (
@@ -100,8 +101,6 @@ def _static() -> dict:
 
 
 def _version() -> str:
-    from importlib import metadata
-
     try:
         return metadata.version(DISTRIBUTION)
     except metadata.PackageNotFoundError:
@@ -148,7 +147,6 @@ def requirement_names() -> list[str]:
     a ``pyproject.toml`` of fsv-bench (an editable install whose metadata may predate the tree),
     from that file too.
     """
-    from importlib import metadata
 
     specs = []
     try:
@@ -163,7 +161,7 @@ def requirement_names() -> list[str]:
 
 def _pyproject_requirements(path: pathlib.Path) -> list[str]:
     try:
-        import tomllib
+        import tomllib  # lazy: Python 3.10 has no tomllib
     except ImportError:  # Python 3.10: the installed metadata alone
         return []
     try:
@@ -184,7 +182,6 @@ def _canonical(name: str) -> str:
 
 def dependency_versions() -> dict:
     """``{requirement name: installed version or None}`` for :func:`requirement_names`."""
-    from importlib import metadata
 
     out = {}
     for name in requirement_names():
@@ -225,7 +222,7 @@ def blas_libraries() -> list[dict]:
         ``num_threads`` and ``filepath`` (the file's basename); [] without threadpoolctl.
     """
     try:
-        from threadpoolctl import threadpool_info
+        from threadpoolctl import threadpool_info  # lazy: threadpoolctl, only for a run's provenance
 
         info = threadpool_info()
     except Exception:  # threadpoolctl missing or failing: provenance never fails

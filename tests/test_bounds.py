@@ -114,6 +114,7 @@ def test_init_perturbation_is_refused_before_the_simulation(value, tmp_path, cap
 @pytest.mark.parametrize("command", ["eval", "leaderboard", "export"])
 def test_a_cache_that_is_a_file_is_refused_in_one_line(command, tmp_path, capsys, monkeypatch):
     monkeypatch.setattr("benchmark.suites.evaluate.evaluate_many", _work)
+    monkeypatch.setattr("benchmark.suites.leaderboard.evaluate_many", _work)  # bound at its top
     monkeypatch.setattr("benchmark.exchange.export.export_suite", _work)
     cache = tmp_path / "cache.txt"
     cache.write_text("keep")

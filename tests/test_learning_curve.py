@@ -97,13 +97,11 @@ def test_the_training_jobs_pickle_for_the_pool_when_the_command_runs_as_main(mon
     import pickle
     import types
 
-    from benchmark import parallel
-
     source = inspect.getsource(learning_curve).replace('if __name__ == "__main__":', "if False:")
     as_main = types.ModuleType("__main__")
     exec(compile(source, learning_curve.__file__, "exec"), as_main.__dict__)
     passed = []
-    monkeypatch.setattr(parallel, "run_jobs", lambda fn, jobs, workers: passed.append(fn) or enumerate([{}] * len(jobs)))
+    monkeypatch.setattr(as_main, "run_jobs", lambda fn, jobs, workers: passed.append(fn) or enumerate([{}] * len(jobs)))
     as_main.train_models("d", [1000], [1], None, tmp_path, workers=2)
     assert pickle.loads(pickle.dumps(passed[0])) is learning_curve._train_job
 

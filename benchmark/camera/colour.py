@@ -37,15 +37,19 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from benchmark.camera import colour_kernels as ck
 from benchmark.camera import raster_kernels as rk
+from benchmark.camera.appearance import appearance_of
 from benchmark.camera.camera import Camera
 from benchmark.camera.colour_sensor import ColourSensor, colour_camera, colour_preset
 from benchmark.camera.depth import DepthRenderer, HandSkin, drawn_hand
-from benchmark.camera.scene import LABEL_BOX
+from benchmark.camera.scene import LABEL_BOX, world_labels
+from benchmark.camera.views import camera_of
 from benchmark.errors import BenchmarkError
+from benchmark.world.assets import build_world, set_frame
 from fsv import Calibration, ColourVideo
 
 
@@ -100,8 +104,6 @@ class ColourRenderer:
     """
 
     def __init__(self, model, camera: Camera, labels: np.ndarray, appearance, *, skin: HandSkin | None = None):
-        import mujoco
-
         self._g = DepthRenderer(model, camera, labels, skin=skin)
         self.camera = camera
         self.appearance = appearance
@@ -355,7 +357,6 @@ def render_colour_video(model, set_state, num_frames: int, *, camera: Camera, la
         The :class:`ColourFrames`; its ``rgb`` is read-only (so that :attr:`ColourFrames.video`
         hands it on without a copy).
     """
-    import mujoco
 
     T = int(num_frames)
     if T < 1:
@@ -479,10 +480,6 @@ def render_colour(episode, *, sensor: ColourSensor | None = None, appearance=Non
         from the scenario's "colour" stream; the hand is drawn as the scenario's ``hand_surface``
         says, as for the depth (:func:`benchmark.camera.render.render`).
     """
-    from benchmark.camera.appearance import appearance_of
-    from benchmark.camera.scene import world_labels
-    from benchmark.camera.views import camera_of
-    from benchmark.world.assets import build_world, set_frame
 
     sc = episode.scenario
     sensor = colour_preset(sc.sensor) if sensor is None else sensor

@@ -11,8 +11,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
+from benchmark.camera import raster_kernels as rk
+from benchmark.camera import skin_kernels as sk
 from benchmark.camera.camera import Camera
 from benchmark.camera.scene import LABEL_PALM, body_pose0, geom_trimesh
 from benchmark.errors import BenchmarkError
@@ -29,7 +32,6 @@ def _geometry(model, labels: np.ndarray) -> tuple:
     welded to it): triangles as a dict of ``vertices`` (V, 3), ``vertex_body`` (V,), ``faces`` (F, 3)
     and ``face_label`` (F,); capsules and spheres as ``ends`` (C, 2, 3), ``body`` (C,), ``radius``
     (C,) and ``label`` (C,)."""
-    import mujoco
 
     G = mujoco.mjtGeom
     verts, vbody, faces, flabel = [], [], [], []
@@ -109,7 +111,6 @@ def drawn_hand(world, truth, hand_surface: str) -> tuple:
 def pulp_presses(truth) -> tuple[np.ndarray, np.ndarray]:
     """Per frame and finger, the world-frame centre of pressure and the pulp's push (its compression
     along the contact normal, :func:`benchmark.world.skin.pulp_indentation_m`), each (T, K, 3) [m]."""
-    from benchmark.camera import skin_kernels as sk
 
     T, K = truth.contact_point.shape[:2]
     centre, push = np.empty((T, K, 3)), np.empty((T, K, 3))
@@ -207,7 +208,6 @@ class DepthRenderer:
             ``(depth, labels)``: exact depth along the optical axis, shape (H, W), float32 metres
             (0 where nothing is seen), and the label of the geom seen at each pixel, (H, W) uint8.
         """
-        from benchmark.camera import raster_kernels as rk
 
         n = self._nbody
         xpos = np.ascontiguousarray(xpos, dtype=np.float64)
@@ -242,9 +242,6 @@ class DepthRenderer:
         return None if self._skin is None else self._skin.skin
 
     def _pose_skin(self, pulp_centre, pulp_push) -> None:
-        from benchmark.camera import raster_kernels as rk
-        from benchmark.camera import skin_kernels as sk
-
         s = self._skin.skin
         sk.skin_points(s.local, self._skin_body, s.parent_local, self._skin_parent_body, s.parent_weight,
                        self._rot, self._trans, self._skin_verts)
@@ -261,8 +258,6 @@ class DepthRenderer:
         sk.flatten_on_box(self._skin_verts, self._rot[b], self._trans[b], self._box_half)
 
     def _draw_skin(self, pulp_centre, pulp_push, fx, fy, cx, cy) -> None:
-        from benchmark.camera import raster_kernels as rk
-
         self._pose_skin(pulp_centre, pulp_push)
         s = self._skin.skin
         cam = self.camera

@@ -25,10 +25,12 @@ annotations and of manopth's ``ManoLayer`` before its final reordering). docs/ca
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 
 from benchmark.errors import BenchmarkError
 from benchmark.world.anatomy import hand_spec
+from benchmark.world.assets import set_frame
 from fsv import HandModel
 
 DIGITS = ("thumb", "index", "middle", "ring", "little")
@@ -159,9 +161,6 @@ def keypoints_world(world, truth) -> np.ndarray:
     Returns:
         Keypoints in :data:`KEYPOINT_NAMES` order, (T, 21, 3) float64, [m].
     """
-    import mujoco
-
-    from benchmark.world.assets import set_frame
 
     hand = world.hand
     seg = digit_segments(hand)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from benchmark.camera import skin_kernels as sk
 from benchmark.errors import BenchmarkError
 from benchmark.world.skin import PULP_REACH, Skin, pulp_indentation_m, skin_of
 from fsv import HandModel
@@ -32,7 +33,6 @@ def pressed_fingertip(hand: HandModel, finger: int, force_n: float, skin: Skin |
     Returns:
         ``(vertices (V, 3), faces (F, 3), face height)``: the pressed fingertip's skin, [m].
     """
-    from benchmark.camera import skin_kernels as sk
 
     if not 0 <= int(finger) < len(hand.fingertip_segment):
         raise BenchmarkError(f"finger must be in 0..{len(hand.fingertip_segment) - 1}, got {finger!r}")

@@ -57,7 +57,9 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+import trimesh
 
+from benchmark.camera import raster_kernels as rk
 from benchmark.camera.camera import GL_FROM_CV, Camera
 from benchmark.camera.depth import DepthRenderer, HandSkin, _geometry, drawn_hand
 from benchmark.camera.render import scenario_sensor
@@ -151,7 +153,7 @@ class Shading:
 def _import_pyrender():
     os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
     try:
-        import pyrender
+        import pyrender  # lazy: optional pyrender (0.8 s)
     except ImportError as e:  # not installed, or no GL platform to load
         raise BenchmarkError(
             f"the pyrender renderer needs the package pyrender-maintained (pip install 'fsv-bench[pyrender]') "
@@ -165,7 +167,7 @@ def _single_sample(pyrender):
     """pyrender turns 4x multisampling on for every pass but segmentation, which blends the
     colours of silhouette and crease pixels; within this block its ``glEnable(GL_MULTISAMPLE)`` is
     skipped (and multisampling switched off), so each pixel is one sample at its centre."""
-    from OpenGL import GL
+    from OpenGL import GL  # lazy: with the optional pyrender
 
     module = pyrender.renderer
     enable = module.glEnable
@@ -184,7 +186,6 @@ def _single_sample(pyrender):
 def _capsule_mesh(half: float, radius: float):
     """A tessellated capsule (axis z, from -half to +half, sphere for half = 0) and each vertex's
     true outward normal, in the geom's frame: ``(vertices (V, 3), faces (F, 3), normals (V, 3))``."""
-    import trimesh
 
     mesh = trimesh.creation.capsule(height=2 * half, radius=radius, count=list(CAPSULE_COUNT))
     v = np.asarray(mesh.vertices, dtype=np.float64)
@@ -325,7 +326,6 @@ class PyrenderRenderer:
             self.scene.set_pose(node, T)
         if self._posing is None:
             return
-        from benchmark.camera import raster_kernels as rk
 
         dr = self._posing
         rk.camera_from_bodies(dr._R_cw, dr._t_cw, xpos, xmat, dr._rot, dr._trans)
@@ -401,7 +401,12 @@ def _release(offscreen) -> None:
     platform.make_current()
     offscreen._renderer.delete()
     if getattr(platform, "_egl_display", None) is not None:
-        from OpenGL.EGL import EGL_NO_CONTEXT, EGL_NO_SURFACE, eglDestroyContext, eglMakeCurrent
+        from OpenGL.EGL import (  # lazy: with the optional pyrender
+            EGL_NO_CONTEXT,
+            EGL_NO_SURFACE,
+            eglDestroyContext,
+            eglMakeCurrent,
+        )
 
         eglMakeCurrent(platform._egl_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT)
         eglDestroyContext(platform._egl_display, platform._egl_context)
@@ -412,7 +417,7 @@ def _release(offscreen) -> None:
 
 
 def _name(pyrender, offscreen) -> str:
-    from OpenGL import GL
+    from OpenGL import GL  # lazy: with the optional pyrender
 
     offscreen._platform.make_current()
     s = [GL.glGetString(k).decode() for k in (GL.GL_VENDOR, GL.GL_RENDERER, GL.GL_VERSION)]

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import mujoco
 import numpy as np
 
 from benchmark.camera.camera import Camera
@@ -31,6 +32,7 @@ from benchmark.camera.scene import world_labels
 from benchmark.camera.sensor import SensorModel, sensor_preset
 from benchmark.camera.views import camera_of
 from benchmark.errors import BenchmarkError
+from benchmark.world.assets import build_world, set_frame
 from benchmark.world.episode import Episode
 from fsv import DepthVideo
 from fsv.types import check_streams
@@ -59,7 +61,6 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
         ``(depth, label_images)``: measured depth (T, H, W) float32 metres (0 = no measurement)
         and the exact label images (T, H, W) uint8 (from the noise-free render).
     """
-    import mujoco
 
     if int(num_frames) < 1:
         raise BenchmarkError(f"num_frames must be >= 1, got {num_frames}")
@@ -143,8 +144,6 @@ def render_colour_stream(episode: Episode, *, camera: Camera | None = None, labe
     """
     labeller = None
     if labelled:
-        from benchmark.world.assets import build_world
-
         colour_calib = colour_camera(camera_of(episode.scenario.view) if camera is None else camera,
                                      colour_preset(episode.scenario.sensor)).calibration()
         keypoints = None if episode.annotations is None else episode.annotations.keypoints_world
@@ -173,8 +172,6 @@ def scenario_sensor(scenario, sensor: SensorModel | None = None) -> SensorModel:
 
 
 def _render_depth(episode: Episode, sensor: SensorModel | None, camera: Camera | None) -> Episode:
-    from benchmark.world.assets import build_world, set_frame
-
     sc = episode.scenario
     sensor = scenario_sensor(sc, sensor)
     camera = camera_of(sc.view) if camera is None else camera

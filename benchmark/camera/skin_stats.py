@@ -15,6 +15,7 @@ from benchmark.camera.scene import LABEL_PALM
 from benchmark.errors import BenchmarkError
 from benchmark.world.skin import Skin, skin_of
 from fsv import HandModel
+from fsv.track.capsules import closest_on_capsules
 
 
 def hand_depth_difference(skin_depth, skin_labels, model_depth, model_labels) -> dict:
@@ -53,7 +54,6 @@ def collision_gap(hand: HandModel, skin: Skin | None = None) -> dict:
         ``{"pulp_mm": (median |gap|, max |gap|), "palm_mm": (median |gap|, max |gap|), "skin_mm":
         (median, 90th percentile) of every vertex's distance to the nearest primitive of its segment}``.
     """
-    from fsv.track.capsules import closest_on_capsules
 
     skin = skin_of(hand) if skin is None else skin
     geom_seg = np.asarray(hand.geom_segment)

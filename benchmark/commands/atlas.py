@@ -152,7 +152,7 @@ def _episode(job) -> dict:
 def atlas(suite, *, cache=None, workers: int = 1) -> dict:
     """Every episode of ``suite`` diagnosed (:func:`diagnose`) under lab and exact knowledge; those
     that fail a criterion under lab knowledge listed with their causes, and the suite's tail."""
-    from benchmark.commands.atlas import _episode as job  # by its module's name, also when run as __main__
+    from benchmark.commands.atlas import _episode as job  # lazy: by its module's name, also as __main__
 
     cache = episode_cache(cache)
     jobs = [(suite, sc, cache) for sc in suite.scenarios]

@@ -57,27 +57,27 @@ def subcommand_module(name: str):
     runs: each pulls in libraries the main command does not need (torch, pandas, h5py, Ray)."""
     match name:
         case "generate":
-            from benchmark.paper.dataset import cli as module
+            from benchmark.paper.dataset import cli as module  # lazy: a sub-command's libraries, when it runs
         case "calibrate":
-            from benchmark.paper import calibration as module
+            from benchmark.paper import calibration as module  # lazy: a sub-command's libraries, when it runs
         case "train":
-            from benchmark.paper import training as module
+            from benchmark.paper import training as module  # lazy: a sub-command's libraries, when it runs
         case "table2":
-            from benchmark.paper import table2 as module
+            from benchmark.paper import table2 as module  # lazy: a sub-command's libraries, when it runs
         case "eval":
-            from benchmark.commands import eval as module
+            from benchmark.commands import eval as module  # lazy: a sub-command's libraries, when it runs
         case "compare":
-            from benchmark.suites import compare as module
+            from benchmark.suites import compare as module  # lazy: a sub-command's libraries, when it runs
         case "export":
-            from benchmark.exchange import export as module
+            from benchmark.exchange import export as module  # lazy: a sub-command's libraries, when it runs
         case "score":
-            from benchmark.exchange import score as module
+            from benchmark.exchange import score as module  # lazy: a sub-command's libraries, when it runs
         case "leaderboard":
-            from benchmark.suites import leaderboard as module
+            from benchmark.suites import leaderboard as module  # lazy: a sub-command's libraries, when it runs
         case "sweep":
-            from benchmark.suites import sweep as module
+            from benchmark.suites import sweep as module  # lazy: a sub-command's libraries, when it runs
         case "check":
-            from benchmark.exchange import check as module
+            from benchmark.exchange import check as module  # lazy: a sub-command's libraries, when it runs
         case _:
             raise KeyError(f"{name!r} is not a sub-command of this module; accepted: {', '.join(SUBCOMMANDS)}")
     return module

@@ -193,7 +193,7 @@ def colour_ablation(suite, *, cache=None, workers: int = 1, every: int = 1, firs
     """Every ``every``-th episode of ``suite`` from its ``first`` (``every`` 1, ``first`` 0: all)
     ablated (:func:`ablate_episode`), and the summary rows (:func:`summary_rows`,
     :func:`tone_rows`, :func:`verdict`)."""
-    from benchmark.commands.colour_ablation import _episode as job  # by its module's name, also when run as __main__
+    from benchmark.commands.colour_ablation import _episode as job  # lazy: by its module's name, also as __main__
 
     cache = episode_cache(cache)
     scenarios = suite.scenarios[first::every]

@@ -40,7 +40,7 @@ def run(argv: list | None = None) -> int:
     """``fsv-bench`` on ``argv`` (default: the process's arguments): ``reproduce``, which runs the other
     commands, here on the top floor; everything else by :func:`benchmark.commands.cli.main`. Returns
     the exit status."""
-    from benchmark.commands import cli  # after the handler: it imports MuJoCo, the renderer, the method
+    from benchmark.commands import cli  # lazy: after the interrupt handler (MuJoCo, numba, scipy: 1 s)
 
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv and argv[0] == "reproduce":
@@ -50,10 +50,10 @@ def run(argv: list | None = None) -> int:
 
 def subcommand_module(name: str):
     """The module of any sub-command of ``fsv-bench`` (:data:`benchmark.commands.cli.ALL_SUBCOMMANDS`)."""
-    from benchmark.commands import cli
+    from benchmark.commands import cli  # lazy: after the interrupt handler (MuJoCo, numba, scipy: 1 s)
 
     if name == "reproduce":
-        from benchmark import reproduce  # torch, pandas and every command: only when asked for
+        from benchmark import reproduce  # lazy: torch, pandas and every command: only when asked for
 
         return reproduce
     return cli.subcommand_module(name)
@@ -61,7 +61,7 @@ def subcommand_module(name: str):
 
 def subcommand_parser(name: str) -> tuple:
     """``(module, parser)`` of any sub-command of ``fsv-bench``."""
-    from benchmark.commands import cli
+    from benchmark.commands import cli  # lazy: after the interrupt handler (MuJoCo, numba, scipy: 1 s)
 
     return cli.subcommand_parser(name, subcommand_module(name))
 
@@ -70,7 +70,7 @@ def main_command_done(argv: list) -> bool:
     """Whether ``argv`` ran the main command (not a sub-command, not ``--help``): it waits for its
     background work and renames its output folder into place before returning, so the interpreter's
     teardown (about 0.7 s of finalisers in the imported libraries) has nothing left to do for it."""
-    from benchmark.commands.cli import ALL_SUBCOMMANDS
+    from benchmark.commands.cli import ALL_SUBCOMMANDS  # lazy: after the interrupt handler (MuJoCo, numba, scipy: 1 s)
 
     return not (argv and argv[0] in ALL_SUBCOMMANDS)
 

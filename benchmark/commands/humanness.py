@@ -16,12 +16,15 @@ import pathlib
 import shutil
 from dataclasses import asdict
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 
-from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_text
+from benchmark.atomic import OutputFolderError, check_out, save_figure, staging_folder, swap_folder, write_text
 from benchmark.scores.aggregate import span
 from benchmark.suites import get_suite
 from benchmark.world import living
+from benchmark.world.assets import box_spec
 from benchmark.world.humanness import suite_humanness
 from benchmark.world.tasks.human import (
     ROTATION_PEAK_ALPHA,
@@ -152,20 +155,14 @@ def person_table(rows: list) -> list:
 
 
 def _friction() -> float:
-    from benchmark.world.assets import box_spec
-
     return float(box_spec()["finger_friction"])
 
 
 def plot_margins(rows: list, path) -> pathlib.Path:
     """The picture of :func:`margin_section`: drawn against realised margins, one point per episode,
     coloured by task, with the diagonal, its +-0.1 band and the published range."""
-    import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from benchmark.atomic import save_figure
 
     hs = [(sc, h) for sc, h in rows if np.isfinite(h.drawn_margin) and np.isfinite(h.effective_margin)]
     fig, ax = plt.subplots(figsize=(5.6, 5.2))

@@ -18,12 +18,25 @@ inputs, ``people-N-blind.npz`` user-blind).
 from __future__ import annotations
 
 import argparse
+import contextlib
+import importlib.resources
+import io
 import json
 import pathlib
 import shutil
 import sys
 
-from benchmark.atomic import staging_folder, swap_folder, write_text
+from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_text
+from benchmark.errors import DatasetError
+from benchmark.method import MethodSpec
+from benchmark.method.grip_file import SHIPPED
+from benchmark.method.protocol import PROTOCOLS
+from benchmark.paper import calibration, training
+from benchmark.paper.dataset.cli import parse_ints
+from benchmark.paper.dataset.files import read_header
+from benchmark.parallel import run_jobs
+from benchmark.suites import get_suite
+from benchmark.suites.evaluate import check_cache_args, evaluate_many, strict
 from fsv.provenance import provenance
 
 COLUMNS = (("learned_rel_err_pct", "learned [%]"), ("learned_mae_n", "MAE [N]"),
@@ -33,7 +46,6 @@ COLUMNS = (("learned_rel_err_pct", "learned [%]"), ("learned_mae_n", "MAE [N]"),
 
 def people_of(data) -> list:
     """The dataset's people, in order (the first N train the N-people model)."""
-    from benchmark.paper.dataset.files import read_header
 
     return list(read_header(data)["spec"]["users"])
 
@@ -47,7 +59,6 @@ def train_model(data, users: list, grip, out: pathlib.Path) -> dict:
     """Trains one model on ``users``' episodes of ``data`` as ``fsv-bench train`` does with a shipped
     model's options, but no cross-validation: with the grip calibrations of ``grip`` (a file) as
     inputs, or user-blind if ``grip`` is None; its metadata."""
-    from benchmark.paper import training
 
     parser = argparse.ArgumentParser()
     training.add_arguments(parser)
@@ -64,11 +75,6 @@ def fit_calibration(recordings: list, out: pathlib.Path, people: list, quiet: bo
     Raises:
         DatasetError: If one of ``people`` has no line in the recordings (naming the first).
     """
-    import contextlib
-    import io
-
-    from benchmark.errors import DatasetError
-    from benchmark.paper import calibration
 
     with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
         lines = calibration.run(argparse.Namespace(data=[str(r) for r in recordings], out=str(out)))
@@ -92,9 +98,7 @@ def train_models(data, everyone: list, counts: list, grip, folder: pathlib.Path,
     Returns:
         ``{n: {protocol: metadata}}``.
     """
-    from benchmark.commands.learning_curve import _train_job  # by its module's name, also when run as __main__
-    from benchmark.method.protocol import PROTOCOLS
-    from benchmark.parallel import run_jobs
+    from benchmark.commands.learning_curve import _train_job  # lazy: by its module's name, also as __main__
 
     keys = sorted(((n, pr) for n in counts for pr in PROTOCOLS), key=lambda k: -k[0])
     jobs = [(str(data), everyone[:n], None if pr == "blind" else str(grip), str(folder / model_file(n, pr)))
@@ -128,14 +132,6 @@ def _cell(agg: dict) -> str:
 
 
 def main(argv=None) -> int:
-    from benchmark.atomic import OutputFolderError, check_out
-    from benchmark.errors import DatasetError
-    from benchmark.method import MethodSpec
-    from benchmark.method.protocol import PROTOCOLS
-    from benchmark.paper.dataset.cli import parse_ints
-    from benchmark.suites import get_suite
-    from benchmark.suites.evaluate import check_cache_args, evaluate_many, strict
-
     p = argparse.ArgumentParser(prog="python -m benchmark.commands.learning_curve", description=__doc__.split("\n\n")[0])
     p.add_argument("--data", required=True, help="a training dataset (fsv-bench generate --split train --design people)")
     p.add_argument("--people", default="5,20,40", help="numbers of training people (default 5,20,40)")
@@ -164,10 +160,6 @@ def main(argv=None) -> int:
         return 2
     grip = args.grip
     if grip is None and not args.calibration:
-        import importlib.resources
-
-        from benchmark.method.grip_file import SHIPPED
-
         grip = str(importlib.resources.files("sim_assets").joinpath(SHIPPED))
     out = pathlib.Path(args.out)
     try:

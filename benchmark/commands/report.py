@@ -14,6 +14,7 @@ import pathlib
 import numpy as np
 
 from benchmark.atomic import write_text
+from benchmark.suites.evaluate import strict
 from benchmark.world.episode import Episode
 from benchmark.world.grasp_plan import grasp_spec
 from benchmark.world.people import person_record
@@ -96,7 +97,6 @@ def write_json(path, data: dict) -> pathlib.Path:
 
     NaN and infinities (a metric with nothing to score) become null, so strict readers accept the file.
     """
-    from benchmark.suites.evaluate import strict
 
     path = write_text(path, json.dumps(strict(data), indent=2, sort_keys=False, allow_nan=False) + "\n")
     return path

@@ -21,6 +21,7 @@ import types
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
+from benchmark.atomic import write_bytes
 from benchmark.world.episode import Episode
 from benchmark.world.scenario import Scenario
 
@@ -151,7 +152,6 @@ def complete(result: StageResult, out, background=None) -> None:
     """Writes a result's files into ``out`` and draws its pictures: on ``background``
     (:class:`benchmark.background.Background`, beside the later stages), or at once without one
     (a stage run on its own)."""
-    from benchmark.atomic import write_bytes
 
     for name, data in result.files:
         write_bytes(out / name, data)

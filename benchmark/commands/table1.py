@@ -40,6 +40,7 @@ from benchmark.paper.table1 import (
     tune,
 )
 from benchmark.world.motion import CALIBRATION_SEEDS, DECLARED
+from benchmark.world.scenario import episode_name
 from benchmark.world.truth import Truth
 
 
@@ -80,7 +81,6 @@ def lab_ahrs_report(episodes: list, scenarios: list, poses_label: str) -> tuple[
         and drawn errors of each) and ``sources``: for each error source alone, and all together,
         each method's ``acc_std`` [m/s^2] and ``gyro_std`` [rad/s].
     """
-    from benchmark.world.scenario import episode_name
 
     readings = [lab_readings(truth, sc) for (truth, _), sc in zip(episodes, scenarios)]
     table, kins = score_episodes(episodes, poses_label=poses_label, readings=readings, reference=MTI_300_REFERENCE)

@@ -11,6 +11,11 @@ import numpy as np
 
 from benchmark.archive import read_archive, write_archive
 from benchmark.errors import BenchmarkError
+from benchmark.fingerprint import world_fingerprint
+from fsv import FsvError
+from fsv.grip import GripCalibration
+from fsv.method import CameraInput
+from fsv.track.tracker import TrackInit
 
 FORMAT = "fsv-bench-camera"
 VERSION = 2
@@ -76,7 +81,10 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list, know
         knowledge: What the method was told and how precisely
             (``benchmark.method.knowledge.Knowledge.given_record``: no truth), stored in the meta.
     """
-    from benchmark.camera.episode_file import model_sections, quantise_depth
+    from benchmark.camera.episode_file import (  # lazy: MuJoCo (0.25 s) off `fsv-bench export`'s start-up
+        model_sections,
+        quantise_depth,
+    )
 
     counts, q = quantise_depth(inputs.depth.depth_m)
     c = inputs.calib
@@ -93,7 +101,6 @@ def save_camera_input(inputs, path, *, episode: str, suite, rng_seed: list, know
                        "colour/exposure_s": np.float64(co.exposure_s), "colour/calib_K": co.calib.K,
                        "colour/calib_T_world_cam": co.calib.T_world_cam,
                        "colour/calib_size": np.array([co.calib.width, co.calib.height], dtype=np.int64)})
-    from benchmark.fingerprint import world_fingerprint
 
     meta = {"episode": episode, "suite": {"name": suite.name, "version": suite.version}, "world": world_fingerprint(),
             "frames": inputs.num_frames, "streams": list(inputs.streams), "rng_seed": [int(v) for v in rng_seed]}
@@ -117,11 +124,11 @@ def load_camera_input(path) -> tuple:
     Raises:
         CameraFileError: If it is missing, damaged, or of another format or version.
     """
-    from benchmark.camera.episode_file import colour_from_arrays, depth_from_arrays, models_from_sections
-    from fsv import FsvError
-    from fsv.grip import GripCalibration
-    from fsv.method import CameraInput
-    from fsv.track.tracker import TrackInit
+    from benchmark.camera.episode_file import (  # lazy: MuJoCo (0.25 s) off `fsv-bench export`'s start-up
+        colour_from_arrays,
+        depth_from_arrays,
+        models_from_sections,
+    )
 
     meta, s = read_archive(path, FORMAT, READS, kind="camera-input", error=CameraFileError)
     try:

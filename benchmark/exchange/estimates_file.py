@@ -12,6 +12,9 @@ import numpy as np
 from benchmark.archive import read_archive, write_archive
 from benchmark.errors import BenchmarkError
 from benchmark.world.scenario import MAX_DURATION_S, MAX_FPS
+from fsv import Contacts, FsvError, Kinematics, Poses
+from fsv.forces import ForceSolution, FrameStatus
+from fsv.method import Estimate, TrackOutput
 
 FORMAT = "fsv-bench-estimates"
 VERSION = 1
@@ -132,7 +135,7 @@ META_KEYS = ("format", "version", "episode", "finger_names", "method", "stages",
 
 def force_bound_n() -> float:
     """:data:`FORCE_WEIGHTS` times the heaviest box's weight, [N]."""
-    from benchmark.world.assets import masses  # here: it imports MuJoCo, which reading a file does not need
+    from benchmark.world.assets import masses  # lazy: MuJoCo (0.25 s), which reading a file does not need
 
     return FORCE_WEIGHTS * max(float(m["mass_kg"]) for m in masses()) * 9.81
 
@@ -393,9 +396,6 @@ def load_estimate(path, *, t: np.ndarray, finger_names: tuple):
         EstimatesFileError: If the file is missing or damaged, of another format, or its frames or
             fingers do not match the episode's (the message names the array).
     """
-    from fsv import Contacts, FsvError, Kinematics, Poses
-    from fsv.forces import FrameStatus
-    from fsv.method import Estimate, TrackOutput
 
     meta, s = read_estimates(path, frames=len(t), identity=lambda meta: _same_fingers(path, meta, finger_names))
     names = tuple(meta.get("finger_names") or ())
@@ -463,8 +463,6 @@ def _same_fingers(path, meta: dict, finger_names) -> None:
 
 
 def _solution(kind: str, contacts, force: np.ndarray, env_wrench: np.ndarray, status: np.ndarray):
-    from fsv.forces import ForceSolution
-
     T, K = contacts.active.shape
     nan6 = np.full((T, 6), np.nan)
     return ForceSolution(kind=kind, finger_names=contacts.finger_names, active=contacts.active,

@@ -17,14 +17,24 @@ import json
 import pathlib
 import shutil
 
-from benchmark.atomic import staging_folder, swap_folder
+from benchmark.atomic import check_out, staging_folder, swap_folder
+from benchmark.exchange import camera_file, estimates_file
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
-from benchmark.method.protocol import DEFAULT_PROTOCOL
+from benchmark.method.protocol import DEFAULT_PROTOCOL, check_people
+from benchmark.method.run import camera_input_and_knowledge
+from benchmark.world.scenario import episode_name
+from fsv.provenance import provenance
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.evaluate import add_knowledge_argument, add_protocol_argument
-    from benchmark.suites.options import add_streams_argument, add_suite_arguments
+    from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench export`'s start-up
+        add_knowledge_argument,
+        add_protocol_argument,
+    )
+    from benchmark.suites.options import (  # lazy: scipy.stats (0.4 s) off `fsv-bench export`'s start-up
+        add_streams_argument,
+        add_suite_arguments,
+    )
 
     add_suite_arguments(p, out_help="output folder (suite.json, <episode>.npz or .h5)", workers=False)
     add_streams_argument(p)
@@ -44,11 +54,10 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
     ``.h5`` with ``container="hdf5"``): the ``streams`` (:data:`fsv.types.STREAMS`), the hand, box
     and camera as ``knowledge`` says and the person's grip calibration under the ``calibrated``
     protocol; returns ``suite.json``'s content."""
-    from benchmark.exchange import camera_file, estimates_file
-    from benchmark.method.run import camera_input_and_knowledge
-    from benchmark.suites.evaluate import cached_episode, episode_cache
-    from benchmark.world.scenario import episode_name
-    from fsv.provenance import provenance
+    from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench export`'s start-up
+        cached_episode,
+        episode_cache,
+    )
 
     cache = episode_cache(cache)
     out = pathlib.Path(out)
@@ -58,7 +67,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
         episodes = []
         scenarios = suite.scenarios
         if progress:
-            from tqdm import tqdm
+            from tqdm import tqdm  # lazy: tqdm (30 ms) off `fsv-bench export`'s start-up
 
             scenarios = tqdm(scenarios, desc=f"export {suite.name}", unit="episode", leave=False)
         for sc in scenarios:
@@ -86,10 +95,10 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.atomic import check_out
-    from benchmark.method.protocol import check_people
-    from benchmark.suites.evaluate import check_cache_args
-    from benchmark.suites.options import suite_of
+    from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench export`'s start-up
+        check_cache_args,
+    )
+    from benchmark.suites.options import suite_of  # lazy: scipy.stats (0.4 s) off `fsv-bench export`'s start-up
 
     suite = suite_of(args)
     check_out(args.out)

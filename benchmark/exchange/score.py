@@ -14,12 +14,28 @@ from __future__ import annotations
 
 import argparse
 import pathlib
+import tempfile
 import time
+
+from benchmark.atomic import check_out
+from benchmark.commands.pictures.episodes import EpisodePictures, chosen
+from benchmark.exchange.estimates_file import check_identity, load_estimate, read_estimates
+from benchmark.exchange.export import FORMATS
+from benchmark.fingerprint import world_fingerprint
+from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
+from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
+from benchmark.world.scenario import episode_name
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.evaluate import add_knowledge_argument, add_protocol_argument
-    from benchmark.suites.options import add_baseline_argument, add_suite_arguments
+    from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up
+        add_knowledge_argument,
+        add_protocol_argument,
+    )
+    from benchmark.suites.options import (  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up
+        add_baseline_argument,
+        add_suite_arguments,
+    )
 
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)", workers=False)
     add_baseline_argument(p)
@@ -29,7 +45,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--gates", default=None, help="JSON file of gates replacing the suite's defaults")
     p.add_argument("--format", choices=("npz", "hdf5"), default="npz",
                    help="the estimates files' container: <episode>.npz (default) or <episode>.h5")
-    from benchmark.commands.eval import add_picture_arguments
+    from benchmark.commands.eval import (  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up
+        add_picture_arguments,
+    )
 
     add_picture_arguments(p)
 
@@ -37,8 +55,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def estimate_paths(suite, folder: pathlib.Path, container: str = "npz") -> dict:
     """``{scenario: path}`` of every episode's estimates file (``.npz``, or ``.h5`` for ``hdf5``);
     ValueError naming the missing ones."""
-    from benchmark.exchange.export import FORMATS
-    from benchmark.world.scenario import episode_name
 
     folder = pathlib.Path(folder)
     if not folder.is_dir():
@@ -64,13 +80,12 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     its camera calibration carries the estimates into the true world frame; ``protocol`` what they
     told it of the person (``--protocol``; recorded with every episode)."""
 
-    from benchmark.exchange.estimates_file import check_identity, load_estimate, read_estimates
-    from benchmark.fingerprint import world_fingerprint
-    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
-    from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
-    from benchmark.scores.episode import episode_row
-    from benchmark.suites.evaluate import cached_episode, episode_cache, scores_document
-    from benchmark.world.scenario import episode_name
+    from benchmark.scores.episode import episode_row  # lazy: MuJoCo (0.25 s) off `fsv-bench score`'s start-up
+    from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up
+        cached_episode,
+        episode_cache,
+        scores_document,
+    )
 
     protocol = check_protocol(protocol or DEFAULT_PROTOCOL)
     paths = estimate_paths(suite, folder, container)
@@ -87,7 +102,7 @@ def score_files(suite, folder: pathlib.Path, *, gates=None, cache=None, progress
     rows = []
     scenarios = suite.scenarios
     if progress:
-        from tqdm import tqdm
+        from tqdm import tqdm  # lazy: tqdm (30 ms) off `fsv-bench score`'s start-up
 
         scenarios = tqdm(scenarios, desc=f"score {suite.name}", unit="episode", leave=False)
     for sc in scenarios:
@@ -109,7 +124,11 @@ def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowled
                    protocol: str | None = None) -> dict:
     """``scores`` with its ``baselines`` entry: every trivial baseline run on the same (cached)
     episodes, told what ``knowledge`` and ``protocol`` say."""
-    from benchmark.suites.evaluate import baseline_specs, baselines_block, evaluate_many
+    from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up
+        baseline_specs,
+        baselines_block,
+        evaluate_many,
+    )
 
     specs = baseline_specs(knowledge, protocol)
     documents = evaluate_many(suite, list(specs.values()), gates=gates, cache=cache, progress=progress)
@@ -117,10 +136,13 @@ def with_baselines(scores: dict, suite, *, gates, cache, progress: bool, knowled
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.atomic import check_out
-    from benchmark.method.protocol import check_protocol
-    from benchmark.suites.evaluate import check_cache_args, load_gates, print_verdict, write_outputs
-    from benchmark.suites.options import suite_of
+    from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up
+        check_cache_args,
+        load_gates,
+        print_verdict,
+        write_outputs,
+    )
+    from benchmark.suites.options import suite_of  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up
 
     suite = suite_of(args)
     gates = load_gates(args.gates) if args.gates else None
@@ -129,10 +151,6 @@ def run(args: argparse.Namespace) -> dict:
     check_protocol(args.protocol)
     estimate_paths(suite, args.estimates, args.format)
     if args.pictures:
-        import tempfile
-
-        from benchmark.commands.pictures.episodes import EpisodePictures, chosen
-
         with tempfile.TemporaryDirectory(prefix="fsv-bench-pictures-") as folder:
             writer = EpisodePictures(folder)
             scores = score_files(suite, args.estimates, gates=gates, cache=args.cache, progress=not args.quiet,

@@ -34,6 +34,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from benchmark.world.anatomy import TEMPLATE_HAND_BREADTH_M, TEMPLATE_HAND_LENGTH_M, Anatomy
+from benchmark.world.hand import hand_model as hand_of
+from fsv import Calibration, ColourVideo
 from fsv.linalg import mm, norm, rigid_inverse
 
 SOURCES = ("hand", "box", "camera")
@@ -223,10 +226,7 @@ def given(episode, name: str = DEFAULT_KNOWLEDGE) -> tuple:
         ``(hand_model, object_model, calib, knowledge)``: the method's models and calibration and
         the :class:`Knowledge` record.
     """
-    from benchmark.world.anatomy import TEMPLATE_HAND_BREADTH_M, TEMPLATE_HAND_LENGTH_M, Anatomy
-    from benchmark.world.assets import user_of
-    from benchmark.world.hand import hand_model as hand_of
-    from fsv import Calibration
+    from benchmark.world.assets import user_of  # lazy: MuJoCo (0.25 s) off `fsv-bench calibrate`'s start-up
 
     check_knowledge(name)
     person = user_of(episode.scenario)
@@ -281,7 +281,6 @@ def given_colour(episode, name: str, known: "Knowledge"):
     :data:`PRINCIPAL_SD_PX`, from the ``"knowledge-colour"`` stream) and its pose is expressed in
     the method's world (``known.world_from_method``): the depth-to-colour offset is exact.
     """
-    from fsv import Calibration, ColourVideo
 
     colour = episode.colour
     if colour is None:

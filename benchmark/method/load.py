@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import inspect
 import os
 import pathlib
 import sys
@@ -65,8 +66,6 @@ def load_object(spec: str, option: str):
 
 
 def _takes_no_arguments(fn) -> bool:
-    import inspect
-
     try:
         params = inspect.signature(fn).parameters.values()
     except (TypeError, ValueError):

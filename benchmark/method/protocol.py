@@ -13,6 +13,7 @@ The two are reported side by side: a calibrated number never stands alone.
 from __future__ import annotations
 
 from benchmark.errors import BenchmarkError
+from benchmark.method.grip_file import calibrated_users, user_grip
 
 PROTOCOLS = ("blind", "calibrated")
 """The protocols a method may be run under."""
@@ -40,7 +41,6 @@ def person_grip(user: int, protocol: str):
     Raises:
         ProtocolError: Under ``calibrated``, if the person has no calibration recording.
     """
-    from benchmark.method.grip_file import calibrated_users, user_grip
 
     check_protocol(protocol)
     if protocol == "blind":

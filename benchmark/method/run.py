@@ -2,9 +2,16 @@
 
 from __future__ import annotations
 
-from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
-from benchmark.method.protocol import DEFAULT_PROTOCOL
+import dataclasses
+
+from benchmark.method.init import tracker_init
+from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given, given_colour
+from benchmark.method.protocol import DEFAULT_PROTOCOL, person_grip
 from benchmark.method.spec import MethodSpec
+from benchmark.world.contact_error import contacts_from_truth
+from benchmark.world.motion import oracle_kinematics
+from fsv.linalg import mm, mv, rigid_inverse
+from fsv.method import CameraInput, Method, ReferenceTracker
 from fsv.track.tracker import TrackInit
 
 
@@ -33,11 +40,6 @@ def camera_input(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOW
 def camera_input_and_knowledge(episode, init_scale: float = 1.0, knowledge: str = DEFAULT_KNOWLEDGE,
                                protocol: str = DEFAULT_PROTOCOL) -> tuple:
     """:func:`camera_input` and the :class:`benchmark.method.knowledge.Knowledge` record behind it."""
-    from benchmark.method.init import tracker_init
-    from benchmark.method.knowledge import given, given_colour
-    from benchmark.method.protocol import person_grip
-    from fsv.linalg import mm, mv, rigid_inverse
-    from fsv.method import CameraInput
 
     hand, obj, calib, known = given(episode, knowledge)
     init = tracker_init(episode.truth, episode.scenario, hand, init_scale)
@@ -56,12 +58,8 @@ def oracle_inputs(episode, oracle: tuple) -> dict:
     """The truth's contacts and/or kinematics for a labelled oracle ablation (keyword arguments of a method call)."""
     out = {}
     if "contacts" in oracle:
-        from benchmark.world.contact_error import contacts_from_truth
-
         out["contacts"] = contacts_from_truth(episode.truth)
     if "kinematics" in oracle:
-        from benchmark.world.motion import oracle_kinematics
-
         out["kinematics"] = oracle_kinematics(episode.truth)
     return out
 
@@ -85,12 +83,9 @@ def run_method(spec: MethodSpec, episode, *, inputs=None, tracking=None, progres
     oracle = oracle_inputs(episode, spec.oracle)
     if tracking is not None:
         return method.after_tracking(inputs, tracking, **oracle)
-    from fsv.method import Method, ReferenceTracker
 
     if progress and isinstance(method, Method) and isinstance(method.tracker, ReferenceTracker):
-        import dataclasses
-
-        from tqdm import tqdm
+        from tqdm import tqdm  # lazy: tqdm (30 ms) off `fsv-bench`'s start-up
 
         with tqdm(total=inputs.num_frames, desc="track", unit="frame", leave=False, disable=None) as bar:
             method = dataclasses.replace(method, tracker=dataclasses.replace(method.tracker, on_frame=bar.update))

@@ -6,7 +6,13 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, check_knowledge
+from benchmark.method.load import load_object
 from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
+from benchmark.world.motion import DECLARED
+from fsv.errors import FsvError, InputError
+from fsv.learn import load
+from fsv.method import LearnedInternalForces, Method, StencilDifferentiator, make_method, method_streams
+from fsv.method.baselines import BASELINE_STAGE, BASELINES
 
 ORACLE_STAGES = ("contacts", "kinematics")
 """The method's inputs the truth may replace (a labelled *oracle* ablation)."""
@@ -66,7 +72,6 @@ class MethodSpec:
     def tracking_key(self):
         """Methods with equal keys run the same tracker (an episode's tracking is run once for them);
         None: a whole method of its own, never shared."""
-        from fsv.method.baselines import BASELINE_STAGE
 
         if not self.method:
             return ("tracker", self.tracker, self.knowledge)
@@ -78,7 +83,6 @@ class MethodSpec:
     @property
     def streams(self) -> tuple:
         """The camera streams the method reads (:func:`fsv.method.method_streams`)."""
-        from fsv.method import method_streams
 
         return method_streams(self.build())
 
@@ -102,11 +106,6 @@ class MethodSpec:
 
 @lru_cache(maxsize=16)
 def _build(spec: MethodSpec):
-    from benchmark.method.load import load_object
-    from fsv.errors import InputError
-    from fsv.method import Method, make_method
-    from fsv.method.baselines import BASELINES
-
     if spec.method in BASELINES:
         return BASELINES[spec.method]()
     if spec.method:
@@ -116,10 +115,6 @@ def _build(spec: MethodSpec):
         return method
     stages = {}
     if spec.internal_model:
-        from fsv.errors import FsvError
-        from fsv.learn import load
-        from fsv.method import LearnedInternalForces
-
         try:
             stages["internal"] = LearnedInternalForces(load(spec.internal_model), source=f"model {spec.internal_model}")
         except (FsvError, OSError) as e:
@@ -131,9 +126,6 @@ def _build(spec: MethodSpec):
             raise ValueError(f"--differentiator {text!r}: accepted: {', '.join(DIFFERENTIATORS)}, "
                              "module:attribute or path/to/file.py:attribute")
         if name == "differentiator" and text in DIFFERENTIATORS:
-            from benchmark.world.motion import DECLARED
-            from fsv.method import StencilDifferentiator
-
             stages[name] = StencilDifferentiator(DECLARED[text])
         elif name == "internal" and text == "none":
             stages[name] = False

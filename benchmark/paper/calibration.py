@@ -20,7 +20,9 @@ from __future__ import annotations
 import argparse
 
 from benchmark.atomic import check_file_out
+from benchmark.errors import DatasetError
 from benchmark.method.grip_file import write_calibration
+from benchmark.scores.samples import MAX_EXCESS_N
 from fsv.grip import GripCalibration, fit_grip
 
 
@@ -33,7 +35,7 @@ def grip_calibrations(df) -> dict[int, GripCalibration]:
     Returns:
         ``{user index: GripCalibration}``.
     """
-    from benchmark.paper.dataset import finger_names_of
+    from benchmark.paper.dataset import finger_names_of  # lazy: pandas (0.3 s) off `fsv-bench calibrate`'s start-up
 
     names = finger_names_of(df)
     out = {}
@@ -52,10 +54,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.errors import DatasetError
-    from benchmark.paper.dataset import load_dataset
-    from benchmark.paper.dataset.files import read_header
-    from benchmark.scores.samples import MAX_EXCESS_N
+    from benchmark.paper.dataset import load_dataset  # lazy: pandas (0.3 s) off `fsv-bench calibrate`'s start-up
+    from benchmark.paper.dataset.files import read_header  # lazy: pandas (0.3 s) off `fsv-bench calibrate`'s start-up
 
     check_file_out(args.out, force=args.force)
     recordings = [read_header(d)["spec"] for d in args.data]  # every header checked before any work

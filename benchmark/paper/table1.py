@@ -22,12 +22,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from benchmark.camera.render import render
 from benchmark.errors import ScenarioError
+from benchmark.method.init import tracker_init
 from benchmark.paper.ahrs import AhrsReadings
 from benchmark.world.motion import CALIBRATION_SEEDS, DECLARED, TUNING
+from benchmark.world.pose_error import tracker_like_poses
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
 from benchmark.world.truth import Truth
 from fsv import Kinematics, Poses
-from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses
+from fsv.kinematics import AlgebraicConfig, GaussianConfig, differentiate_poses, so3
+from fsv.track.tracker import track
 
 METHODS = ("central", "gaussian", "algebraic")
 from benchmark.suites.registry import TABLE1_TASKS as SIX_AXIS_TASKS  # noqa: E402  (one source: the table1 suite)
@@ -301,7 +307,6 @@ def support_sweep(calibration: list[tuple[Truth, Poses]], supports=(9, 15, 21, 3
 
 def episode_scenarios(tasks=SIX_AXIS_TASKS, noise_m: float = 0.01, seeds=CALIBRATION_SEEDS, duration_s: float | None = None) -> list:
     """The scenarios of :func:`episode_set`, in its order (every seed of the first task, then the next)."""
-    from benchmark.world.scenario import Scenario
 
     return [Scenario(task=task, noise_m=noise_m, seed=int(seed), duration_s=duration_s) for task in tasks for seed in seeds]
 
@@ -315,17 +320,11 @@ def episode_set(
         tracked: Observe the poses with the tracker on the rendered depth (``fsv.track``, slow:
             about a minute per 10 s episode) instead of the tracker-like error model.
     """
-    from benchmark.world.pose_error import tracker_like_poses
-    from benchmark.world.simulate import simulate
 
     out = []
     for sc in episode_scenarios(tasks, noise_m, seeds, duration_s):
         ep = simulate(sc)
         if tracked:
-            from benchmark.camera.render import render
-            from benchmark.method.init import tracker_init
-            from fsv.track.tracker import track
-
             ep = render(ep)
             init = tracker_init(ep.truth, sc, ep.hand_model)
             poses = track(ep.depth, ep.calib, ep.object_model, ep.hand_model, init, rng=sc.rng("tracker")).box
@@ -343,7 +342,6 @@ def pose_error_stats(episodes: list[tuple[Truth, Poses]]) -> dict:
         position error (world frame) and of the body-frame rotation-vector error per axis, averaged
         over axes, and their lag-one autocorrelations (after removing each episode's mean).
     """
-    from fsv.kinematics import so3
 
     pos, rot = [], []
     for truth, poses in episodes:

@@ -48,7 +48,15 @@ import pandas as pd
 from benchmark.atomic import check_out, save_figure, staging_folder, swap_folder, write_text
 from benchmark.errors import DatasetError
 from benchmark.limits import MAX_EPOCHS, MAX_MEMBERS, MAX_SEED, integer, number
-from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset, training_set
+from benchmark.paper.dataset import (
+    finger_names_of,
+    frames_of,
+    load_dataset,
+    read_episode_file,
+    read_manifest,
+    training_set,
+)
+from benchmark.paper.dataset.cli import parse_ints
 from benchmark.paper.dataset.files import read_header
 from benchmark.scores.samples import DATASET_FORCE_SETTINGS, MAX_EXCESS_N
 from fsv import ObjectModel
@@ -108,7 +116,6 @@ class Table2Protocol:
 
 def object_models(out) -> dict:
     """The object model and gravity of each episode of a dataset: ``{episode: (ObjectModel, gravity)}``."""
-    from benchmark.paper.dataset import read_episode_file, read_manifest
 
     models = {}
     for row in read_manifest(out).to_dict("records"):  # every file checked against its digests
@@ -297,10 +304,10 @@ def markdown(result: dict) -> str:
 def plot_fig6(result: dict, path: str) -> None:
     """A plot like the paper's Fig. 6: reconstructed per-finger normal forces against the truth over time
     for the first evaluation episode of the all-changed row (×××)."""
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench train`'s start-up
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench train`'s start-up
 
     full, part = result["fig6"]["full"], result["fig6"]["partial"]
     ep = full["episode"][0]
@@ -364,7 +371,6 @@ def add_max_excess_argument(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> dict:
     """Runs ``fsv-bench table2``: prints the table and writes it to ``--out``."""
-    from benchmark.paper.dataset.cli import parse_ints
 
     check_out(args.out)
     users = parse_ints(args.users, "--users")

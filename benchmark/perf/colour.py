@@ -21,23 +21,23 @@ from __future__ import annotations
 import argparse
 import dataclasses
 
+import mujoco
 import numpy as np
+
+from benchmark.camera.appearance import appearance_of
+from benchmark.camera.camera import load_camera
+from benchmark.camera.colour import ColourRenderer, interpolated_state
+from benchmark.camera.colour_sensor import colour_camera, colour_preset
+from benchmark.camera.depth import DepthRenderer, hand_skin, pulp_presses
+from benchmark.camera.scene import world_labels
+from benchmark.camera.sensor import sensor_preset
+from benchmark.perf.render import _rates, scene_frames
+from benchmark.world.assets import set_frame
+from benchmark.world.scenario import Scenario
 
 
 def main(argv=None) -> dict:
     """Measures and prints the speeds; returns them as a dict (fps per way, best and median)."""
-    import mujoco
-
-    from benchmark.camera.appearance import appearance_of
-    from benchmark.camera.camera import load_camera
-    from benchmark.camera.colour import ColourRenderer, interpolated_state
-    from benchmark.camera.colour_sensor import colour_camera, colour_preset
-    from benchmark.camera.depth import DepthRenderer, hand_skin, pulp_presses
-    from benchmark.camera.scene import world_labels
-    from benchmark.camera.sensor import sensor_preset
-    from benchmark.perf.render import _rates, scene_frames
-    from benchmark.world.assets import set_frame
-    from benchmark.world.scenario import Scenario
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=150, help="frames per timed pass (default 150)")

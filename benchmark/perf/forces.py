@@ -26,17 +26,18 @@ import time
 
 import numpy as np
 
+from benchmark.world.contact_error import contacts_from_truth
+from benchmark.world.motion import oracle_kinematics
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
+from fsv import Contacts, Kinematics
+from fsv.forces import FrameStatus, nominal_forces, required_wrench, table_contacts, tangent_basis, to_object_frame
+
 TARGET_MS = 0.15
 TARGET_RATIO = 10.0
 
 
 def _frames(seed: int, grasp: int = 0):
-    from benchmark.world.contact_error import contacts_from_truth
-    from benchmark.world.motion import oracle_kinematics
-    from benchmark.world.scenario import Scenario
-    from benchmark.world.simulate import simulate
-    from fsv.forces import table_contacts
-
     ep = simulate(Scenario(task="lift", seed=seed, grasp=grasp))
     tr = ep.truth
     kin, con = oracle_kinematics(tr), contacts_from_truth(tr)
@@ -54,8 +55,6 @@ def _frames(seed: int, grasp: int = 0):
 
 
 def _subset(kin, con, idx):
-    from fsv import Contacts, Kinematics
-
     k = Kinematics(kin.t[idx], kin.pos[idx], kin.rot[idx], kin.vel[idx], kin.acc[idx], kin.omega[idx],
                    kin.alpha[idx], kin.valid[idx], kin.method)
     c = Contacts(con.finger_names, con.active[idx], con.sliding[idx], con.point[idx], con.normal[idx],
@@ -64,7 +63,7 @@ def _subset(kin, con, idx):
 
 
 def _cvxpy_solver(K: int, mu: float):
-    import cvxpy as cp
+    import cvxpy as cp  # lazy: optional cvxpy (0.7 s)
 
     W = cp.Parameter((6, 3 * K))
     w = cp.Parameter(6)
@@ -82,9 +81,7 @@ def main(argv=None) -> int:
     p.add_argument("--seed", type=int, default=0, help="scenario seed of the lift")
     p.add_argument("--grasp", type=int, default=0, help="grasp of the lift (2: five fingers, see sim_assets/grasps.yaml)")
     args = p.parse_args(argv)
-    import cvxpy as cp
-
-    from fsv.forces import FrameStatus, nominal_forces, required_wrench, tangent_basis, to_object_frame
+    import cvxpy as cp  # lazy: optional cvxpy (0.7 s)
 
     ep, kin, con, idx = _frames(args.seed, args.grasp)
     idx = idx[: args.frames]

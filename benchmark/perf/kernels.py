@@ -19,6 +19,8 @@ import subprocess
 import sys
 import tempfile
 
+from benchmark.suites import get_suite
+
 KERNELS = ("Haswell", "Sandybridge", "Nehalem", "Prescott")
 
 MAIN_FIGURES = {
@@ -52,7 +54,6 @@ def main(argv=None) -> int:
     p.add_argument("--out", default=None, help="keep the runs here (default: a temporary folder)")
     args = p.parse_args(argv)
     kernels = [k.strip() for k in args.kernels.split(",") if k.strip()]
-    from benchmark.suites import get_suite
 
     get_suite(args.suite)
     out = pathlib.Path(args.out or tempfile.mkdtemp(prefix="fsv-kernels-"))

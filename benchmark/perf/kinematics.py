@@ -24,6 +24,7 @@ import numpy as np
 from benchmark.world.motion import DECLARED
 from benchmark.world.pose_error import tracker_like_poses
 from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
 from fsv.kinematics import differentiate_poses
 
 
@@ -57,7 +58,6 @@ def _rms(est: np.ndarray, ref: np.ndarray, margin: int) -> float:
 
 def run(task: str = "lift", noise_m: float = 0.01, seed: int = 0, repeat: int = 200, duration_s: float | None = None) -> list[dict]:
     """Times every available differentiator on one episode; returns one row per method."""
-    from benchmark.world.simulate import simulate
 
     sc = Scenario(task=task, noise_m=noise_m, seed=seed, duration_s=duration_s)
     truth = simulate(sc).truth
@@ -103,7 +103,7 @@ def run(task: str = "lift", noise_m: float = 0.01, seed: int = 0, repeat: int = 
 def _algdiff_row(alg, st1, x: np.ndarray, dt: float, v_true: np.ndarray, margin: int, repeat: int) -> dict:
     """The AlgDiff package's algebraic differentiator on the same channel (its row)."""
     try:
-        from AlgDiff import AlgebraicDifferentiator
+        from AlgDiff import AlgebraicDifferentiator  # lazy: optional peer
     except ImportError:
         return dict(method="AlgDiff (not installed)", s=float("nan"), vel_rms=float("nan"))
     else:
@@ -130,7 +130,7 @@ def _pynumdiff_rows(alg, x: np.ndarray, dt: float, v_true: np.ndarray, margin: i
     """pynumdiff's differentiators on the same channel (their rows)."""
     rows = []
     try:
-        import pynumdiff
+        import pynumdiff  # lazy: optional peer
     except ImportError:
         return [dict(method="pynumdiff (not installed)", s=float("nan"), vel_rms=float("nan"))]
     else:

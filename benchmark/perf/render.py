@@ -31,7 +31,14 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 from benchmark.camera.camera import GL_FROM_CV, Camera, load_camera  # noqa: E402
-from benchmark.camera.depth import DepthRenderer  # noqa: E402
+from benchmark.camera.depth import DepthRenderer, pulp_presses  # noqa: E402
+from benchmark.camera.render import hand_skin
+from benchmark.camera.scene import world_labels
+from benchmark.camera.sensor import SENSORS, sensor_preset
+from benchmark.world.assets import build_world, set_frame, user_of, world_xml
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
+from benchmark.world.tasks import TASKS
 
 
 def add_mujoco_camera(spec, camera: Camera, name: str = "depth_camera"):
@@ -81,10 +88,6 @@ def scene_frames(num: int):
     Returns:
         ``(world, set_frame, truth)`` with ``set_frame(data, k)`` posing frame k.
     """
-    from benchmark.world.assets import build_world, set_frame
-    from benchmark.world.scenario import Scenario
-    from benchmark.world.simulate import simulate
-    from benchmark.world.tasks import TASKS
 
     sc = Scenario(duration_s=max((num - 1) / Scenario().fps, TASKS[Scenario().task].min_duration_s))
     truth = simulate(sc).truth
@@ -98,8 +101,6 @@ def scene_frames(num: int):
 
 def main(argv=None) -> dict:
     """Measures and prints renderer speeds; returns them as a dict."""
-    from benchmark.camera.scene import world_labels
-    from benchmark.camera.sensor import SENSORS, sensor_preset
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=150, help="frames per timed pass (default 150)")
@@ -111,8 +112,6 @@ def main(argv=None) -> dict:
         parser.error(f"--repeats must be >= 1, got {args.repeats}")
 
     camera = load_camera()
-    from benchmark.camera.depth import pulp_presses
-    from benchmark.camera.render import hand_skin
 
     world, pose, truth = scene_frames(args.frames)
     model = world.model
@@ -200,7 +199,6 @@ def _peer(world, camera) -> tuple:
 
 def _print_rates(rates: dict, scene: str) -> None:
     """The rates and ratios as a table."""
-    from benchmark.camera.sensor import SENSORS
 
     print(scene)
     print("                                   best fps  median fps  CPU ms/frame (all threads)")
@@ -228,8 +226,6 @@ def _print_rates(rates: dict, scene: str) -> None:
 
 def _model_xml(world) -> str:
     """The MJCF text of a world (for a MuJoCo spec to which the camera is added)."""
-    from benchmark.world.assets import user_of, world_xml
-    from benchmark.world.scenario import Scenario
 
     sc = Scenario()
     return world_xml(sc.user, sc.mass, float(user_of(sc)["stiffness_nm_per_rad"]))

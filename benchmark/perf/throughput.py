@@ -22,6 +22,11 @@ import os
 import tempfile
 import time
 
+from benchmark.paper.dataset import DatasetSpec, generate
+from benchmark.parallel import ONE_CORE_ENV
+from benchmark.suites import get_suite
+from benchmark.suites.evaluate import evaluate
+
 TPAMI_MANIPULATION_S = 3.2 * 3600
 """Seconds of manipulation in the TPAMI extension's dataset (3.2 h)."""
 
@@ -50,8 +55,6 @@ def extrapolate(seconds_1: float, manipulated_s: float, efficiency: float, cores
 
 
 def _generate(episodes: int, duration: float, workers: int) -> float:
-    from benchmark.paper.dataset import DatasetSpec, generate
-
     spec = DatasetSpec(tasks=("lift",), seeds=tuple(range(episodes)), duration_s=duration)
     with tempfile.TemporaryDirectory() as out:
         t0 = time.perf_counter()
@@ -60,9 +63,6 @@ def _generate(episodes: int, duration: float, workers: int) -> float:
 
 
 def _evaluate(suite_name: str, workers: int) -> float:
-    from benchmark.suites import get_suite
-    from benchmark.suites.evaluate import evaluate
-
     with tempfile.TemporaryDirectory() as cache:
         t0 = time.perf_counter()
         evaluate(get_suite(suite_name), cache=cache, progress=False, workers=workers)
@@ -75,8 +75,6 @@ def main(argv=None) -> dict:
     p.add_argument("--duration", type=float, default=5.0, help="generation episode length in seconds")
     p.add_argument("--suite", default="smoke", help="suite evaluated")
     args = p.parse_args(argv)
-    from benchmark.parallel import ONE_CORE_ENV
-    from benchmark.suites import get_suite
 
     # One worker is one core: the in-process run too (before anything renders), like the pool's workers.
     os.environ.update(ONE_CORE_ENV)

@@ -29,6 +29,14 @@ import time
 
 import numpy as np
 
+from benchmark.camera.render import render
+from benchmark.method.init import tracker_init
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
+from fsv.forces import nominal_forces
+from fsv.kinematics import AlgebraicConfig, differentiate_poses
+from fsv.track.tracker import track
+
 TARGET_FPS = 30.0
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
@@ -87,13 +95,6 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     if args.rounds < 1:
         p.error(f"--rounds must be >= 1, got {args.rounds}")
-    from benchmark.camera.render import render
-    from benchmark.method.init import tracker_init
-    from benchmark.world.scenario import Scenario
-    from benchmark.world.simulate import simulate
-    from fsv.forces import nominal_forces
-    from fsv.kinematics import AlgebraicConfig, differentiate_poses
-    from fsv.track.tracker import track
 
     with tempfile.TemporaryDirectory(prefix="fsv-perf-track-") as tmp:
         tmp = pathlib.Path(tmp)

@@ -34,7 +34,11 @@ from dataclasses import asdict
 import numpy as np
 
 from benchmark.scores.contact_forces import KEYS, contact_force_errors
+from benchmark.scores.forces import score_forces
+from benchmark.scores.frames import rot_in_true_world, tracking_in_true_world
+from benchmark.scores.learned import score_episode as score_learned
 from benchmark.scores.metrics import FORCE_METRICS, METRICS, NOMINAL_FORCE_METRICS
+from benchmark.scores.tracking import score_tracking
 from benchmark.world.grasp_plan import grasp_spec
 from benchmark.world.scenario import episode_name
 
@@ -52,9 +56,6 @@ def score_episode(episode, estimate, world_from_method=None) -> dict:
     Returns:
         ``{metric: float}`` for every name in :data:`METRICS`.
     """
-    from benchmark.scores.forces import score_forces
-    from benchmark.scores.frames import rot_in_true_world, tracking_in_true_world
-    from benchmark.scores.tracking import score_tracking
 
     tr = episode.truth
     t = score_tracking(tracking_in_true_world(estimate.tracking, world_from_method), tr, estimate.contacts)
@@ -90,7 +91,6 @@ def learned_errors(episode, estimate) -> dict:
     """The final (learned) forces over every contact frame, and Table 2's error under the paper's rule."""
     if estimate.forces is None:
         return {"learned_rel_err_pct": np.nan, "learned_mae_n": np.nan, "learned_rel_err_pct_paper": np.nan}
-    from benchmark.scores.learned import score_episode as score_learned
 
     block = score_learned(episode, estimate.forces, estimate.kinematics, estimate.contacts)
     return {"learned_rel_err_pct": block["rel_err_pct_mean"], "learned_mae_n": block["mae_n"],

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
+
+from benchmark.scores.aggregate import span
+
 COLUMNS = (
     ("box_pos_err_mm", "median", "box [mm]"),
     ("contact_err_mm_std", "median", "contact std [mm]"),
@@ -121,9 +125,6 @@ def spread_table(entries: list) -> list:
     """Lines of a Markdown table: the first method's per-episode values per grasp family (each
     episode's ``grasp_family``), median (min-max), and over people (every episode a person of its
     own in the split suites: the quartiles of the episodes)."""
-    import numpy as np
-
-    from benchmark.scores.aggregate import span
 
     if not entries or not all("grasp_family" in r for r in entries[0][1]["episodes"]):
         return []

@@ -31,9 +31,13 @@ from benchmark.scores.samples import (
     nominal_excess_n,
     sample_mask,
 )
+from benchmark.scores.samples import take_contacts as _take_con
+from benchmark.scores.samples import take_kinematics as _take_kin
+from benchmark.world.tactile import tactile_normal_forces
 from fsv import Contacts, Kinematics
 from fsv.features import grasp_features
-from fsv.forces import SOLVED, FrameStatus
+from fsv.forces import SOLVED, FrameStatus, decompose_forces
+from fsv.learn import relative_errors_pct
 
 MIN_FORCE_N = 1.0
 """Smallest true normal force whose relative error is scored, [N] (the paper's Table 2)."""
@@ -78,9 +82,6 @@ def paper_rule_errors(episode, solution, kinematics: Kinematics, contacts: Conta
         ``dropped_gap``, ``dropped_plausibility``, ``solver_failures`` (kept frames unsolved, left
         out by this rule) and ``residual_rel_max``.
     """
-    from benchmark.world.tactile import tactile_normal_forces
-    from fsv.forces import decompose_forces
-    from fsv.learn import relative_errors_pct
 
     tr, sol = episode.truth, solution
     feats = grasp_features(kinematics, contacts, episode.object_model, gravity=tr.gravity)
@@ -145,7 +146,5 @@ def model_block(model) -> dict:
 
 def _take(x, idx):
     """The frames ``idx`` of a :class:`fsv.Kinematics` or :class:`fsv.Contacts`."""
-    from benchmark.scores.samples import take_contacts as _take_con
-    from benchmark.scores.samples import take_kinematics as _take_kin
 
     return _take_kin(x, idx) if isinstance(x, Kinematics) else _take_con(x, idx)

@@ -7,6 +7,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
 from benchmark.scores.aggregate import FEW_EPISODES, STATISTICS, aggregate_all
+from benchmark.scores.leaderboard import skill_table
 from benchmark.scores.units import labelled
 
 
@@ -128,8 +129,6 @@ def report_markdown(suite, method: str, rows: list[dict], aggregates: dict, per_
         lines.append(f"| {r.name} | {_fmt(r.value)} | {_interval(r.ci)} | {r.n} | "
                      f"{'pass' if r.passed else '**FAIL**'} |")
     if baselines:
-        from benchmark.scores.leaderboard import skill_table
-
         entries = [("this method", {"aggregate": aggregates})]
         entries += [(f"baseline-{name}", {"aggregate": b["aggregate"]}) for name, b in baselines.items()]
         table = skill_table(entries, {name: b["stage"] for name, b in baselines.items()})

@@ -41,10 +41,21 @@ from benchmark.atomic import (
     swap_folder,
 )
 from benchmark.errors import BenchmarkError, EpisodeFileError
+from benchmark.fingerprint import world_fingerprint
 from benchmark.limits import checked
-from benchmark.scores.aggregate import FEW_EPISODES
+from benchmark.method import DIFFERENTIATORS, ORACLE_STAGES, MethodSpec, method_label, run_method
+from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE, check_knowledge
+from benchmark.method.protocol import DEFAULT_PROTOCOL, PROTOCOLS, check_people, check_protocol
+from benchmark.method.run import camera_input_and_knowledge
+from benchmark.parallel import check_ray_address, run_jobs
+from benchmark.scores.aggregate import FEW_EPISODES, aggregate_all
+from benchmark.scores.metrics import METRICS
+from benchmark.scores.verdict import GateResult, check_gates, junit_xml, report_markdown
 from benchmark.suites import Gate, Suite
+from benchmark.suites.options import add_baseline_argument, add_streams_argument, add_suite_arguments, suite_of
 from benchmark.world.scenario import Scenario, episode_name
+from fsv.method.baselines import BASELINE_STAGE, BASELINES
+from fsv.provenance import provenance
 from fsv.types import check_streams
 
 
@@ -78,7 +89,6 @@ def check_cache_args(args: argparse.Namespace) -> None:
 
 def episode_identity(suite: Suite, scenario: Scenario) -> dict:
     """What a cached episode is: its scenario, the suite's name and version, the world's fingerprint."""
-    from benchmark.fingerprint import world_fingerprint
 
     return {"scenario": asdict(scenario), "suite": suite.name, "version": suite.version, "world": world_fingerprint()}
 
@@ -99,9 +109,12 @@ def cached_episode(suite: Suite, scenario: Scenario, cache: pathlib.Path, stream
     Returns:
         ``(episode, rendered)``: ``rendered`` is True when it had to be made.
     """
-    from benchmark.camera.episode_file import load_episode, save_episode
-    from benchmark.camera.render import render
-    from benchmark.world.simulate import simulate
+    from benchmark.camera.episode_file import (  # lazy: MuJoCo (0.25 s) off `fsv-bench eval`'s start-up
+        load_episode,
+        save_episode,
+    )
+    from benchmark.camera.render import render  # lazy: MuJoCo (0.25 s) off `fsv-bench eval`'s start-up
+    from benchmark.world.simulate import simulate  # lazy: MuJoCo (0.25 s) off `fsv-bench eval`'s start-up
 
     path = cache / suite.name / f"{episode_name(scenario)}-{episode_key(suite, scenario)}.npz"
     if path.parent.is_dir():
@@ -127,9 +140,7 @@ def _episode_rows(job) -> list:
 
     Methods whose stages differ only after the tracker share one tracking run of the episode.
     """
-    from benchmark.method import run_method
-    from benchmark.method.run import camera_input_and_knowledge
-    from benchmark.scores.episode import episode_row
+    from benchmark.scores.episode import episode_row  # lazy: MuJoCo (0.25 s) off `fsv-bench eval`'s start-up
 
     suite, sc, cache, specs, init_scale, observer, streams = job
     t0 = time.perf_counter()
@@ -166,7 +177,6 @@ def evaluate(suite: Suite, *, spec=None, gates=None, cache: pathlib.Path | None 
         The content of ``scores.json`` (``episodes``, ``aggregate``, ``per_task``, ``gates``,
         ``verdict``, ``rendered`` episodes, ``method`` and ``stages``, ``provenance``).
     """
-    from benchmark.method import MethodSpec
 
     return evaluate_many(suite, [spec or MethodSpec()], gates=gates, cache=cache, progress=progress,
                          workers=workers, init_scale=init_scale, ray_address=ray_address, observer=observer,
@@ -190,7 +200,6 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
     Returns:
         One ``scores.json`` content per method, in the order of ``specs``.
     """
-    from benchmark.method import method_label
 
     specs = list(specs)
     for spec in specs:
@@ -200,12 +209,11 @@ def evaluate_many(suite: Suite, specs, *, gates=None, cache: pathlib.Path | None
     t0 = time.perf_counter()
     bar = None
     if progress:
-        from tqdm import tqdm
+        from tqdm import tqdm  # lazy: tqdm (30 ms) off `fsv-bench`'s start-up
 
         bar = tqdm(total=len(suite.scenarios), desc=f"eval {suite.name}", unit="episode", leave=False)
     streams = check_streams([*streams, *(s for spec in specs for s in spec.streams)])
     jobs = [(suite, sc, cache, specs, init_scale, observer, streams) for sc in suite.scenarios]
-    from benchmark.parallel import run_jobs
 
     per_episode = [None] * len(jobs)
     for i, rows in run_jobs(_episode_rows, jobs, workers=workers, ray_address=ray_address):
@@ -225,9 +233,6 @@ def baseline_specs(knowledge: str | None = None, protocol: str | None = None) ->
     """``{name: MethodSpec}`` of every stage's trivial baseline (:mod:`fsv.method.baselines`), told
     what ``knowledge`` and ``protocol`` say (default: the defaults). Under the ``blind`` protocol
     the grip line, which is a person's calibration and nothing else, is left out."""
-    from benchmark.method import MethodSpec
-    from benchmark.method.protocol import DEFAULT_PROTOCOL
-    from fsv.method.baselines import BASELINES
 
     extra = {} if knowledge is None else {"knowledge": knowledge}
     protocol = DEFAULT_PROTOCOL if protocol is None else protocol
@@ -239,7 +244,6 @@ def baselines_block(names, documents) -> dict:
     """The ``baselines`` entry of ``scores.json``: per baseline, the stage it stands in for and its
     aggregates on the same episodes (what :func:`benchmark.scores.leaderboard.skill_table` measures
     a method's skill against)."""
-    from fsv.method.baselines import BASELINE_STAGE
 
     return {name: {"stage": BASELINE_STAGE[name], "aggregate": doc["aggregate"]} for name, doc in zip(names, documents)}
 
@@ -256,10 +260,6 @@ def scores_document(suite: Suite, rows: list, gates, *, method: str, stages: dic
         method_spec: How the method was named (a ``MethodSpec`` as a dict), or None for estimates from files.
         seconds: Wall time of the whole evaluation.
     """
-    from benchmark.scores.aggregate import aggregate_all
-    from benchmark.scores.metrics import METRICS
-    from benchmark.scores.verdict import check_gates
-    from fsv.provenance import provenance
 
     aggregates = aggregate_all(rows, METRICS)
     results = check_gates(gates, aggregates)
@@ -287,8 +287,6 @@ def strict(obj):
 def write_outputs(scores: dict, suite: Suite, out: pathlib.Path, pictures=()) -> None:
     """Writes ``scores.json``, ``report.md`` and ``junit.xml`` (and ``pictures/``: the given files)
     into a temporary folder, then swaps it in."""
-    from benchmark.scores.metrics import METRICS
-    from benchmark.scores.verdict import GateResult, junit_xml, report_markdown
 
     results = [GateResult(**{**g, "ci": tuple(g["ci"]) if g["ci"] is not None else None}) for g in scores["gates"]]
     out = pathlib.Path(out)
@@ -321,7 +319,6 @@ def load_gates(path) -> tuple:
             non-empty list, an unknown or missing key, a value of the wrong type, a non-finite
             limit, an unknown metric, operator or statistic).
     """
-    from benchmark.scores.metrics import METRICS
 
     what = 'a non-empty JSON list of {"metric", "op", "limit"[, "statistic"]}'
     try:
@@ -357,8 +354,6 @@ def load_gates(path) -> tuple:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.options import add_baseline_argument, add_streams_argument, add_suite_arguments
-
     add_suite_arguments(p, out_help="output folder (scores.json, report.md, junit.xml)")
     add_baseline_argument(p)
     add_streams_argument(p)
@@ -370,7 +365,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, internal_model: bool = True) -> None:
     """``--method``, ``--tracker``, ``--differentiator``, ``--forces``, ``--internal``, ``--internal-model`` [, ``--oracle``]."""
-    from benchmark.method import DIFFERENTIATORS, ORACLE_STAGES
 
     g = p.add_argument_group("the method (default: the reference; replace a stage by module:attribute)")
     g.add_argument("--method", default=None, metavar="NAME|MODULE:ATTR",
@@ -395,7 +389,6 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, intern
 
 def add_protocol_argument(p) -> None:
     """``--protocol blind|calibrated``: what the method is told of the person."""
-    from benchmark.method.protocol import DEFAULT_PROTOCOL, PROTOCOLS, check_protocol
 
     p.add_argument("--protocol", default=DEFAULT_PROTOCOL, metavar="|".join(PROTOCOLS), type=checked(check_protocol),
                    help="what the method is told of the person: blind (nothing, the paper's protocol) or "
@@ -405,7 +398,6 @@ def add_protocol_argument(p) -> None:
 
 def add_knowledge_argument(p) -> None:
     """``--knowledge lab|exact|...``: what the method is told of the hand, the box and the camera."""
-    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE, check_knowledge
 
     p.add_argument("--knowledge", default=DEFAULT_KNOWLEDGE, metavar="|".join(KNOWLEDGE), type=checked(check_knowledge),
                    help="what the method is told of the hand, the box and the camera: lab (measured with a ruler, "
@@ -416,9 +408,6 @@ def add_knowledge_argument(p) -> None:
 
 def spec_from_args(args: argparse.Namespace):
     """The :class:`benchmark.method.MethodSpec` of the command line, loaded and checked (raises ValueError)."""
-    from benchmark.method import MethodSpec
-    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
-    from benchmark.method.protocol import DEFAULT_PROTOCOL
 
     spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=args.differentiator,
                       forces=args.forces, internal=args.internal, internal_model=getattr(args, "internal_model", None),
@@ -435,7 +424,6 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
     ``observer`` sees every estimate (:func:`evaluate_many`); ``pictures(scores, gates)`` returns
     files to write into ``DIR/pictures/`` (the commands' ``--pictures``).
     """
-    from benchmark.suites.options import suite_of
 
     suite = suite_of(args)
     gates = load_gates(args.gates) if args.gates else None
@@ -444,12 +432,9 @@ def run(args: argparse.Namespace, *, observer=None, pictures=None) -> dict:
     check_out(args.out)
     check_cache_args(args)
     spec = spec_from_args(args)
-    from benchmark.method.protocol import check_people
 
     check_people((sc.user for sc in suite.scenarios), spec.protocol)
     if args.ray_address is not None:
-        from benchmark.parallel import check_ray_address
-
         check_ray_address(args.ray_address)
     extra = {} if args.no_baselines else baseline_specs(spec.knowledge, spec.protocol)
     documents = evaluate_many(suite, [spec, *extra.values()], gates=gates, cache=args.cache, progress=not args.quiet,

@@ -19,9 +19,12 @@ import argparse
 import pathlib
 import shutil
 
-from benchmark.atomic import staging_folder, swap_folder
+from benchmark.atomic import check_out, staging_folder, swap_folder
 from benchmark.method import MethodSpec
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE
+from benchmark.scores.leaderboard import leaderboard_markdown
+from benchmark.suites.evaluate import GateFailure, baselines_block, check_cache_args, evaluate_many, write_outputs
+from benchmark.suites.options import add_suite_arguments, suite_of
 from fsv.method.baselines import BASELINE_STAGE, BASELINES
 
 BASELINE_NAMES = tuple(BASELINES)
@@ -46,17 +49,10 @@ a calibration, so it is run calibrated)."""
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.options import add_suite_arguments
-
     add_suite_arguments(p, out_help="output folder (leaderboard.md, <variant>/)")
 
 
 def run(args: argparse.Namespace) -> list:
-    from benchmark.atomic import check_out
-    from benchmark.scores.leaderboard import leaderboard_markdown
-    from benchmark.suites.evaluate import GateFailure, baselines_block, check_cache_args, evaluate_many, write_outputs
-    from benchmark.suites.options import suite_of
-
     suite = suite_of(args)
     if args.workers < 1:
         raise ValueError(f"--workers {args.workers}: need at least 1 worker process")

@@ -8,7 +8,7 @@ import argparse
 import pathlib
 
 from benchmark.limits import MAX_WORKERS, check_grid, folder, integer, parsed
-from benchmark.suites.registry import SUITES
+from benchmark.suites.registry import SUITES, get_suite
 from fsv.types import STREAMS, check_streams
 
 
@@ -44,7 +44,6 @@ def suite_of(args: argparse.Namespace):
     ``--grip-control`` applied where the command has them (``benchmark.suites.registry.get_suite``;
     raises its ValueError, and ``benchmark.limits.RangeError`` for a suite of more than
     ``benchmark.limits.MAX_EPISODES`` episodes)."""
-    from benchmark.suites.registry import get_suite
 
     suite = get_suite(args.suite, getattr(args, "sensor", None), getattr(args, "hand_surface", None),
                       getattr(args, "grip_control", None))

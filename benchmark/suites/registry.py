@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+import numpy as np
+
 from benchmark.suites.splits import split_scenarios
 from benchmark.suites.suite import Gate, Suite
-from benchmark.world.scenario import Scenario
+from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES, Scenario
 
 SMOKE = Suite(
     name="smoke",
@@ -61,7 +65,6 @@ STANDARD_DRAW_SEED = 2026  # seeds the masses of the standard suite
 def _grid_scenarios(first_seed: int, draw_seed: int, count: int = 48) -> tuple:
     """``count`` ten-second episodes: task i mod 12, user i mod 5, grasp (i div 5) mod 4, a mass
     drawn uniformly from the six by a generator seeded with ``draw_seed``, seed ``first_seed + i``."""
-    import numpy as np
 
     masses = np.random.default_rng(draw_seed).integers(0, 6, count)
     return tuple(Scenario(task=STANDARD_TASKS[i % 12], user=i % 5, grasp=(i // 5) % 4, mass=int(masses[i]),
@@ -199,10 +202,8 @@ def get_suite(name: str, sensor: str | None = None, hand_surface: str | None = N
     """
     if name not in SUITES:
         raise ValueError(f"--suite {name!r}: no such suite; accepted: {', '.join(SUITES)}")
-    from dataclasses import replace
 
-    from benchmark.camera.sensor import SENSORS
-    from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES
+    from benchmark.camera.sensor import SENSORS  # lazy: numba (0.2 s) off `fsv-bench sweep`'s start-up
 
     overrides = (("sensor", "--sensor", sensor, SENSORS, "Seen by the {} sensor preset."),
                  ("hand_surface", "--hand-surface", hand_surface, HAND_SURFACES, "The hand drawn as its {}."),

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from benchmark.world.people import named_count
 from benchmark.world.scenario import Scenario
 
 
@@ -60,8 +61,7 @@ SPLITS = {
 
 def split_of(scenario: Scenario) -> str | None:
     """The split holding the scenario's person, grasp and view; None if they are not all in one."""
-    from benchmark.world.assets import grasps
-    from benchmark.world.people import named_count
+    from benchmark.world.assets import grasps  # lazy: MuJoCo (0.25 s) off `fsv-bench eval`'s start-up
 
     if scenario.user < named_count() and scenario.grasp < len(grasps()) and scenario.view == 0:
         return "cohort"

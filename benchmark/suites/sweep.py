@@ -24,10 +24,13 @@ import math
 import pathlib
 import shutil
 
-from benchmark.atomic import staging_folder, swap_folder
+import numpy as np
+
+from benchmark.atomic import check_out, save_figure, staging_folder, swap_folder
 from benchmark.errors import ScenarioError
 from benchmark.limits import MAX_EPISODES, MAX_INIT_SCALE, check_grid
-from benchmark.world.scenario import MAX_FPS, MAX_NOISE_M
+from benchmark.suites import Suite, get_suite
+from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES, MAX_FPS, MAX_NOISE_M, Scenario
 
 AXES = {
     "noise": ("noise_m", float, "depth noise std [m]"),
@@ -49,8 +52,12 @@ PLOTTED = ("box_pos_err_mm", "contact_err_mm_std", "acc_err_rms", "net_force_err
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    from benchmark.suites.evaluate import add_method_arguments
-    from benchmark.suites.options import add_suite_arguments
+    from benchmark.suites.evaluate import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        add_method_arguments,
+    )
+    from benchmark.suites.options import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        add_suite_arguments,
+    )
 
     add_suite_arguments(p, out_help="output folder (sweep.json, sweep.md, sweep.png)", sensor=False)
     p.add_argument("--axis", required=True, help=f"one of {', '.join(AXES)}")
@@ -95,15 +102,12 @@ def parse_values(axis: str, text: str) -> list:
                 raise ValueError(f"--values {text!r}: {v!r} is outside the {axis} axis's range; accepted: numbers "
                                  f"from {low:g} to {high:g}{' ' + unit if unit else ''}")
     if axis in ("hand_surface", "grip_control"):
-        from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES
-
         accepted, what = (HAND_SURFACES, "a hand surface") if axis == "hand_surface" else (GRIP_CONTROLS, "a grip control")
         for v in values:
             if v not in accepted:
                 raise ValueError(f"--values {text!r}: {v!r} is not {what}; accepted: {', '.join(accepted)}")
     if axis == "mass":
-        from benchmark.world.assets import validate
-        from benchmark.world.scenario import Scenario
+        from benchmark.world.assets import validate  # lazy: MuJoCo (0.25 s) off `fsv-bench sweep`'s start-up
 
         for v in values:
             try:
@@ -111,7 +115,9 @@ def parse_values(axis: str, text: str) -> list:
             except ScenarioError as e:
                 raise ValueError(f"--values {text!r}: {v!r} is not a mass index: {e}") from None
     if axis == "knowledge":
-        from benchmark.method.knowledge import check_knowledge
+        from benchmark.method.knowledge import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+            check_knowledge,
+        )
 
         for v in values:
             try:
@@ -119,7 +125,9 @@ def parse_values(axis: str, text: str) -> list:
             except ValueError as e:
                 raise ValueError(f"--values {text!r}: {v!r} is not a knowledge: {e}") from None
     if axis == "protocol":
-        from benchmark.method.protocol import check_protocol
+        from benchmark.method.protocol import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+            check_protocol,
+        )
 
         for v in values:
             try:
@@ -132,8 +140,7 @@ def parse_values(axis: str, text: str) -> list:
 def swept_suite(suite, axis: str, value):
     """The suite with every scenario moved to ``value`` along ``axis`` (itself for the ``init`` and
     ``knowledge`` and ``protocol`` axes, which change what the method is given)."""
-    from benchmark.suites import Suite
-    from benchmark.world.assets import validate
+    from benchmark.world.assets import validate  # lazy: MuJoCo (0.25 s) off `fsv-bench sweep`'s start-up
 
     field = AXES[axis][0]
     if field is None:
@@ -147,13 +154,10 @@ def swept_suite(suite, axis: str, value):
 
 def plot_sweep(axis: str, values: list, results: list, path) -> pathlib.Path:
     """Median [95 % interval] of each metric of :data:`PLOTTED` against the axis, one panel each."""
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench sweep`'s start-up
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from benchmark.atomic import save_figure
+    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench sweep`'s start-up
 
     fig, axes = plt.subplots(2, 3, figsize=(12, 6.5))
     categorical = AXES[axis][1] is str
@@ -186,7 +190,6 @@ def _capped(v, lo, hi) -> tuple:
     """Median and interval bounds with their infinite values (episodes counted at their worst,
     docs/suites.md) replaced by a cap 15 % above the largest finite one, and which medians were
     capped: ``(v, lo, hi, beyond)``."""
-    import numpy as np
 
     both = np.concatenate([v, lo, hi])
     finite = both[np.isfinite(both)]
@@ -197,12 +200,21 @@ def _capped(v, lo, hi) -> tuple:
 
 
 def run(args: argparse.Namespace) -> dict:
-    from benchmark.atomic import check_out
-    from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
-    from benchmark.method.protocol import DEFAULT_PROTOCOL
-    from benchmark.suites import get_suite
-    from benchmark.suites.evaluate import check_cache_args, evaluate, spec_from_args, strict
-    from fsv.provenance import provenance
+    from benchmark.method.knowledge import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        DEFAULT_KNOWLEDGE,
+    )
+    from benchmark.method.protocol import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        DEFAULT_PROTOCOL,
+    )
+    from benchmark.suites.evaluate import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        check_cache_args,
+        evaluate,
+        spec_from_args,
+        strict,
+    )
+    from fsv.provenance import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        provenance,
+    )
 
     suite = get_suite(args.suite)
     values = parse_values(args.axis, args.values)
@@ -216,7 +228,9 @@ def run(args: argparse.Namespace) -> dict:
     check_out(args.out)
     check_cache_args(args)
     spec = spec_from_args(args)
-    from benchmark.method.protocol import check_people
+    from benchmark.method.protocol import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        check_people,
+    )
 
     for protocol in (values if args.axis == "protocol" else [spec.protocol]):
         check_people((sc.user for sc in suite.scenarios), protocol)
@@ -227,7 +241,9 @@ def run(args: argparse.Namespace) -> dict:
         results.append(evaluate(s, spec=told, cache=args.cache, progress=not args.quiet, workers=args.workers,
                                 init_scale=scale))
         print(f"  {args.axis} = {value}: done ({results[-1]['seconds']:.0f} s)")
-    from benchmark.method.run import method_label
+    from benchmark.method.run import (  # lazy: numba, clarabel, scipy.sparse, scipy.special (0.25 s) off `fsv-bench sweep`'s start-up
+        method_label,
+    )
 
     # the suite and the method swept (not the first value's: "dev", not "dev-noise-0.005"; the method
     # without the knowledge or protocol the sweep sets per value)

@@ -27,6 +27,7 @@ from benchmark.world.hand import hand_mjcf, pad_geoms
 from benchmark.world.hand import hand_model as _hand_model_of
 from benchmark.world.people import person, users  # noqa: F401 (users: re-exported)
 from benchmark.world.scenario import Scenario
+from benchmark.world.tasks import TASKS
 from fsv import HandModel, ObjectModel
 from fsv.hand import finger_of_segment
 
@@ -82,7 +83,6 @@ def validate(scenario: Scenario) -> None:
     Raises:
         ScenarioError: Naming the bad value and the accepted ones.
     """
-    from benchmark.world.tasks import TASKS
 
     if scenario.task not in TASKS:
         raise ScenarioError(f"unknown task {scenario.task!r}; accepted: {', '.join(TASKS)}")

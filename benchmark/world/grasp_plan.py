@@ -20,19 +20,22 @@ training set's choices are stored beside the named plans (:data:`STORED_DRAWN`).
 
 from __future__ import annotations
 
+import argparse
 import functools
 import hashlib
 import importlib.resources
 import json
 import math
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from benchmark.atomic import write_text
 from benchmark.errors import ScenarioError, SimulationError
 from benchmark.world import bounded_lsq, physics
-from benchmark.world.assets import build_world, grasps, user_of
+from benchmark.world.assets import build_world, grasps, user_of, users
 from benchmark.world.grasp_families import draw_candidate
 from benchmark.world.scenario import Scenario
 
@@ -352,7 +355,6 @@ def _drawn_entry(pair: tuple) -> tuple:
 def solve_all_plans(workers: int = 1) -> dict:
     """Solves every named (user, grasp) plan and every :data:`STORED_DRAWN` choice from scratch:
     the content of ``sim_assets/grasp_plans.json``."""
-    from benchmark.world.assets import users
 
     plans = {}
     for u in range(len(users())):
@@ -361,8 +363,6 @@ def solve_all_plans(workers: int = 1) -> dict:
             plans[f"{problem.user_name}/{problem.grasp_name}"] = {"fingerprint": problem.fingerprint,
                                                                   "x": [float(v) for v in problem.solve()]}
     if workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
         with ProcessPoolExecutor(workers) as pool:
             plans.update(pool.map(_drawn_entry, STORED_DRAWN))
     else:
@@ -384,9 +384,6 @@ def plan_grasp(scenario: Scenario) -> GraspPlan:
 
 def main(argv=None) -> int:
     """``python -m benchmark.world.grasp_plan --write-plans``: re-solves and stores every grasp plan."""
-    import argparse
-
-    from benchmark.atomic import write_text
 
     parser = argparse.ArgumentParser(prog="python -m benchmark.world.grasp_plan", description=main.__doc__)
     parser.add_argument("--write-plans", action="store_true", help="solve every plan and write sim_assets/" + PLANS_FILE)

@@ -16,9 +16,11 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+from tqdm import tqdm
 
 from benchmark.world.living import LivingGrip
 from benchmark.world.people import person
+from benchmark.world.simulate import simulate
 from fsv.linalg import norm
 
 STILL_ACC = 0.3
@@ -193,12 +195,9 @@ def _best_lag(grip: np.ndarray, load: np.ndarray, mask: np.ndarray, max_lag: int
 def suite_humanness(suite, progress: bool = True) -> list:
     """``(scenario, EpisodeHumanness)`` for every episode of a suite (simulated, not rendered), with the
     person's drawn margin and the trial's."""
-    from benchmark.world.simulate import simulate
 
     scenarios = suite.scenarios
     if progress:
-        from tqdm import tqdm
-
         scenarios = tqdm(scenarios, desc=f"simulate {suite.name}", unit="episode", leave=False)
     rows = []
     for sc in scenarios:

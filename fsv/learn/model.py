@@ -7,6 +7,7 @@ import os
 import tempfile
 import zipfile
 from dataclasses import asdict
+from importlib.resources import files
 
 import numpy as np
 
@@ -15,6 +16,7 @@ from fsv.errors import InputError, one_line
 from fsv.features import Features
 from fsv.learn.config import GRIP_INPUTS, LearnConfig
 from fsv.learn.nets import forward
+from fsv.provenance import provenance
 
 FORMAT = "fsv-internal-forces"
 VERSION = 4  # versions 1 and 2 carried no digest; 3 was a torch archive. None of them is read
@@ -128,7 +130,6 @@ class InternalForceModel:
         The metadata gains ``provenance`` (:func:`fsv.provenance.provenance`) unless it has one
         already (a model read from a file keeps the provenance of the environment that wrote it).
         """
-        from fsv.provenance import provenance
 
         metadata = dict(self.metadata)
         if "provenance" not in metadata:
@@ -296,6 +297,5 @@ def default_model(*, blind: bool = False) -> InternalForceModel:
     """
     if not isinstance(blind, bool):
         raise InputError(f"default_model: blind must be True or False, got {blind!r}")
-    from importlib.resources import files
 
     return load(files("fsv").joinpath("data", SHIPPED_MODELS[blind]))

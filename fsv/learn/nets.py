@@ -16,7 +16,7 @@ def _targets(internal: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.n
 
 def _mlp(n_in: int, hidden: tuple, n_out: int, gen):
     """A torch MLP (sigmoid hidden layers, linear output) with weights drawn from ``gen``."""
-    import torch
+    import torch  # lazy: torch (1.2 s) off `import fsv`
 
     layers, prev = [], n_in
     for h in hidden:
@@ -33,7 +33,7 @@ def _mlp(n_in: int, hidden: tuple, n_out: int, gen):
 
 
 def _rprop(net, x, loss_fn, config: LearnConfig, on_epoch=None) -> float:
-    import torch
+    import torch  # lazy: torch (1.2 s) off `import fsv`
 
     opt = torch.optim.Rprop(net.parameters(), lr=config.lr, etas=config.etas, step_sizes=config.step_sizes, foreach=False)
     loss = None
@@ -50,7 +50,7 @@ def _rprop(net, x, loss_fn, config: LearnConfig, on_epoch=None) -> float:
 
 def _layers(net) -> list:
     """The (weight (out, in), bias (out,)) pairs of a torch MLP's linear layers, as float64 arrays."""
-    import torch
+    import torch  # lazy: torch (1.2 s) off `import fsv`
 
     return [(m.weight.detach().numpy().copy(), m.bias.detach().numpy().copy())
             for m in net if isinstance(m, torch.nn.Linear)]

@@ -39,7 +39,7 @@ def train(data: TrainingSet, config: LearnConfig = LearnConfig(), *, finger_name
     x_std = np.where(x_std > 1e-12, x_std, 1.0)
     l2, shares = _targets(data.internal, data.active)
     l2_mean, l2_std = float(l2.mean()), float(l2.std()) if l2.std() > 1e-12 else 1.0
-    import torch
+    import torch  # lazy: torch (1.2 s) off `import fsv`
 
     threads = torch.get_num_threads()
     torch.set_num_threads(1)

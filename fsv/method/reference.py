@@ -12,7 +12,7 @@ import numpy as np
 from fsv.errors import InputError
 from fsv.forces import ForceSettings, ForceSolution, nominal_forces
 from fsv.kinematics import AlgebraicConfig, CentralConfig, GaussianConfig, differentiate_poses
-from fsv.learn import AMOUNT_SMOOTHING_S
+from fsv.learn import AMOUNT_SMOOTHING_S, default_model, learned_forces
 from fsv.track.tracker import TrackerConfig, Tracking, track
 from fsv.types import Contacts, Kinematics, Poses
 
@@ -102,7 +102,6 @@ class LearnedInternalForces:
     def model_for(self, grip=None):
         """The model this stage uses for a person with grip calibration ``grip`` (None: nothing is
         known of the person): :attr:`model`, or the protocol's shipped model."""
-        from fsv.learn import default_model
 
         return self.model if self.model is not None else default_model(blind=grip is None)
 
@@ -110,7 +109,6 @@ class LearnedInternalForces:
         """The final forces; ``grip`` is the person's :class:`fsv.grip.GripCalibration` (or None:
         nothing is known of the person), used by a model trained with grip inputs and choosing the
         shipped model when :attr:`model` is None."""
-        from fsv.learn import learned_forces  # torch is loaded only when this stage runs
 
         model = self.model_for(grip)
         return learned_forces(model, kinematics, contacts, object_model, gravity=gravity, settings=self.settings,

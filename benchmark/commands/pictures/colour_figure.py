@@ -31,10 +31,26 @@ import dataclasses
 import io
 import pathlib
 
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.colors import to_rgb
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+from PIL import Image
 
 from benchmark.atomic import write_bytes
+from benchmark.camera.annotations import SEGMENTATION_CLASSES, segmentation
+from benchmark.camera.appearance import people_with_tone
+from benchmark.camera.colour import render_colour
+from benchmark.camera.colour_sensor import colour_preset
+from benchmark.camera.keypoints import DIGITS
+from benchmark.camera.render import render
+from benchmark.commands.pictures.depth_preview import colorize
 from benchmark.errors import BenchmarkError
+from benchmark.world.scenario import Scenario
+from benchmark.world.simulate import simulate
+from benchmark.world.tasks.shake import CENTRE_M
 
 FILES = ("colour_depth.png", "colour_labels.png", "colour_blur.png")
 """The pictures :func:`write_colour_figures` writes, in order."""
@@ -84,14 +100,12 @@ SKELETON = tuple((0 if j == 0 else 1 + 4 * d + j - 1, 1 + 4 * d + j) for d in ra
 
 def person_of(shot: Shot) -> int:
     """The user index of a shot: the first drawn user of its Monk tone."""
-    from benchmark.camera.appearance import people_with_tone
 
     return people_with_tone(shot.tone, 1, start=FIRST_DRAWN_USER)[0]
 
 
 def scenario_of(shot: Shot, duration_s: float, fps: float = 30.0):
     """The :class:`benchmark.world.scenario.Scenario` of a shot."""
-    from benchmark.world.scenario import Scenario
 
     return Scenario(task=shot.task, user=person_of(shot), grasp=shot.grasp, view=shot.view, seed=shot.seed,
                     duration_s=float(duration_s), fps=float(fps))
@@ -99,8 +113,6 @@ def scenario_of(shot: Shot, duration_s: float, fps: float = 30.0):
 
 def rendered(scenario):
     """The scenario simulated and rendered with both streams and their labels."""
-    from benchmark.camera.render import render
-    from benchmark.world.simulate import simulate
 
     return render(simulate(scenario), streams=("depth", "colour"))
 
@@ -131,7 +143,6 @@ def shaking_frames(truth) -> np.ndarray:
     """The frames of a ``shake`` from the box's first reaching the oscillation's centre
     (:data:`benchmark.world.tasks.shake.CENTRE_M` above its start) while held, to the last held
     frame: the oscillation, without the lift before it."""
-    from benchmark.world.tasks.shake import CENTRE_M
 
     held = np.asarray(truth.held, bool)
     up = held & (truth.box_pos[:, 2] - truth.box_pos[0, 2] >= CENTRE_M)
@@ -183,9 +194,6 @@ def crop_of(label_image: np.ndarray, uv: np.ndarray, margin: float = 0.2, min_px
 def mask_rgba(label_image: np.ndarray) -> np.ndarray:
     """The segmentation as a translucent RGBA image, (H, W, 4) float in [0, 1]
     (:data:`SEGMENT_COLOURS`, :data:`MASK_ALPHA`)."""
-    from matplotlib.colors import to_rgb
-
-    from benchmark.camera.annotations import segmentation
 
     seg = segmentation(label_image)
     out = np.zeros(seg.shape + (4,))
@@ -211,8 +219,6 @@ def draw_keypoints(ax, uv: np.ndarray, visibility: np.ndarray, size: float = 5.0
 
 
 def _depth_rgb(depth_m: np.ndarray) -> np.ndarray:
-    from benchmark.commands.pictures.depth_preview import colorize
-
     return colorize(depth_m)
 
 
@@ -236,8 +242,6 @@ picture under 400 kB, within 7 codes of the RGB rendering at 99 % of the pixels 
 
 def _save(fig, path) -> pathlib.Path:
     """Saves a figure as a palette PNG (:data:`PALETTE_COLOURS`), atomically."""
-    import matplotlib.pyplot as plt
-    from PIL import Image
 
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=fig.dpi)
@@ -255,12 +259,6 @@ def _title(shot: Shot, episode, k: int) -> str:
 
 
 def _legend(fig) -> None:
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-
-    from benchmark.camera.annotations import SEGMENTATION_CLASSES
-    from benchmark.camera.keypoints import DIGITS
-
     handles = [Patch(color=SEGMENT_COLOURS[c], alpha=0.6, label=name) for c, name in SEGMENTATION_CLASSES.items()]
     handles += [Line2D([], [], color=c, marker="o", mec="black", ls="-", label=d) for d, c in zip(DIGITS, DIGIT_COLOURS)]
     handles += [Line2D([], [], color="white", marker="o", mec="black", ls="", label="wrist"),
@@ -276,10 +274,8 @@ def figure_colour_depth(shown: list, path) -> pathlib.Path:
         shown: ``(shot, episode, frame)`` per person.
         path: Where to write.
     """
-    import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(len(shown), 2, figsize=(8.4, 3.3 * len(shown)), dpi=100, squeeze=False)
     for row, (shot, ep, k) in zip(axes, shown):
@@ -302,10 +298,8 @@ def figure_labels(shown: list, path) -> pathlib.Path:
         shown: ``(shot, episode, frame)`` per person.
         path: Where to write.
     """
-    import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(len(shown), 2, figsize=(8.0, 4.0 * len(shown) + 0.7), dpi=100, squeeze=False)
     for row, (shot, ep, k) in zip(axes, shown):
@@ -342,10 +336,8 @@ def figure_blur(shot: Shot, episode, sharp, k: int, path) -> pathlib.Path:
         k: The frame.
         path: Where to write.
     """
-    import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     labels = episode.annotations.streams["colour"]
     uv = labels.keypoints_uv
@@ -380,8 +372,6 @@ def write_colour_figures(out_dir, *, shots: tuple = SHOTS, blur: Shot = BLUR_SHO
     Returns:
         The paths written, in :data:`FILES` order.
     """
-    from benchmark.camera.colour import render_colour
-    from benchmark.camera.colour_sensor import colour_preset
 
     if not shots:
         raise BenchmarkError("write_colour_figures needs at least one shot")

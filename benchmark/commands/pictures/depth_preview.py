@@ -39,7 +39,7 @@ def colorize(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0) -> n
     Returns:
         RGB images, shape (..., H, W, 3), uint8; missing pixels black.
     """
-    from matplotlib import colormaps
+    from matplotlib import colormaps  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     if not far_m > near_m:
         raise BenchmarkError(f"preview range needs far_m > near_m, got {near_m}, {far_m}")
@@ -137,7 +137,7 @@ def write_colour_preview(rgb: np.ndarray, fps: float, out_dir, num: int = 6) -> 
     rgb = np.asarray(rgb)
     if rgb.ndim != 4 or rgb.shape[0] == 0 or rgb.shape[3] != 3 or rgb.dtype != np.uint8:
         raise BenchmarkError(f"a colour video (T, H, W, 3) uint8 with T >= 1 is needed, got {rgb.shape} {rgb.dtype}")
-    from PIL import Image
+    from PIL import Image  # lazy: PIL (10 ms) off `fsv-bench`'s start-up
 
     out_dir = pathlib.Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -162,7 +162,7 @@ def colour_bar(width: int, near_m: float = 0.15, far_m: float = 1.0) -> np.ndarr
     The gradient spans the middle of the strip from ``near_m`` to ``far_m`` with ticks every 0.1 m,
     and a black swatch labels "no measurement".
     """
-    from PIL import Image, ImageDraw
+    from PIL import Image, ImageDraw  # lazy: PIL (10 ms) off `fsv-bench`'s start-up
 
     img = np.full((COLOUR_BAR_HEIGHT, width, 3), 255, np.uint8)
     x0, x1 = width // 4, 3 * width // 4
@@ -184,7 +184,7 @@ def colour_bar(width: int, near_m: float = 0.15, far_m: float = 1.0) -> np.ndarr
 def palette() -> np.ndarray:
     """The pictures' palette, shape (256, 3), uint8: :data:`_LABEL_GREYS` (black first), then
     :data:`DEPTH_LEVELS` levels of the depth map from near to far."""
-    from matplotlib import colormaps
+    from matplotlib import colormaps  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     lo, hi = TURBO_SPAN
     out = np.empty((256, 3), dtype=np.uint8)
@@ -195,7 +195,7 @@ def palette() -> np.ndarray:
 
 def _indexed(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0):
     """A depth image as a palette image over :func:`palette` (index 0 black: no measurement)."""
-    from PIL import Image
+    from PIL import Image  # lazy: PIL (10 ms) off `fsv-bench`'s start-up
 
     d = np.asarray(depth_m, dtype=np.float32)
     level = np.rint(np.clip((d - near_m) / (far_m - near_m), 0, 1) * (DEPTH_LEVELS - 1)).astype(np.uint8)
@@ -208,7 +208,7 @@ def _indexed(depth_m: np.ndarray, near_m: float = 0.15, far_m: float = 1.0):
 
 def _on_palette(rgb: np.ndarray):
     """An RGB picture as a palette image over :func:`palette`, each pixel its nearest entry."""
-    from PIL import Image
+    from PIL import Image  # lazy: PIL (10 ms) off `fsv-bench`'s start-up
 
     ref = Image.new("P", (1, 1))
     ref.putpalette(palette().ravel().tolist())
@@ -222,7 +222,7 @@ def _atomic(path: pathlib.Path, write) -> None:
 
 def _stamp(img: np.ndarray, text: str) -> np.ndarray:
     """Writes `text` in white on a black box at the top left of an RGB image."""
-    from PIL import Image, ImageDraw
+    from PIL import Image, ImageDraw  # lazy: PIL (10 ms) off `fsv-bench`'s start-up
 
     pil = Image.fromarray(img)
     draw = ImageDraw.Draw(pil)

@@ -26,10 +26,10 @@ def plot_fig4(truth: Truth, kinematics: dict, path: str | os.PathLike, title: st
     Returns:
         The written path.
     """
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     if panels is not None and len(panels) != 6:
         raise ScenarioError(f"plot_fig4 needs 6 panels (acc x, y, z, gyro x, y, z), got {len(panels)}")

@@ -67,10 +67,10 @@ def plot_fig5(solution: ForceSolution, truth: Truth, rot: np.ndarray, path, titl
     (:func:`robust_limits`); a value beyond them is drawn as a triangle at the edge, and the number of
     such values is noted in the panel. Written atomically as a PNG.
     """
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     t = truth.t
     fig, axes = plt.subplots(3, 1, figsize=(13, 10), sharex=True)
@@ -113,7 +113,7 @@ def _finger_panel(ax, t, names, fn_true, fn_nom, fn_learn, colors) -> None:
     """Per finger: the true normal force (solid), the nominal (dashed) and the learned (dotted)."""
     lim = robust_limits(fn_true, fn_nom, *(() if fn_learn is None else (fn_learn,)))
     clipped = 0
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     for k, name in enumerate(names):
         c = colors[k % len(colors)]

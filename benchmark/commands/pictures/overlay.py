@@ -45,10 +45,10 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
     Returns:
         The path written.
     """
-    import matplotlib
+    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     T = depth.num_frames
     idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
@@ -116,7 +116,7 @@ def _crop(calib: Calibration, tracking, object_model: ObjectModel, hand_model: H
 
 def _draw_truth(ax, calib: Calibration, truth: Truth, object_model: ObjectModel, hand_model: HandModel, i: int) -> None:
     """The true box (gold dashed), hand (faint gold) and contact points (magenta plus signs) of frame ``i``."""
-    from matplotlib.collections import LineCollection
+    from matplotlib.collections import LineCollection  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     corners = truth.box_pos[i] + (_SIGNS * object_model.half_extents) @ truth.box_rot[i].T
     uv = _project(calib, corners)
@@ -134,7 +134,7 @@ def _draw_truth(ax, calib: Calibration, truth: Truth, object_model: ObjectModel,
 def _draw_estimate(ax, calib: Calibration, tracking, object_model: ObjectModel, hand_model: HandModel, i: int) -> None:
     """The tracked box (green), hand capsules (orange), fingertips (red: seen, white: hidden) and
     active contact points (cyan crosses) of frame ``i``."""
-    from matplotlib.collections import LineCollection
+    from matplotlib.collections import LineCollection  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     corners = tracking.box.pos[i] + (_SIGNS * object_model.half_extents) @ tracking.box.rot[i].T
     uv = _project(calib, corners)
@@ -162,7 +162,7 @@ def _draw_estimate(ax, calib: Calibration, tracking, object_model: ObjectModel, 
 
 def _legend(with_truth: bool) -> list:
     """The legend's handles: every mark of the strip."""
-    from matplotlib.lines import Line2D
+    from matplotlib.lines import Line2D  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     marks = [Line2D([], [], color="lime", lw=1.2, label="tracked box"),
              Line2D([], [], color="orange", lw=3, alpha=0.55, label="tracked hand"),

@@ -14,6 +14,7 @@ import pyarrow as pa
 
 from benchmark.atomic import write_text
 from benchmark.errors import BenchmarkError, DatasetError
+from benchmark.method import camera_input
 from benchmark.paper.dataset.claims import Claims
 from benchmark.paper.dataset.files import (
     TIMING_SUFFIX,
@@ -39,9 +40,15 @@ from benchmark.scores.forces import true_normal_forces
 from benchmark.scores.samples import DATASET_FORCE_SETTINGS, sample_mask
 from benchmark.scores.samples import take_contacts as _take_con
 from benchmark.scores.samples import take_kinematics as _take_kin
+from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
+from benchmark.world.motion import episode_kinematics
 from benchmark.world.scenario import Scenario, episode_name
+from benchmark.world.tactile import tactile_normal_forces
 from fsv import Contacts
 from fsv.features import grasp_features
+from fsv.forces import FrameStatus, decompose_forces
+from fsv.method import ReferenceTracker
+from fsv.method.reference import TRACKED_POSES
 
 TRAINING_KNOWLEDGE = "exact"
 """What the tracker is told when a dataset is made: the simulation's own hand, box and camera (a
@@ -54,9 +61,7 @@ def track_episode(episode):
     """Renders a simulated episode and tracks it from depth alone with the method's tracker stage,
     as ``fsv-bench --knowledge exact`` does (same camera inputs, same random streams):
     ``(rendered episode, Tracking)``."""
-    from benchmark.camera.render import render
-    from benchmark.method import camera_input
-    from fsv.method import ReferenceTracker
+    from benchmark.camera.render import render  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
     ep = render(episode)
     return ep, ReferenceTracker(on_frame=report_progress)(camera_input(ep, knowledge=TRAINING_KNOWLEDGE),
@@ -67,7 +72,6 @@ def episode_contacts(episode, source: str, tracking=None) -> Contacts:
     """The contacts behind the features: "tracker" (``tracking.contacts``), "oracle" (the truth's)
     or "error-model" (the truth's moved by the paper's contact-point error model,
     ``benchmark.world.contact_error``)."""
-    from benchmark.world.contact_error import contacts_from_truth, vision_like_contacts
 
     if source == "tracker":
         if tracking is None:
@@ -83,11 +87,7 @@ def episode_contacts(episode, source: str, tracking=None) -> Contacts:
 
 def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     """Simulates one scenario and returns its kept samples as a table (see the module docstring)."""
-    from benchmark.world.motion import episode_kinematics
-    from benchmark.world.simulate import simulate
-    from benchmark.world.tactile import tactile_normal_forces
-    from fsv.forces import FrameStatus, decompose_forces
-    from fsv.method.reference import TRACKED_POSES
+    from benchmark.world.simulate import simulate  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
     ep, tracking = simulate(scenario), None
     if spec.contacts == "tracker":
@@ -121,7 +121,9 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     )
     stats["gravity"] = np.asarray(tr.gravity, float).tolist()
     if tracking is not None:
-        from benchmark.scores.tracking import score_tracking
+        from benchmark.scores.tracking import (  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
+            score_tracking,
+        )
 
         stats["tracking"] = score_tracking(tracking, tr)
     return _with_meta(pa.table(cols), scenario, spec, names, stats, status="ok")
@@ -211,7 +213,7 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
     written = _check_existing(spec, out, episodes)
     todo = [sc for sc in spec.scenarios() if os.path.join("episodes", episode_name(sc) + ".parquet") not in written]
     total = len(spec.scenarios())
-    from tqdm.auto import tqdm
+    from tqdm.auto import tqdm  # lazy: tqdm (30 ms) off `fsv-bench generate`'s start-up
 
     bar = tqdm(total=total, initial=total - len(todo), unit="episode", desc="generate", disable=not progress, file=sys.stderr)
     tracked = spec.contacts == "tracker" and build is build_episode and ray_address is None
@@ -252,7 +254,7 @@ def generate(spec: DatasetSpec, out, *, workers: int | None = None, ray_address:
 
 def _frames_of(sc: Scenario) -> int:
     """Frames of a scenario's episode (as the simulation makes them)."""
-    from benchmark.world.simulate import duration_of
+    from benchmark.world.simulate import duration_of  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
     return int(np.floor(duration_of(sc) * sc.fps + 1e-9)) + 1
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import socket
 import time
 
 from benchmark.world.scenario import episode_name
@@ -22,8 +23,6 @@ class Claims:
     """
 
     def __init__(self, out: str):
-        import socket
-
         self.folder = os.path.join(out, "episodes")
         self.host, self.pid = socket.gethostname(), os.getpid()
         self.mine: set = set()

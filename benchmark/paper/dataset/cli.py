@@ -26,10 +26,14 @@ import time
 import pandas as pd
 
 from benchmark import limits
+from benchmark.atomic import check_out
 from benchmark.errors import DatasetError
 from benchmark.paper.dataset.build import generate
+from benchmark.paper.dataset.files import made_by_generate
+from benchmark.paper.dataset.frames import FramesSpec, check_training_people, generate_frames, made_by_generate_frames
 from benchmark.paper.dataset.shards import COLOUR_ENCODINGS
 from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, DatasetSpec
+from benchmark.parallel import check_ray_address
 
 
 def parse_ints(text: str, option: str = "") -> tuple:
@@ -89,7 +93,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="write the rendered frames and every per-frame label (forces, contacts, box and hand state, "
                         "keypoints, masks) as one HDF5 shard per episode, with index.parquet, README.md and "
                         "croissant.json, instead of the networks' features (training data: dev and test people refused)")
-    from benchmark.suites.options import add_streams_argument
+    from benchmark.suites.options import (  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
+        add_streams_argument,
+    )
 
     add_streams_argument(p)
     p.add_argument("--colour-encoding", default="raw", choices=COLOUR_ENCODINGS,
@@ -101,12 +107,10 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
     """Runs ``fsv-bench generate`` with parsed arguments; prints a one-paragraph summary."""
     grid_size(args)  # before any list is built
     if args.ray_address is not None:
-        from benchmark.parallel import check_ray_address
-
         check_ray_address(args.ray_address)
     users, grasps, views = (parse_ints(getattr(args, name), f"--{name}") for name in ("users", "grasps", "views"))
     if args.split is not None:
-        from benchmark.suites.splits import SPLITS
+        from benchmark.suites.splits import SPLITS  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
 
         if args.split not in SPLITS or args.split == "cohort":
             raise DatasetError(f"--split {args.split!r}: accepted: train, dev, test")
@@ -121,8 +125,6 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         duration_s=args.duration,
         noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
     )
-    from benchmark.atomic import check_out
-    from benchmark.paper.dataset.files import made_by_generate
 
     if args.frames:
         return run_frames(args, spec)
@@ -145,13 +147,6 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
 
 def run_frames(args: argparse.Namespace, spec: DatasetSpec) -> pd.DataFrame:
     """``fsv-bench generate --frames``: a frames dataset (:func:`benchmark.paper.dataset.frames.generate_frames`)."""
-    from benchmark.atomic import check_out
-    from benchmark.paper.dataset.frames import (
-        FramesSpec,
-        check_training_people,
-        generate_frames,
-        made_by_generate_frames,
-    )
 
     frames = FramesSpec(grid=spec, streams=args.streams, colour_encoding=args.colour_encoding)
     check_training_people(spec)  # before the folder is touched

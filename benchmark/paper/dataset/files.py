@@ -16,11 +16,13 @@ import pyarrow.parquet as pq
 
 from benchmark.atomic import claim_folder, remove_stale_temporaries, write_bytes, write_text
 from benchmark.errors import DatasetError, DatasetFileError
+from benchmark.fingerprint import world_fingerprint
 from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec
 from benchmark.scores.samples import nominal_excess_n
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
-from benchmark.world.scenario import episode_name
+from benchmark.world.scenario import DEFAULT_GRIP_CONTROL, DEFAULT_HAND_SURFACE, episode_name
 from fsv import Contacts, InputError, Kinematics
+from fsv.learn import TrainingSet
 from fsv.provenance import provenance
 
 
@@ -69,7 +71,6 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
     os.makedirs(episodes, exist_ok=True)
     for folder in (out, episodes):  # a killed run's half-written files (a live run's are kept)
         remove_stale_temporaries(folder, owner=out)
-    from benchmark.fingerprint import world_fingerprint
 
     header = dict(format=FORMAT, version=VERSION, spec=spec.as_dict(), world=world_fingerprint())
     path = os.path.join(out, "dataset.json")
@@ -96,8 +97,6 @@ def _prepare(spec: DatasetSpec, out: str) -> str:
 
 
 def _expected_stem(meta: dict) -> str | None:
-    from benchmark.world.scenario import DEFAULT_GRIP_CONTROL, DEFAULT_HAND_SURFACE
-
     sc = meta.get("scenario")
     if not isinstance(sc, dict):
         return None
@@ -318,9 +317,6 @@ def training_set(df: pd.DataFrame, grips: dict | None = None):
     """The networks' samples of a dataset table (:class:`fsv.learn.TrainingSet`): features,
     decomposition targets, episode groups, and with ``grips`` (``{user: fsv.grip.GripCalibration}``,
     :func:`benchmark.method.grip_file.read_calibration`) each sample's user's grip calibration."""
-    from fsv.learn import (
-        TrainingSet,  # torch: imported only where it is used, not in the workers
-    )
     names = finger_names_of(df)
     grip = None
     if grips is not None:

@@ -27,7 +27,7 @@ import json
 import os
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
@@ -35,9 +35,18 @@ import pyarrow as pa
 
 from benchmark.atomic import claim_folder, remove_stale_temporaries, write_bytes, write_text
 from benchmark.errors import BenchmarkError, DatasetError, DatasetFileError
+from benchmark.fingerprint import world_fingerprint
+from benchmark.paper.dataset.card import write_card
+from benchmark.paper.dataset.claims import Claims
+from benchmark.paper.dataset.files import _write_sealed
 from benchmark.paper.dataset.shards import check_colour_encoding, failed_shard, verify_shard, write_shard
 from benchmark.paper.dataset.spec import DatasetSpec
+from benchmark.parallel import RayUnavailable, check_ray_address, run_jobs
+from benchmark.sealed_table import read_sealed
+from benchmark.world.people import person_record
 from benchmark.world.scenario import Scenario, episode_name
+from fsv.provenance import provenance
+from fsv.types import check_streams
 
 FRAMES_FORMAT = "fsv-bench-frames"
 FRAMES_VERSION = 1
@@ -65,8 +74,6 @@ class FramesSpec:
     colour_encoding: str = "raw"
 
     def __post_init__(self):
-        from fsv.types import check_streams
-
         try:
             object.__setattr__(self, "streams", check_streams(self.streams))
         except ValueError as e:
@@ -85,7 +92,7 @@ class FramesSpec:
 def check_training_people(spec: DatasetSpec) -> None:
     """Refuses a grid holding a ``dev`` or ``test`` person, grasp or view (they choose and score,
     never train): DatasetError naming the first, before any work."""
-    from benchmark.suites.splits import SPLITS
+    from benchmark.suites.splits import SPLITS  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
 
     for sc in spec.scenarios():
         for kind in ("user", "grasp", "view"):
@@ -100,8 +107,8 @@ def check_training_people(spec: DatasetSpec) -> None:
 
 def render_episode(scenario: Scenario, streams: tuple):
     """Simulates and renders one scenario with ``streams`` (the default episode source)."""
-    from benchmark.camera.render import render
-    from benchmark.world.simulate import simulate
+    from benchmark.camera.render import render  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
+    from benchmark.world.simulate import simulate  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
     return render(simulate(scenario), streams=streams)
 
@@ -109,9 +116,8 @@ def render_episode(scenario: Scenario, streams: tuple):
 def build_shard(scenario: Scenario, spec: FramesSpec, make=render_episode) -> bytes:
     """One scenario's shard bytes (:func:`benchmark.paper.dataset.shards.write_shard`), with its
     person and grasp descriptors as privileged; a world failure gives a failed shard."""
-    from benchmark.suites.splits import split_of
-    from benchmark.world.grasp_plan import grasp_spec
-    from benchmark.world.people import person_record
+    from benchmark.suites.splits import split_of  # lazy: scipy.stats (0.4 s) off `fsv-bench generate`'s start-up
+    from benchmark.world.grasp_plan import grasp_spec  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
     split = split_of(scenario)
     try:
@@ -145,9 +151,6 @@ def made_by_generate_frames(out) -> bool:
 
 
 def _prepare(spec: FramesSpec, out: str) -> str:
-    from benchmark.fingerprint import world_fingerprint
-    from fsv.provenance import provenance
-
     claim_folder(out, adopt=made_by_generate_frames(out))
     episodes = os.path.join(out, "episodes")
     os.makedirs(episodes, exist_ok=True)
@@ -191,7 +194,6 @@ def _listed(out: str) -> dict:
 def _check_existing(spec: FramesSpec, out: str) -> dict:
     """Verifies every shard already there; a bad one is reported and removed (then rebuilt).
     Returns ``{relative path: root attributes}`` of the good ones."""
-    from dataclasses import asdict
 
     listed = _listed(out)
     expected = {episode_name(sc): sc for sc in spec.grid.scenarios()}
@@ -230,8 +232,6 @@ def generate_frames(spec: FramesSpec, out, *, workers: int | None = None, ray_ad
         The index (one row per shard), also in ``out/index.parquet``; ``out/README.md`` and
         ``out/croissant.json`` are written from it.
     """
-    from benchmark.paper.dataset.claims import Claims
-    from benchmark.parallel import RayUnavailable, check_ray_address, run_jobs
 
     out = os.fspath(out)
     if workers is not None and (isinstance(workers, bool) or int(workers) != workers or workers < 1):
@@ -244,7 +244,7 @@ def generate_frames(spec: FramesSpec, out, *, workers: int | None = None, ray_ad
     rel = lambda sc: os.path.join("episodes", episode_name(sc) + SHARD_SUFFIX)
     todo = [sc for sc in spec.grid.scenarios() if rel(sc) not in written]
     total = spec.grid.size()
-    from tqdm.auto import tqdm
+    from tqdm.auto import tqdm  # lazy: tqdm (30 ms) off `fsv-bench generate`'s start-up
 
     bar = tqdm(total=total, initial=total - len(todo), unit="episode", desc="generate --frames", disable=not progress,
                file=sys.stderr)
@@ -277,7 +277,6 @@ def generate_frames(spec: FramesSpec, out, *, workers: int | None = None, ray_ad
     if claims.waited:
         written = _check_existing(spec, out)
     index = write_index(out, written)
-    from benchmark.paper.dataset.card import write_card
 
     write_card(out, spec, index)
     return index
@@ -292,7 +291,7 @@ def _index_row(rel: str, meta: dict) -> dict:
 
 
 def _frames(meta: dict, sc: dict) -> int:
-    from benchmark.world.simulate import duration_of
+    from benchmark.world.simulate import duration_of  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
     if meta["status"] != "ok":
         return 0
@@ -302,7 +301,6 @@ def _frames(meta: dict, sc: dict) -> int:
 def write_index(out, shards: dict) -> pd.DataFrame:
     """Writes ``out/index.parquet`` (sealed: :mod:`benchmark.sealed_table`) from ``{relative path:
     verified root attributes}`` and returns it."""
-    from benchmark.paper.dataset.files import _write_sealed
 
     rows = [_index_row(rel, meta) for rel, meta in sorted(shards.items())]
     index = pd.DataFrame(rows, columns=list(INDEX_COLUMNS))
@@ -317,7 +315,6 @@ def write_index(out, shards: dict) -> pd.DataFrame:
 
 def read_index(out) -> pd.DataFrame:
     """``out/index.parquet``, its content digest checked (DatasetFileError naming it otherwise)."""
-    from benchmark.sealed_table import read_sealed
 
     path = os.path.join(os.fspath(out), "index.parquet")
     try:

@@ -45,10 +45,13 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
+from dataclasses import asdict
 
 import numpy as np
 
 from benchmark.errors import DatasetError, DatasetFileError
+from benchmark.world.scenario import episode_name
 
 SHARD_FORMAT = "fsv-bench-frames-shard"
 SHARD_VERSION = 1
@@ -75,7 +78,10 @@ def check_colour_encoding(name: str) -> str:
 
 def label_arrays(episode) -> dict:
     """The world- and object-frame labels of an episode: ``{name: array}`` (see the module docstring)."""
-    from benchmark.camera.annotations import _quat_rot, _rotate
+    from benchmark.camera.annotations import (  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
+        _quat_rot,
+        _rotate,
+    )
 
     tr = episode.truth
     R = _quat_rot(tr.box_quat)  # (T, 3, 3) world_R_object, fixed-order arithmetic
@@ -122,7 +128,7 @@ def decode_depth(stored: np.ndarray, encoding: str) -> np.ndarray:
 
 
 def _encode_jpeg(rgb: np.ndarray) -> np.ndarray:
-    from PIL import Image
+    from PIL import Image  # lazy: PIL (10 ms) off `fsv-bench generate`'s start-up
 
     buf = io.BytesIO()
     Image.fromarray(rgb).save(buf, "JPEG", quality=JPEG_QUALITY)
@@ -134,7 +140,7 @@ def decode_colour(ds, start: int = 0, stop: int | None = None) -> np.ndarray:
     stop = ds.shape[0] if stop is None else stop
     if ds.attrs["encoding"] == "raw":
         return ds[start:stop]
-    from PIL import Image
+    from PIL import Image  # lazy: PIL (10 ms) off `fsv-bench generate`'s start-up
 
     return np.stack([np.asarray(Image.open(io.BytesIO(ds[k].tobytes())).convert("RGB")) for k in range(start, stop)])
 
@@ -164,9 +170,7 @@ def write_shard(episode, *, streams: tuple = ("depth",), colour_encoding: str = 
         split: The episode's split (``benchmark.suites.splits.split_of``), recorded.
         privileged: ``{"person": dict, "grasp": dict}`` stored under ``/privileged``.
     """
-    import h5py
-
-    from benchmark.world.scenario import episode_name
+    import h5py  # lazy: h5py (0.1 s) off `fsv-bench generate`'s start-up
 
     check_colour_encoding(colour_encoding)
     missing = [s for s in streams if s not in episode.streams]
@@ -190,9 +194,7 @@ def write_shard(episode, *, streams: tuple = ("depth",), colour_encoding: str = 
 def failed_shard(scenario, error: str, split: str | None = None) -> bytes:
     """A shard holding only the root attributes and ``status = error`` (a world failure: the
     episode is neither lost nor retried forever)."""
-    import h5py
-
-    from benchmark.world.scenario import episode_name
+    import h5py  # lazy: h5py (0.1 s) off `fsv-bench generate`'s start-up
 
     buf = io.BytesIO()
     with h5py.File(buf, "w") as f:
@@ -204,8 +206,6 @@ def failed_shard(scenario, error: str, split: str | None = None) -> bytes:
 
 
 def _scenario_dict(sc) -> dict:
-    from dataclasses import asdict
-
     return asdict(sc)
 
 
@@ -220,8 +220,6 @@ def _json_default(v):
 
 
 def _root_attrs(f, episode, streams, split) -> None:
-    from benchmark.world.scenario import episode_name
-
     tr, om = episode.truth, episode.object_model
     f.attrs.update(
         format=SHARD_FORMAT, version=SHARD_VERSION, episode=episode_name(episode.scenario), status="ok",
@@ -248,7 +246,7 @@ def _stream(f, episode, stream: str, colour_encoding: str) -> None:
         if colour_encoding == "raw":
             _images(g, "frames", np.asarray(video.rgb, np.uint8), encoding="raw")
         else:
-            import h5py
+            import h5py  # lazy: h5py (0.1 s) off `fsv-bench generate`'s start-up
 
             ds = g.create_dataset("frames", shape=(len(video.rgb),), dtype=h5py.vlen_dtype(np.uint8))
             for k in range(len(video.rgb)):
@@ -295,7 +293,7 @@ def content_sha256(f) -> str:
 
 def open_shard(path, data: bytes | None = None):
     """An h5py File of a shard (read-only), from its path or its bytes; DatasetFileError naming it if unreadable."""
-    import h5py
+    import h5py  # lazy: h5py (0.1 s) off `fsv-bench generate`'s start-up
 
     try:
         return h5py.File(io.BytesIO(data) if data is not None else path, "r")
@@ -312,7 +310,6 @@ def verify_shard(path, data: bytes | None = None, sha256: str | None = None, con
     Raises:
         DatasetFileError: naming the file and what is wrong.
     """
-    import os
 
     if data is None:
         try:

@@ -93,7 +93,7 @@ class DatasetSpec:
 
     def _check_grid(self) -> None:
         """Every task, user, grasp and mass exists and the duration suits every task (before any work)."""
-        from benchmark.world.assets import validate
+        from benchmark.world.assets import validate  # lazy: MuJoCo (0.25 s) off `fsv-bench generate`'s start-up
 
         try:
             base = Scenario(noise_m=self.noise_m, duration_s=self.duration_s, fps=self.fps)

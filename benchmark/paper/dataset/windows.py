@@ -28,10 +28,12 @@ from __future__ import annotations
 import json
 import os
 
+import h5py
 import numpy as np
 import torch
 
 from benchmark.errors import DatasetError
+from benchmark.paper.dataset.frames import read_index
 from benchmark.paper.dataset.shards import decode_colour, decode_depth
 
 FORCE_FRAMES = {"camera": "depth/contact_force_cam", "world": "labels/contact_force_world",
@@ -56,8 +58,6 @@ class FrameWindows(torch.utils.data.Dataset):
 
     def __init__(self, root, window: int = 8, stride: int | None = None, streams: tuple = ("depth",),
                  force_frame: str = "camera", episodes=None):
-        from benchmark.paper.dataset.frames import read_index
-
         if isinstance(window, bool) or int(window) != window or window < 1:
             raise DatasetError(f"window must be an integer >= 1, got {window!r}")
         stride = int(window) if stride is None else stride
@@ -87,8 +87,6 @@ class FrameWindows(torch.utils.data.Dataset):
         return len(self.items)
 
     def _file(self, i: int):
-        import h5py
-
         f = self._files.get(i)
         if f is None:
             f = self._files[i] = h5py.File(os.path.join(self.root, self.index["file"].iloc[i]), "r")

@@ -8,13 +8,12 @@ phases before and the release after are common to every task (:class:`~benchmark
 
 from __future__ import annotations
 
+from benchmark.world.tasks import excite, free, lift, place, release, rotate, shake
 from benchmark.world.tasks.motion import Motion, Phases, min_jerk
 from benchmark.world.tasks.task import Task
 
 
 def _registry() -> dict:
-    from benchmark.world.tasks import excite, free, lift, place, release, rotate, shake
-
     tasks = [lift.TASK, place.TASK, release.TASK, rotate.TASK, free.TASK, shake.TASK, *excite.TASKS]
     return {t.name: t for t in tasks}
 
