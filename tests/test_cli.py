@@ -32,10 +32,11 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert not [k for k in summary["tracking"] if k.endswith("_median")]
     lines = text.splitlines()
     first = next(i for i, line in enumerate(lines) if line.startswith("verdict: "))
-    gate_lines = lines[first + 1:first + 9]
+    gate_lines = lines[first + 1:first + 10]
     assert [line.split()[1] for line in gate_lines] == [g["name"].split()[1] for g in verdict["gates"]]
     assert all(line.split()[0] == ("pass" if g["passed"] else "FAIL") for line, g in zip(gate_lines, verdict["gates"]))
-    assert "(limit <= 60 %)" in gate_lines[-1] and "learned_rel_err_pct" in gate_lines[-1]
+    assert "(limit <= 50 %)" in gate_lines[-1] and "learned_rel_err_pct" in gate_lines[-1]
+    assert "(limit <= 0.5 N, a suite's 90th percentile)" in gate_lines[6] and "(limit <= 0.3 N)" in gate_lines[5]
     assert "(limit <= 8 mm)" in gate_lines[0]
     person, grasp = summary["scenario"].pop("person"), summary["scenario"].pop("grasp_spec")
     assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "sensor": "ds325",

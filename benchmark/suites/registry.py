@@ -32,22 +32,29 @@ SMOKE = Suite(
     # Version 8: the people grip at their drawn margins, and a gate on the tail: the worst episode's
     # net force (the 90th percentile of four is the largest) within 0.5 N, set from the reference's
     # 0.26 N on version 7's world with the method's tail mends (benchmark/CHANGELOG), a regression
-    # bar that gravity-only forces fail (their mean over version 7's four is 0.53 N).
+    # bar that gravity-only forces fail (their mean over version 7's four is 0.53 N). In version 8's
+    # world the place and release episodes set the box down with an impact (the hand sits 1.2 mm
+    # lower under the lighter grip, and the set-down's plan ends at the table: the box touches down
+    # at about 0.16 m/s, a frame-mean acceleration of 27 m/s^2 that no 30 Hz camera resolves): the
+    # reference's acceleration error went from 0.39 to 0.69 m/s^2 (zero kinematics 0.73 -> 0.93), so
+    # the acceleration gate moved from 0.5 to 0.8 m/s^2, between the two; a set-down that slows to
+    # the touch (a guarded approach) is the world's next mend (CHANGELOG). The people's lighter
+    # squeeze leaves less to the internal forces: no internal forces err by 54 % (84 before), the
+    # reference by 38 % (29 before), so the learned-force gate moved from 60 to 50 %, between them (the default lift: 42 %).
     gates=(
-        Gate("box_pos_err_mm", "<=", 8.0, measured="median 4.00 mm (1.59-4.95), lab knowledge; "
+        Gate("box_pos_err_mm", "<=", 8.0, measured="median 4.00 mm (1.57-4.96), lab knowledge; "
                                                    "the static box 127 mm"),
-        Gate("contact_err_mm_std", "<=", 5.0, measured="median 2.43 mm (1.48-4.32)"),
-        Gate("contact_recall", ">=", 0.85, measured="median 0.993 (0.987-0.998); the static box 0"),
-        Gate("contact_precision", ">=", 0.85, measured="median 0.96 (0.91-0.99)"),
-        Gate("acc_err_rms", "<=", 0.5, measured="median 0.39 m/s^2 (0.21-0.45)"),
-        Gate("net_force_err_n_rms", "<=", 0.3, measured="median 0.18 N (0.08-0.29); gravity-only forces 0.49"),
+        Gate("contact_err_mm_std", "<=", 5.0, measured="median 2.78 mm (2.26-4.17)"),
+        Gate("contact_recall", ">=", 0.85, measured="median 0.989; the static box 0"),
+        Gate("contact_precision", ">=", 0.85, measured="median 0.934"),
+        Gate("acc_err_rms", "<=", 0.8, measured="median 0.69 m/s^2 (0.21-1.52: the set-down impacts); "
+                                            "zero kinematics 0.93"),
+        Gate("net_force_err_n_rms", "<=", 0.3, measured="median 0.15 N (0.08-0.30); gravity-only forces 0.53"),
         Gate("net_force_err_n_rms", "<=", 0.5, statistic="p90",
-             measured="largest 0.26 N (version 7's world, the tail mends); gravity-only forces' mean "
-                      "0.53 N, so their largest is above the bar"),
+             measured="largest 0.30 N; gravity-only forces' 0.92 N"),
         Gate("least_violation_frac", "<=", 0.25, statistic="mean", measured="mean 0 (no frame on any task)"),
-        Gate("learned_rel_err_pct", "<=", 60.0,
-             measured="median 28.6 % over every contact frame, blind (33.6 % calibrated); no internal forces "
-                      "about 81"),
+        Gate("learned_rel_err_pct", "<=", 50.0,
+             measured="median 37.8 % over every contact frame, blind; no internal forces 54.4 %"),
     ),
     description=(
         "For CI: four 4 s episodes of the named cohort, one per task family (lift, place, rotate, release), "

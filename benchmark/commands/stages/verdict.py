@@ -43,12 +43,19 @@ def run(record: Run, options) -> StageResult:
     return StageResult(blocks=(("verdict", block),), lines=(line, *(gate_line(g, r) for g, r in zip(gates, results))))
 
 
+ON_A_SUITE = {"median": "", "mean": ", a suite's mean", "p90": ", a suite's 90th percentile"}
+"""What a gate's limit bounds over a suite's episodes, as the verdict's line says it (of one episode,
+every statistic is the episode's own value: two gates on one metric differ only in this)."""
+
+
 def gate_line(gate: Gate, result: GateResult) -> str:
     """One gate of the verdict as the command prints it: the episode's value beside the limit, in the
-    metric's unit, e.g. ``  pass  acc_err_rms 0.367 m/s² (limit <= 0.5)``."""
+    metric's unit, e.g. ``  pass  acc_err_rms 0.367 m/s² (limit <= 0.5 m/s²)`` or ``  pass
+    net_force_err_n_rms 0.0591 N (limit <= 0.5 N, a suite's 90th percentile)``."""
     unit = UNITS.get(gate.metric, "")
     value = "not scored" if result.value is None else f"{result.value:.3g}{' ' + unit if unit else ''}"
-    return f"  {'pass' if result.passed else 'FAIL'}  {gate.metric} {value} (limit {gate.op} {gate.limit:g}{' ' + unit if unit else ''})"
+    limit = f"{gate.limit:g}{' ' + unit if unit else ''}{ON_A_SUITE[gate.statistic]}"
+    return f"  {'pass' if result.passed else 'FAIL'}  {gate.metric} {value} (limit {gate.op} {limit})"
 
 
 STAGE = Stage(name="verdict", run=run, options=("gates",), add_arguments=add_arguments)
