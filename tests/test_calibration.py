@@ -50,7 +50,9 @@ def test_the_shipped_calibration_covers_every_user_and_the_firm_user_squeezes_mo
     grips = read_calibration()
     assert set(range(5)) < set(grips) and all(grips[u].samples > 1000 for u in range(5))  # eight 10 s lifts each
     drawn = [g for u, g in grips.items() if u >= 5]  # two 6 s lifts each
-    assert len(drawn) == 40 + 48 + 48 and all(g.samples > 100 for g in drawn)
+    # each line fitted on at least 40 kept frames (measured: at least 53, person 1006; 131 of the 136 over
+    # 100: the people who grip at their margins leave more frames to the 1.5 N gap and two-finger rules)
+    assert len(drawn) == 40 + 48 + 48 and all(g.samples >= 40 for g in drawn)
     amount_at_5n = {u: grips[u].baseline_n + 5.0 * grips[u].gain for u in range(5)}
     assert max(amount_at_5n, key=amount_at_5n.get) == 3  # users.yaml: user 3 grips firmest of the cohort
     assert user_grip(2) == grips[2] and user_grip(99) is None

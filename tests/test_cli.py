@@ -40,7 +40,7 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
     assert "(limit <= 8 mm)" in gate_lines[0]
     person, grasp = summary["scenario"].pop("person"), summary["scenario"].pop("grasp_spec")
     assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "sensor": "ds325",
-                                   "hand_surface": "skin", "grip_control": "whole-hand", "noise_m": 0.01, "seed": 2, "frames": 46, "fps": 30.0}
+                                   "hand_surface": "skin", "grip_control": "per-digit", "noise_m": 0.01, "seed": 2, "frames": 46, "fps": 30.0}
     assert person["name"] == "u0-average" and not person["drawn"] and person["anatomy"]["hand_length_m"] == 0.19
     assert grasp["name"] == "g0-four-centred" and grasp["family"] == "width-four"
     assert summary["world"]["ne_force_residual_n"] < 0.01

@@ -40,7 +40,7 @@ COMMANDS = {
     "compare": (["a", "b"], "benchmark.suites.compare.load_scores"),
     "export": (["--suite", "smoke", "--out", "ex"], "benchmark.exchange.export.export_suite"),
     "score": (["--suite", "smoke", "--out", "sc", "--estimates", "est"], "benchmark.exchange.score.estimate_paths"),
-    "leaderboard": (["--suite", "smoke", "--out", "lb"], "benchmark.suites.evaluate.evaluate_many"),
+    "leaderboard": (["--suite", "smoke", "--out", "lb"], "benchmark.suites.leaderboard.evaluate_many"),
     "sweep": (["--suite", "smoke", "--axis", "noise", "--values", "0.005,0.01", "--out", "sw"],
               "benchmark.suites.evaluate.evaluate"),
     "check": (["est.npz"], "benchmark.exchange.check.check"),
