@@ -40,8 +40,15 @@ def atomic_path(path: str | os.PathLike) -> Iterator[pathlib.Path]:
         The temporary file's path (same folder and suffix as ``path``, so writers that infer the
         format from the suffix still do). On any exception, including KeyboardInterrupt, it is
         removed and ``path`` is left untouched.
+
+    Raises:
+        KeyboardInterrupt: After Ctrl-C (:func:`benchmark.interrupt.interrupted`), before anything is
+            made: a background thread still writing while the interrupt removes the run's staging
+            folder would otherwise make that folder again, and leave it behind.
     """
     path = pathlib.Path(path)
+    if interrupt.interrupted():  # a thread still writing after Ctrl-C must not make a removed staging folder again
+        raise KeyboardInterrupt(f"interrupted: {path.name} not written")
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".tmp-{path.name}.{os.getpid()}.", suffix=path.suffix)
     os.close(fd)

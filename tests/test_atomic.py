@@ -249,3 +249,20 @@ def test_a_cache_apart_from_the_output_only(tmp_path):
         with pytest.raises(OutputFolderError, match="one inside the other"):
             check_cache(tmp_path / cache, {"--out": tmp_path / out})
     check_cache(tmp_path / "cache", {"--out": tmp_path / "out"})
+
+
+def test_after_ctrl_c_no_write_makes_a_removed_folder_again(tmp_path, monkeypatch):
+    """A background thread still writing while Ctrl-C's cleanup removes the staging folder: the
+    write is refused before anything is made, so the folder stays removed (CI saw one left behind)."""
+    from benchmark import interrupt
+
+    gone = tmp_path / ".run.1.x"
+    monkeypatch.setattr(interrupt, "interrupted", lambda: True)
+    with pytest.raises(KeyboardInterrupt, match="episode.npz not written"):
+        with atomic_path(gone / "episode.npz") as tmp:
+            tmp.write_bytes(b"late")
+    assert not gone.exists() and list(tmp_path.iterdir()) == []
+    monkeypatch.setattr(interrupt, "interrupted", lambda: False)
+    with atomic_path(gone / "episode.npz") as tmp:  # without Ctrl-C the folder is made as before
+        tmp.write_bytes(b"on time")
+    assert (gone / "episode.npz").read_bytes() == b"on time"
