@@ -596,11 +596,11 @@ class Human:
         self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
 
 
-def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals_obj: np.ndarray) -> tuple:
-    """Each digit's normal and tangential force on the box now, along its planned normal, [N], (K,) each."""
-    m = world.model
-    K = len(normals_obj)
-    force = np.zeros((K, 3))
+def _digit_box_contacts(world: World, data: mujoco.MjData):
+    """The active contacts between a digit and the box now: ``(i, k, f6, sign)`` per contact, i its
+    index in ``data.contact``, k the digit, f6 its force and torque in the contact frame (one array,
+    refilled for each contact: read it before the next), sign +1 where the box is geom2 (the force
+    on the box), -1 where it is geom1."""
     f6 = np.zeros(6)
     con = data.contact
     for i in range(data.ncon):
@@ -610,10 +610,16 @@ def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals
         k = int(world.geom_finger[g1 if g2 == world.box_geom else g2])
         if k < 0:
             continue
-        mujoco.mj_contactForce(m, data, i, f6)
-        frame = con.frame[i].reshape(3, 3)
-        sign = 1.0 if g2 == world.box_geom else -1.0  # the force on geom2, in the contact frame
-        force[k] += sign * vm(f6[:3], frame)
+        mujoco.mj_contactForce(world.model, data, i, f6)
+        yield i, k, f6, (1.0 if g2 == world.box_geom else -1.0)
+
+
+def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals_obj: np.ndarray) -> tuple:
+    """Each digit's normal and tangential force on the box now, along its planned normal, [N], (K,) each."""
+    K = len(normals_obj)
+    force = np.zeros((K, 3))
+    for i, k, f6, sign in _digit_box_contacts(world, data):
+        force[k] += sign * vm(f6[:3], data.contact.frame[i].reshape(3, 3))
     f_obj = rows_mt(force, box_rot.T)
     n = np.einsum("kj,kj->k", f_obj, normals_obj)
     t = norm_rows(f_obj - n[:, None] * normals_obj)
@@ -623,21 +629,11 @@ def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals
 def _digit_points(world: World, data: mujoco.MjData, box_rot: np.ndarray) -> tuple:
     """Each digit's centre of pressure on the box now, relative to its centre, box frame, (K, 3) [m],
     and whether it touches, (K,) bool."""
-    m = world.model
     K = len(world.hand.finger_names)
     weighted, total = np.zeros((K, 3)), np.zeros(K)
-    f6 = np.zeros(6)
-    con = data.contact
-    for i in range(data.ncon):
-        g1, g2 = int(con.geom1[i]), int(con.geom2[i])
-        if world.box_geom not in (g1, g2) or con.efc_address[i] < 0:
-            continue
-        k = int(world.geom_finger[g1 if g2 == world.box_geom else g2])
-        if k < 0:
-            continue
-        mujoco.mj_contactForce(m, data, i, f6)
+    for i, k, f6, _ in _digit_box_contacts(world, data):
         if f6[0] > 0:
-            weighted[k] += f6[0] * con.pos[i]
+            weighted[k] += f6[0] * data.contact.pos[i]
             total[k] += f6[0]
     touching = total > 0
     if box_rot is None:
