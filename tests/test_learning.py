@@ -68,7 +68,13 @@ def test_learning_block_on_a_short_lift(episode_factory):
     # people grip at their margins (17.1 % when they squeezed as one pattern)
     assert 0 < paper["rel_err_pct_mean"] < 35
     assert 0 < block["rel_err_pct_mean"] < 35 and block["scored"] >= paper["scored"]
-    held = ep.truth.contact_active.sum(axis=1) >= 2
-    # internal grip, not a pull: the networks' output is not bounded below, and on this lift 15 of 300
-    # finger-frames predict at most 0.065 N of pull (a known fault of the shipped model, CHANGELOG)
-    assert np.all(pred[held][ep.truth.contact_active[held]] >= -0.1)
+    # A negative internal normal force is a finger pressing less than its nominal share, as the
+    # decomposition's own targets do (eq. 9: 10-14 % of the
+    # fingers' samples in 60 of the training set's episodes, down to -1.5 N),
+    # not a pull: every finger's total force presses on the box (eq. 14 keeps F^(n) + F^(i) in its cone).
+    # Measured: the least total normal force of a used contact here is +0.029 N; 15 of 302 internal
+    # parts are negative, down to -0.065 N.
+    ok = np.isfinite(sol.force).all(axis=(1, 2))
+    total_normal = np.sum(sol.force * sol.normal, axis=2)[ok]
+    assert np.all(total_normal[sol.active[ok]] >= -1e-6)
+    assert np.min(pred[ok][sol.active[ok]]) < 0  # the internal parts alone do go below their nominal share
