@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from benchmark.world.tasks.human import Plan
+from benchmark.world.tasks.human import PRESS_M, Plan
 from benchmark.world.tasks.motion import Phases
-from benchmark.world.tasks.place import PRESS_M
 from benchmark.world.tasks.task import Task
 
 
