@@ -9,6 +9,7 @@ from benchmark.world.simulate import simulate
 from benchmark.world.tasks import TASKS, Motion
 from benchmark.world.tasks.human import (
     APPROACH_HEIGHT_M,
+    APPROACH_HURRIED_M_S,
     APPROACH_RAMP_S,
     APPROACH_SPEED,
     MIN_DWELL_S,
@@ -66,16 +67,21 @@ def test_every_task_plans_within_its_window(name):
         assert np.all(np.diff(t) > 0)
 
 
-def test_an_approach_keeps_its_speed_when_the_plan_must_hurry():
+def test_an_approach_runs_at_its_speed_and_is_the_first_movement_to_hurry():
     plan = Plan(np.random.default_rng(0)).move([0, 0, 0.1], duration=1.0).approach([0, 0, -0.002], 0.02)
     assert plan.durations[1] == pytest.approx(0.102 / 0.02 + APPROACH_RAMP_S)
-    k = plan.keyframes(0.0, 6.0)  # too short by 0.2 s: the minimum-jerk move speeds up, the approach does not
-    assert [x[0] for x in k] == pytest.approx([0.0, 0.8, 6.0])
-    assert len(k[2]) == 4 and k[2][3] == APPROACH_RAMP_S
-    _, _, vel, _, _, _ = Motion(np.zeros(3), np.eye(3), k).evaluate(np.linspace(1.0, 5.8, 49))
+    k = plan.keyframes(0.0, 7.0)
+    assert [x[0] for x in k] == pytest.approx([0.0, 1.0, 6.2])
+    assert len(k[1]) == 3 and len(k[2]) == 4 and k[2][3] == APPROACH_RAMP_S  # the approach's keyframe carries its ramp
+    _, _, vel, _, _, _ = Motion(np.zeros(3), np.eye(3), k).evaluate(np.linspace(1.2, 6.0, 49))
     np.testing.assert_allclose(vel[:, 2], -0.02, rtol=1e-12)
-    k = plan.keyframes(0.0, 4.0)  # the approach alone does not fit: everything speeds up
-    assert [x[0] for x in k] == pytest.approx([0.0, 4.0 / 6.2, 4.0])
+    k = plan.keyframes(0.0, 3.65)  # too short: the approach hurries (4 cm/s), the minimum-jerk move keeps its time
+    assert [x[0] for x in k] == pytest.approx([0.0, 1.0, 3.65])
+    _, _, vel, _, _, _ = Motion(np.zeros(3), np.eye(3), k).evaluate(np.linspace(1.2, 3.45, 25))
+    np.testing.assert_allclose(vel[:, 2], -0.04, rtol=1e-12)
+    fastest = 1.0 + 0.102 / APPROACH_HURRIED_M_S + APPROACH_RAMP_S
+    k = plan.keyframes(0.0, 0.5 * fastest)  # the approach at its fastest does not suffice: everything speeds up
+    assert [x[0] for x in k] == pytest.approx([0.0, 0.5, 0.5 * fastest])
 
 
 @pytest.mark.parametrize("name", ["place", "release"])

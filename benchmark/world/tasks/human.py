@@ -83,6 +83,11 @@ degrees in smoke's `place`, its lowest corner 19 mm below a level box's bottom).
 APPROACH_RAMP_S = 0.1
 """An approach reaches and leaves its speed along minimum-jerk ramps this long, [s] (a choice: at
 2-3 cm/s the ramps peak at 0.4-0.6 m/s^2, below the transports' accelerations)."""
+APPROACH_HURRIED_M_S = 0.06
+"""An episode too short for its plan at human speed speeds up its set-down's approach up to this,
+[m/s], before it hurries the other movements (a choice: twice the drawn range's top, still an
+order of magnitude below the transports' speeds; a person in a hurry feels for the table faster
+rather than jerk the box about)."""
 PRESS_M = 0.002
 """The set-down ends this far below the box's place on the table, [m]: the hand's compliance presses
 the box on."""
@@ -114,6 +119,7 @@ class Plan:
         self.optional = []
         self.moves = []
         self.ramps = []
+        self.shortest = []
 
     @property
     def pose(self) -> tuple[np.ndarray, np.ndarray]:
@@ -139,23 +145,26 @@ class Plan:
         self.optional.append(bool(optional))
         self.moves.append(True)
         self.ramps.append(0.0)
+        self.shortest.append(T)
         return self
 
     def approach(self, displacement, speed: float, ramp_s: float = APPROACH_RAMP_S) -> "Plan":
         """A guarded approach: a straight movement to ``displacement`` (3,) [m] (box start frame,
         the rotation kept) at the constant ``speed`` [m/s], which it reaches and leaves along
         minimum-jerk ramps of ``ramp_s`` [s] (:func:`benchmark.world.tasks.motion.cruise`).
-        Its duration is distance / speed + ramp_s; a plan too long for its window speeds up its
-        other movements before this one (:meth:`keyframes`)."""
+        Its duration is distance / speed + ramp_s (shorter only in an episode too short for its
+        plan: :meth:`keyframes`, :data:`APPROACH_HURRIED_M_S`)."""
         if not speed > 0 or not ramp_s > 0:
             raise ValueError(f"an approach needs a positive speed and ramp, got {speed} m/s, {ramp_s} s")
         d0, r0 = self.pose
         d1 = np.asarray(displacement, float)
         self.way.append((d1, r0))
-        self.durations.append(norm(d1 - d0) / speed + ramp_s)
+        distance = norm(d1 - d0)
+        self.durations.append(distance / speed + ramp_s)
         self.optional.append(False)
         self.moves.append(True)
         self.ramps.append(float(ramp_s))
+        self.shortest.append(distance / max(speed, APPROACH_HURRIED_M_S) + ramp_s)
         return self
 
     def set_down(self, place) -> "Plan":
@@ -173,20 +182,22 @@ class Plan:
         self.optional.append(False)
         self.moves.append(False)
         self.ramps.append(0.0)
+        self.shortest.append(0.0)
         return self
 
     def keyframes(self, t0: float, t1: float) -> list:
         """The keyframes from ``t0``, the last pose held until ``t1``. A plan longer than the
         window [t0, t1] first shortens its holds (down to :data:`MIN_DWELL_S`), then leaves out
-        its optional movements from the last one back (each with the hold after it); only if the
-        required movements alone do not fit do they speed up to fit: the movements at human
-        speed first, the guarded approaches (:meth:`approach`) only if those cannot make room.
+        its optional movements from the last one back (each with the hold after it), then speeds
+        up its guarded approaches (:meth:`approach`, up to :data:`APPROACH_HURRIED_M_S`); only if
+        the required movements alone do not fit do they all speed up to fit, in proportion.
 
         Returns:
             ``(t, displacement, rotation vector)`` keyframes for :class:`~benchmark.world.tasks.motion.Motion`,
             ``(t, displacement, rotation vector, ramp_s)`` for one that ends an approach.
         """
         way, optional, moves, ramps = list(self.way), list(self.optional), list(self.moves), list(self.ramps)
+        shortest = list(self.shortest)
         window = t1 - t0
         d = np.asarray(self.durations, float)
         if d.sum() > window:  # shorten the holds
@@ -201,14 +212,13 @@ class Plan:
             if i + 1 < len(d) and not moves[i + 1]:
                 drop.append(i + 1)  # and the hold after it
             for j in reversed(drop):
-                del way[j + 1], d[j], optional[j], moves[j], ramps[j]
+                del way[j + 1], d[j], optional[j], moves[j], ramps[j], shortest[j]
+        room = [x - s if r > 0 else 0.0 for x, s, r in zip(d, shortest, ramps)]
+        if sum(d) > window and sum(room) > 0:  # the approaches hurry first
+            cut = min(1.0, (sum(d) - window) / sum(room))
+            d = [x - q * cut for x, q in zip(d, room)]
         if sum(d) > window:  # only in an episode too short for the required movements: faster
-            fixed = sum(x for x, r in zip(d, ramps) if r > 0)  # the approaches keep their speed if they can
-            if 0 < fixed < window:
-                k = (window - fixed) / (sum(d) - fixed)
-                d = [x if r > 0 else x * k for x, r in zip(d, ramps)]
-            else:
-                d = [x * window / sum(d) for x in d]
+            d = [x * window / sum(d) for x in d]
         times = t0 + np.concatenate([[0.0], np.cumsum(d)])
         frames = []
         for i, (t, (dd, rr)) in enumerate(zip(times, way)):
