@@ -26,13 +26,14 @@ of our box covers):
   placing an object lengthen their deceleration (Marteniuk, MacKenzie, Jeannerod, Athenes & Dugas
   1987, Can. J. Psychol. 41(3), "Constraints on human arm movement trajectories": placing a disk
   into a tight well against throwing it), and the contact with the support is a sensed event that
-  ends the replacement phase and starts the unloading (Johansson & Westling 1984, Exp. Brain Res.
-  56; Johansson & Flanagan 2009, Nat. Rev. Neurosci. 10). The plan lowers the box at human speed
-  to :data:`APPROACH_HEIGHT_M` above the table, then approaches at a constant speed drawn from
-  ``APPROACH_SPEED`` 2-3 cm/s (chosen: no source gives a touchdown speed; an order of magnitude
-  below the transports' peaks, so that the box comes to rest on the table within a camera frame
-  at accelerations like the transports') until it is :data:`PRESS_M` into the table. The constant
-  speed makes the touchdown speed the same wherever in that band the box meets the table.
+  ends the replacement phase before the unloading (Johansson & Westling 1984, Exp. Brain Res. 56;
+  Johansson & Flanagan 2009, Nat. Rev. Neurosci. 10; here the unloading keeps its planned time,
+  after the approach). The plan lowers the box at human speed to :data:`APPROACH_HEIGHT_M` above
+  the table, then approaches at a constant speed drawn from ``APPROACH_SPEED`` 2-3 cm/s (chosen:
+  we found no source for a touchdown speed; an order of magnitude below the transports' peaks, so
+  that a box stopped by the table within one 30 Hz frame decelerates at most 0.6-0.9 m/s^2, below
+  the transports' accelerations) until it is :data:`PRESS_M` into the table. The constant speed
+  makes the touchdown speed the same wherever in that band the box meets the table.
 """
 
 from __future__ import annotations
@@ -75,11 +76,13 @@ SHAKE_FREQUENCY_HZ = Range(1.0, 2.0, "Hz")
 SHAKE_PEAK_ACC = Range(2.5, 5.0, "m/s^2")
 
 APPROACH_SPEED = Range(0.02, 0.03, "m/s")
+"""The set-down's guarded approach speed, drawn per trial (see the module's notes)."""
 APPROACH_HEIGHT_M = 0.025
 """The set-down's guarded approach starts with the plan's box this far above its place on the table,
-[m] (a choice: the slow band covers where the box can meet the table: the hand sits a millimetre or
-two lower or higher under the person's grip, and the box turns in the grasp during a carry: 15
-degrees in smoke's `place`, its lowest corner 19 mm below a level box's bottom)."""
+[m] (a choice: the slow band covers where the box can meet the table: the box hangs about a
+millimetre below the plan under the person's grip and lags it by about 20 ms, and a carry can turn
+it in the grasp: 15 degrees about its short axis lower an end of its 171 mm length by 85.5 mm x sin
+15 degrees = 22 mm; smoke's `place`, so turned, met the table with the plan 19 mm above its end)."""
 APPROACH_RAMP_S = 0.1
 """An approach reaches and leaves its speed along minimum-jerk ramps this long, [s] (a choice: at
 2-3 cm/s the ramps peak at 0.4-0.6 m/s^2, below the transports' accelerations)."""
