@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from benchmark.world.tasks import TASKS
-from benchmark.world.tasks.motion import Motion, min_jerk, timed
+from benchmark.world.tasks.motion import Motion, cruise, min_jerk, timed
 from fsv.hand import axis_angle_to_rot
 
 
@@ -73,3 +73,33 @@ def test_keyframes_fit_the_manipulation_window(name, duration):
         assert d[:, 2].max() >= 0.08
     if task.releases:
         assert d[-1, 2] <= 0.0  # put back on the table before letting go
+
+
+@pytest.mark.parametrize("ramp", [0.1, 0.3, 0.5])
+def test_cruise_runs_at_constant_speed_between_smooth_ramps(ramp):
+    s = np.linspace(0.01, 0.99, 99)
+    h = 1e-6
+    p, dp, ddp = cruise(s, ramp)
+    np.testing.assert_allclose(dp, (cruise(s + h, ramp)[0] - cruise(s - h, ramp)[0]) / (2 * h), atol=1e-6)
+    np.testing.assert_allclose(ddp, (cruise(s + h, ramp)[1] - cruise(s - h, ramp)[1]) / (2 * h), atol=1e-4)
+    ends = cruise(np.array([0.0, 1.0]), ramp)
+    np.testing.assert_allclose(ends[0], [0.0, 1.0], atol=1e-15)
+    np.testing.assert_allclose(ends[1:], 0.0, atol=1e-15)  # starts and ends at rest
+    middle = (s > ramp) & (s < 1 - ramp)
+    np.testing.assert_allclose(dp[middle], 1.0 / (1.0 - ramp), rtol=1e-12)  # the constant speed
+    np.testing.assert_allclose(ddp[middle], 0.0, atol=1e-12)
+    with pytest.raises(ValueError):
+        cruise(s, 0.6)
+
+
+def test_a_keyframe_with_a_ramp_ends_a_constant_speed_segment():
+    # 24 mm down in 1.1 s with 0.1 s ramps: 2.4 cm/s between them; the other segment stays minimum-jerk
+    motion = Motion(np.zeros(3), np.eye(3), [(0.0, np.zeros(3), np.zeros(3)), (1.0, np.array([0, 0, 0.1]), np.zeros(3)),
+                                             (2.1, np.array([0, 0, 0.076]), np.zeros(3), 0.1)])
+    _, _, vel, acc, _, _ = motion.evaluate(np.linspace(1.1, 2.0, 91))
+    np.testing.assert_allclose(vel[:, 2], -0.024, rtol=1e-12)
+    np.testing.assert_allclose(acc, 0.0, atol=1e-12)
+    pos, _, vel, _, _, _ = motion.evaluate(np.array([0.5, 1.0, 2.1]))
+    np.testing.assert_allclose(pos[:, 2], [0.05, 0.1, 0.076], atol=1e-15)
+    np.testing.assert_allclose(vel[1:], 0.0, atol=1e-15)
+    assert vel[0, 2] == pytest.approx(1.875 * 0.1)  # the minimum-jerk segment's peak

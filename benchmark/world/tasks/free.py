@@ -6,12 +6,11 @@ import numpy as np
 
 from benchmark.world.tasks.human import Plan
 from benchmark.world.tasks.motion import Phases
-from benchmark.world.tasks.place import PRESS_M
 from benchmark.world.tasks.task import Task
 
 
 def keyframes(phases: Phases, rng: np.random.Generator) -> list:
-    """Lift, random poses (within 10 cm sideways, 8-20 cm up, 25 degrees), put down, hold.
+    """Lift, random poses (within 10 cm sideways, 8-20 cm up, 25 degrees), set down (:meth:`Plan.set_down`), hold.
 
     One random pose per ~1.2 s of manipulation time (at most 5), movements at human speed with
     dwells of 0.2-1 s between them.
@@ -24,7 +23,7 @@ def keyframes(phases: Phases, rng: np.random.Generator) -> list:
         plan.move(d, r, optional=True).hold(rng.uniform(0.2, 1.0))
     end = np.array([rng.uniform(-0.08, 0.08), rng.uniform(-0.05, 0.05), 0.0])
     yaw = np.array([0.0, 0.0, rng.uniform(-0.3, 0.3)])
-    plan.move(end + [0, 0, 0.05], yaw).move(end + [0, 0, -PRESS_M])
+    plan.move(end + [0, 0, 0.05], yaw).set_down(end)
     return plan.keyframes(phases.load_end, phases.move_end)
 
 

@@ -22,6 +22,18 @@ of our box covers):
   with a hand-held load, the load force changing by tens of percent of the weight (Flanagan &
   Wing 1995, Exp. Brain Res. 105, "The stability of precision grip forces during cyclic arm
   movements with a hand-held load").
+* The set-down (:meth:`Plan.set_down`): people put an object down gently. Movements that end in
+  placing an object lengthen their deceleration (Marteniuk, MacKenzie, Jeannerod, Athenes & Dugas
+  1987, Can. J. Psychol. 41(3), "Constraints on human arm movement trajectories": placing a disk
+  into a tight well against throwing it), and the contact with the support is a sensed event that
+  ends the replacement phase before the unloading (Johansson & Westling 1984, Exp. Brain Res. 56;
+  Johansson & Flanagan 2009, Nat. Rev. Neurosci. 10; here the unloading keeps its planned time,
+  after the approach). The plan lowers the box at human speed to :data:`APPROACH_HEIGHT_M` above
+  the table, then approaches at a constant speed drawn from ``APPROACH_SPEED`` 2-3 cm/s (chosen:
+  we found no source for a touchdown speed; an order of magnitude below the transports' peaks, so
+  that a box stopped by the table within one 30 Hz frame decelerates at most 0.6-0.9 m/s^2, below
+  the transports' accelerations) until it is :data:`PRESS_M` into the table. The constant speed
+  makes the touchdown speed the same wherever in that band the box meets the table.
 """
 
 from __future__ import annotations
@@ -63,6 +75,26 @@ DWELL_S = Range(0.2, 0.6, "s")
 SHAKE_FREQUENCY_HZ = Range(1.0, 2.0, "Hz")
 SHAKE_PEAK_ACC = Range(2.5, 5.0, "m/s^2")
 
+APPROACH_SPEED = Range(0.02, 0.03, "m/s")
+"""The set-down's guarded approach speed, drawn per trial (see the module's notes)."""
+APPROACH_HEIGHT_M = 0.025
+"""The set-down's guarded approach starts with the plan's box this far above its place on the table,
+[m] (a choice: the slow band covers where the box can meet the table: the box hangs about a
+millimetre below the plan under the person's grip and lags it by about 20 ms, and a carry can turn
+it in the grasp: 15 degrees about its short axis lower an end of its 171 mm length by 85.5 mm x sin
+15 degrees = 22 mm; smoke's `place`, so turned, met the table with the plan 19 mm above its end)."""
+APPROACH_RAMP_S = 0.1
+"""An approach reaches and leaves its speed along minimum-jerk ramps this long, [s] (a choice: at
+2-3 cm/s the ramps peak at 0.4-0.6 m/s^2, below the transports' accelerations)."""
+APPROACH_HURRIED_M_S = 0.06
+"""An episode too short for its plan at human speed speeds up its set-down's approach up to this,
+[m/s], before it hurries the other movements (a choice: twice the drawn range's top, still an
+order of magnitude below the transports' speeds; a person in a hurry feels for the table faster
+rather than jerk the box about)."""
+PRESS_M = 0.002
+"""The set-down ends this far below the box's place on the table, [m]: the hand's compliance presses
+the box on."""
+
 MIN_MOVE_S = 0.25
 """No movement is planned shorter than this, [s] (a tiny displacement does not make a twitch)."""
 MIN_DWELL_S = 0.1
@@ -89,6 +121,8 @@ class Plan:
         self.durations = []
         self.optional = []
         self.moves = []
+        self.ramps = []
+        self.shortest = []
 
     @property
     def pose(self) -> tuple[np.ndarray, np.ndarray]:
@@ -113,7 +147,36 @@ class Plan:
         self.durations.append(T)
         self.optional.append(bool(optional))
         self.moves.append(True)
+        self.ramps.append(0.0)
+        self.shortest.append(T)
         return self
+
+    def approach(self, displacement, speed: float, ramp_s: float = APPROACH_RAMP_S) -> "Plan":
+        """A guarded approach: a straight movement to ``displacement`` (3,) [m] (box start frame,
+        the rotation kept) at the constant ``speed`` [m/s], which it reaches and leaves along
+        minimum-jerk ramps of ``ramp_s`` [s] (:func:`benchmark.world.tasks.motion.cruise`).
+        Its duration is distance / speed + ramp_s (shorter only in an episode too short for its
+        plan: :meth:`keyframes`, :data:`APPROACH_HURRIED_M_S`)."""
+        if not speed > 0 or not ramp_s > 0:
+            raise ValueError(f"an approach needs a positive speed and ramp, got {speed} m/s, {ramp_s} s")
+        d0, r0 = self.pose
+        d1 = np.asarray(displacement, float)
+        self.way.append((d1, r0))
+        distance = norm(d1 - d0)
+        self.durations.append(distance / speed + ramp_s)
+        self.optional.append(False)
+        self.moves.append(True)
+        self.ramps.append(float(ramp_s))
+        self.shortest.append(distance / max(speed, APPROACH_HURRIED_M_S) + ramp_s)
+        return self
+
+    def set_down(self, place) -> "Plan":
+        """Puts the box down at ``place`` (3,) [m] (box start frame; its z the table's, 0): a
+        movement at human speed (:meth:`move`) to :data:`APPROACH_HEIGHT_M` above it, then a guarded
+        :meth:`approach` at a speed drawn from :data:`APPROACH_SPEED` to :data:`PRESS_M` below it."""
+        place = np.asarray(place, float)
+        self.move(place + [0.0, 0.0, APPROACH_HEIGHT_M])
+        return self.approach(place - [0.0, 0.0, PRESS_M], APPROACH_SPEED.draw(self.rng))
 
     def hold(self, seconds: float | None = None) -> "Plan":
         """Stays still for ``seconds`` (default: a dwell drawn from :data:`DWELL_S`)."""
@@ -121,18 +184,23 @@ class Plan:
         self.durations.append(DWELL_S.draw(self.rng) if seconds is None else float(seconds))
         self.optional.append(False)
         self.moves.append(False)
+        self.ramps.append(0.0)
+        self.shortest.append(0.0)
         return self
 
     def keyframes(self, t0: float, t1: float) -> list:
         """The keyframes from ``t0``, the last pose held until ``t1``. A plan longer than the
         window [t0, t1] first shortens its holds (down to :data:`MIN_DWELL_S`), then leaves out
-        its optional movements from the last one back (each with the hold after it); only if the
-        required movements alone do not fit do they speed up to fit.
+        its optional movements from the last one back (each with the hold after it), then speeds
+        up its guarded approaches (:meth:`approach`, up to :data:`APPROACH_HURRIED_M_S`); only if
+        the required movements alone do not fit do they all speed up to fit, in proportion.
 
         Returns:
-            ``(t, displacement, rotation vector)`` keyframes for :class:`~benchmark.world.tasks.motion.Motion`.
+            ``(t, displacement, rotation vector)`` keyframes for :class:`~benchmark.world.tasks.motion.Motion`,
+            ``(t, displacement, rotation vector, ramp_s)`` for one that ends an approach.
         """
-        way, optional, moves = list(self.way), list(self.optional), list(self.moves)
+        way, optional, moves, ramps = list(self.way), list(self.optional), list(self.moves), list(self.ramps)
+        shortest = list(self.shortest)
         window = t1 - t0
         d = np.asarray(self.durations, float)
         if d.sum() > window:  # shorten the holds
@@ -147,8 +215,16 @@ class Plan:
             if i + 1 < len(d) and not moves[i + 1]:
                 drop.append(i + 1)  # and the hold after it
             for j in reversed(drop):
-                del way[j + 1], d[j], optional[j], moves[j]
+                del way[j + 1], d[j], optional[j], moves[j], ramps[j], shortest[j]
+        room = [x - s if r > 0 else 0.0 for x, s, r in zip(d, shortest, ramps)]
+        if sum(d) > window and sum(room) > 0:  # the approaches hurry first
+            cut = min(1.0, (sum(d) - window) / sum(room))
+            d = [x - q * cut for x, q in zip(d, room)]
         if sum(d) > window:  # only in an episode too short for the required movements: faster
             d = [x * window / sum(d) for x in d]
         times = t0 + np.concatenate([[0.0], np.cumsum(d)])
-        return [(float(t), np.asarray(dd, float), np.asarray(rr, float)) for t, (dd, rr) in zip(times, way)]
+        frames = []
+        for i, (t, (dd, rr)) in enumerate(zip(times, way)):
+            frame = (float(t), np.asarray(dd, float), np.asarray(rr, float))
+            frames.append(frame + (ramps[i - 1],) if i > 0 and ramps[i - 1] > 0 else frame)
+        return frames

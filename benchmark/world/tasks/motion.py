@@ -2,8 +2,10 @@
 
 A task describes what happens to the box as keyframes (time, displacement, rotation) relative to
 its start pose; :class:`Motion` interpolates them with minimum-jerk profiles (Flash & Hogan 1985),
-so positions, velocities and accelerations are smooth and known in closed form. The hand follows
-the box's planned pose with the grasp's palm offset.
+so positions, velocities and accelerations are smooth and known in closed form; a keyframe may
+instead end a constant-speed segment with smooth ramps (:func:`cruise`: the guarded final approach
+of a set-down, :meth:`benchmark.world.tasks.human.Plan.approach`). The hand follows the box's
+planned pose with the grasp's palm offset.
 """
 
 from __future__ import annotations
@@ -27,6 +29,44 @@ def min_jerk(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     s = np.clip(s, 0.0, 1.0)
     return (10 * s**3 - 15 * s**4 + 6 * s**5, 30 * s**2 - 60 * s**3 + 30 * s**4, 60 * s - 180 * s**2 + 120 * s**3)
+
+
+def cruise(s: np.ndarray, ramp: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A constant-speed profile with smooth ramps and its first two derivatives in s: the speed
+    rises along the minimum-jerk step 10 x^3 - 15 x^4 + 6 x^5 over the first ``ramp`` of the
+    segment, stays constant, and falls the same way over the last ``ramp``.
+
+    Args:
+        s: Normalised time, any shape; clipped to [0, 1].
+        ramp: Each ramp's share of the segment, in (0, 1/2].
+
+    Returns:
+        ``(p, dp/ds, d2p/ds2)``, each shaped like ``s``; p runs from 0 to 1, and dp/ds is
+        1 / (1 - ramp) between the ramps.
+    """
+    if not 0.0 < ramp <= 0.5:
+        raise ValueError(f"ramp must be in (0, 1/2], got {ramp}")
+    s = np.clip(s, 0.0, 1.0)
+    c = 1.0 / (1.0 - ramp)  # the ramps cover half their length each: p(1) = c (1 - 2 ramp + ramp) = 1
+    up = np.clip(s / ramp, 0.0, 1.0)
+    down = np.clip((1.0 - s) / ramp, 0.0, 1.0)
+    p = np.where(s < ramp, ramp * _ramp_integral(up),
+                 np.where(s > 1.0 - ramp, 1.0 - ramp - ramp * _ramp_integral(down), s - 0.5 * ramp))
+    step_up, rate_up = _step(up)
+    step_down, rate_down = _step(down)
+    dp = np.where(s < ramp, step_up, np.where(s > 1.0 - ramp, step_down, 1.0))
+    ddp = np.where(s < ramp, rate_up / ramp, np.where(s > 1.0 - ramp, -rate_down / ramp, 0.0))
+    return c * p, c * dp, c * ddp
+
+
+def _step(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The minimum-jerk step 10 x^3 - 15 x^4 + 6 x^5 and its derivative."""
+    return 10 * x**3 - 15 * x**4 + 6 * x**5, 30 * x**2 - 60 * x**3 + 30 * x**4
+
+
+def _ramp_integral(x: np.ndarray) -> np.ndarray:
+    """The integral of the minimum-jerk step from 0 to x: 5/2 x^4 - 3 x^5 + x^6 (1/2 at x = 1)."""
+    return 2.5 * x**4 - 3 * x**5 + x**6
 
 
 MIN_GRIP_COMPRESSION = 0.6
@@ -77,12 +117,15 @@ class Motion:
     Keyframe i is ``(t_i, d_i, r_i)``: at time t_i the box centre is at ``start_pos + d_i`` and its
     orientation is ``exp(r_i) @ start_rot`` (r_i a rotation vector in the world frame). Between
     keyframes the displacement and the relative rotation (about a fixed axis) follow minimum-jerk
-    profiles; before the first and after the last keyframe the box rests.
+    profiles; before the first and after the last keyframe the box rests. A keyframe with a fourth
+    element ``ramp_s`` ends a constant-speed segment instead (:func:`cruise`), whose speed rises and
+    falls over ``ramp_s`` [s] at its ends.
 
     Args:
         start_pos: Box centre at rest, (3,), [m].
         start_rot: Box orientation at rest, (3, 3).
-        keyframes: List of ``(t, displacement (3,), rotation vector (3,))``, times increasing.
+        keyframes: List of ``(t, displacement (3,), rotation vector (3,))`` or ``(t, displacement,
+            rotation vector, ramp_s)``, times increasing.
     """
 
     def __init__(self, start_pos: np.ndarray, start_rot: np.ndarray, keyframes: list):
@@ -93,6 +136,11 @@ class Motion:
             raise ValueError(f"keyframe times must increase, got {self.t}")
         self.d = np.array([k[1] for k in keyframes], dtype=float).reshape(-1, 3)
         self.R = [mm(axis_angle_to_rot(_unit(k[2]), norm(k[2])), self.start_rot) for k in keyframes]
+        # each segment's ramp share (0: minimum jerk), from the keyframe that ends it
+        self.ramp = np.zeros(max(len(keyframes) - 1, 0))
+        for i, k in enumerate(keyframes[1:]):
+            if len(k) > 3:
+                self.ramp[i] = min(0.5, float(k[3]) / (self.t[i + 1] - self.t[i]))
         # Relative rotation of each segment as axis * angle, world frame.
         self.seg_axis, self.seg_angle = [], []
         for a, b in zip(self.R[:-1], self.R[1:]):
@@ -131,7 +179,8 @@ class Motion:
         for i in np.unique(seg[inside]):
             sel = inside & (seg == i)
             T = self.t[i + 1] - self.t[i]
-            p, dp, ddp = min_jerk((t[sel] - self.t[i]) / T)
+            s = (t[sel] - self.t[i]) / T
+            p, dp, ddp = cruise(s, self.ramp[i]) if self.ramp[i] > 0 else min_jerk(s)
             delta = self.d[i + 1] - self.d[i]
             pos[sel] = self.start_pos + self.d[i] + p[:, None] * delta
             vel[sel] = (dp / T)[:, None] * delta
