@@ -155,10 +155,9 @@ class ContactConfig:
     seen_off_frames: int = 30
     held_by: int = 2
     grasp_min_digits: int = 3
-    hidden_fit_points: bool = False
-    seen_off_m: float = 0.012
-    rank_by_count: bool = False
-    ulnar_chain: bool = False
+    hidden_points_from_fit: bool = True
+    slide_needs_sight: bool = True
+    contiguous_grasp: bool = True
 
     def __post_init__(self):
         if not (np.isfinite(self.on_m) and np.isfinite(self.off_m) and self.off_m >= self.on_m):
@@ -288,7 +287,7 @@ def _median_in_runs(active, point, normal, half, w):
     return out, nrm
 
 
-def _sliding(active, point, normal, t, c: ContactConfig, observed=None):
+def _sliding(active, point, normal, t, c: ContactConfig, observed):
     """Sliding flags and directions (see ContactConfig): the contact point's tangential speed by a
     centred difference over ``slide_window`` frames each side, with a start after ``slide_frames``
     frames above ``slide_speed_m_s`` and a stop below ``slide_stop_m_s``."""
@@ -307,8 +306,8 @@ def _sliding(active, point, normal, t, c: ContactConfig, observed=None):
         if c.slide_jump_share < 1:  # one frame's step making most of the motion: a jump, not a slide
             steps = np.linalg.norm(np.diff(point[i - w : i + w + 1], axis=0), axis=2)  # (2w, K)
             fast &= ~(steps.max(axis=0) > c.slide_jump_share * steps.sum(axis=0))
-        if c.hidden_fit_points and observed is not None:  # no sight of the digit, no evidence of a slide
-            fast &= observed[i - w : i + w + 1].any(axis=0)
+        if c.slide_needs_sight:  # no sight of the digit, no evidence of a slide
+            fast &= observed[i - w] & observed[i + w]
         fast_run = np.where(span & fast, fast_run + 1, 0)
         s = span & ((fast_run >= c.slide_frames) | (sliding[i - 1] & (speed >= c.slide_stop_m_s)))
         sliding[i] = s
@@ -340,7 +339,7 @@ def _activate(gap, observed, q, radius, point, normal, half, weight, outside, c:
             # a contact the opposition prior placed lasts only as long as the fingers it opposes
             hidden = ~observed[i] & prev & ~opposed[i - 1]
             active[i] |= hidden
-            if c.hidden_fit_points:  # the hand fit's pad where it still lies on the same face
+            if c.hidden_points_from_fit:  # the hand fit's pad where it still lies on the same face
                 on_face = (gap[i] <= c.off_m) & (np.abs(normal[i] - normal[i - 1]).sum(axis=1) == 0)
                 hidden = hidden & ~on_face
             point[i, hidden] = point[i - 1, hidden]
@@ -377,20 +376,21 @@ def out_of_grasp(active: np.ndarray, observed: np.ndarray, gap: np.ndarray,
         held = count - active[:, k] >= c.held_by
         seen = observed[:, k] & held
         n = int(seen.sum())
-        off = int((seen & (gap[:, k] > c.seen_off_m)).sum())
+        off = int((seen & (gap[:, k] > c.off_m)).sum())
         out[k] = off >= c.seen_off_frames and off > c.seen_off_share * n
-        share[k] = off if c.rank_by_count else off / max(n, 1)
-    if c.ulnar_chain and K > 2:  # the fingers in a grasp are the index and its neighbours in turn
+        share[k] = off / max(n, 1)
+    touched = active.any(axis=0)
+    rank = share  # the digits most often seen off leave first
+    if c.contiguous_grasp and K > 2:
         first = np.flatnonzero(out[1:])
-        if first.size:
+        if first.size:  # every finger beyond the first one outside the grasp is outside too
             out[1 + first[0]:] = True
-        out &= active.any(axis=0)
-        share = np.arange(K, dtype=float)  # the ulnar-most leave first
-    keep = int(active.any(axis=0).sum()) - int(c.grasp_min_digits)
-    if out.sum() > max(keep, 0):
-        order = [k for k in np.argsort(-share, kind="stable") if out[k]]
-        out[:] = False
-        out[order[: max(keep, 0)]] = True
+        rank = np.arange(K, dtype=float)  # the fingers farthest from the index leave first
+    keep = max(int(touched.sum()) - int(c.grasp_min_digits), 0)
+    if (out & touched).sum() > keep:
+        order = [k for k in np.argsort(-rank, kind="stable") if out[k] and touched[k]]
+        out &= ~touched
+        out[order[:keep]] = True
     return out
 
 
