@@ -144,7 +144,11 @@ class ContactConfig:
         held_by: Frames in which at least this many other digits touch the box count as held.
         seen_off_span: ... and the frames it was seen off reach (first to last) over at least this
             share of the hold (first to last held frame): one window of a stray hand fit is not a
-            digit off the box through the hold (0: any window).
+            digit off the box through the hold (0: any window). Half, a stated choice: on ``dev``
+            (lab and exact) the 58 phantom digits the evidence drops reach 0.65 or more (the next
+            0.76, the rest 0.83 or more) and the true digits it flags 0.78-1.00, so ``dev``'s
+            contacts are the same to the bit for any share up to 0.65; the true ring of the default
+            lift of seed 3 that a stray fit had put off the box reached 0.18.
         grasp_min_digits: The grasp keeps at least this many of the digits that touched the box.
         hidden_points_from_fit: A hidden digit that keeps its contact (the occlusion prior) has the
             hand fit's pad as its point while the fit keeps the pad within ``off_m`` of the same
