@@ -22,7 +22,8 @@ Per frame, in this order (``input_names`` names them):
   point and the unit normal into the box in the object frame, zero where the finger is not in contact.
 
 A frame without valid kinematics (``Kinematics.valid`` False, or a pose that is not finite) has NaN
-inputs. Element-wise arithmetic and einsum contractions only (no BLAS): the same bits on every machine.
+inputs. Element-wise arithmetic in a fixed order only (no BLAS, no einsum, whose sums follow the
+operands' memory layout): the same bits on every machine, from a dataset's table or a tracker.
 """
 
 from __future__ import annotations
@@ -63,15 +64,22 @@ def check_window(window) -> int:
 
 
 def _in_object(rot: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """R^T v per frame: (T, 3, 3), (T, 3) -> (T, 3)."""
-    return np.einsum("tji,tj->ti", rot, v)
+    """R^T v per frame: (T, 3, 3), (T, 3) -> (T, 3), summed in a fixed order (einsum's sums follow
+    the operands' memory layout: a table's column-major copy and a tracker's rows would differ in
+    the last bit)."""
+    return rot[:, 0, :] * v[:, 0:1] + rot[:, 1, :] * v[:, 1:2] + rot[:, 2, :] * v[:, 2:3]
+
+
+def _times(matrix: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """M v per frame for one (3, 3) matrix: (3, 3), (T, 3) -> (T, 3), in a fixed order."""
+    return v[:, 0:1] * matrix[:, 0] + v[:, 1:2] * matrix[:, 1] + v[:, 2:3] * matrix[:, 2]
 
 
 def lowest_height(kinematics: Kinematics, object_model: ObjectModel) -> np.ndarray:
     """Height of the box's lowest corner above the plane z = 0, shape (T,), [m]:
     z - sum_j |R_zj| h_j with h the half extents (NaN where the pose is not finite)."""
-    R = kinematics.rot
-    return kinematics.pos[:, 2] - np.einsum("tj,j->t", np.abs(R[:, 2, :]), object_model.half_extents)
+    up, h = np.abs(kinematics.rot[:, 2, :]), object_model.half_extents
+    return kinematics.pos[:, 2] - (up[:, 0] * h[0] + up[:, 1] * h[1] + up[:, 2] * h[2])
 
 
 def direct_inputs(kinematics: Kinematics, contacts: Contacts, object_model: ObjectModel, gravity, *,
@@ -107,8 +115,7 @@ def direct_inputs(kinematics: Kinematics, contacts: Contacts, object_model: Obje
         spec = _in_object(R, kinematics.acc - g)
         omega, alpha = _in_object(R, kinematics.omega), _in_object(R, kinematics.alpha)
         inertia = object_model.inertia
-        Iw = np.einsum("ij,tj->ti", inertia, omega)
-        torque = np.einsum("ij,tj->ti", inertia, alpha) + np.cross(omega, Iw)
+        torque = _times(inertia, alpha) + np.cross(omega, _times(inertia, omega))
         blocks = [object_model.mass_kg * spec, torque, spec, _in_object(R, kinematics.vel), omega, alpha,
                   R[:, 2, :], np.full((T, 1), object_model.mass_kg), np.tile(object_model.half_extents, (T, 1)),
                   lowest_height(kinematics, object_model)[:, None]]
