@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
 
 from benchmark.atomic import check_file_out
 from benchmark.limits import MAX_EPOCHS, MAX_SEED, integer, number
@@ -141,28 +141,25 @@ def _timeline(rows: pd.DataFrame) -> tuple[Kinematics, Contacts]:
 
 def run(args: argparse.Namespace):
     check_file_out(args.out, force=args.force)
-    header = check_all_rows(args.data)
     where = {} if args.seeds is None else dict(seed=list(parse_ints(args.seeds, "--seeds")))
     if args.users is not None:
         where["user"] = list(parse_ints(args.users, "--users"))
     config = DirectConfig(hidden=args.hidden, window=args.window, epochs=args.epochs, batch=args.batch, lr=args.lr,
                           val_fraction=args.val_fraction, seed=args.seed)
+    header = check_all_rows(args.data)
     df = load_dataset(args.data, rows="all", **where)
     check_training_people(df["user"].unique())
     samples, names = direct_samples(df, object_models(args.data), config)
-    import torch  # noqa: F401  (lazy: 1.2 s, imported before the training's clock starts)
-    from tqdm import tqdm  # lazy: tqdm (30 ms) off `fsv-bench train-direct`'s start-up
-
     meta = dict(
         command="fsv-bench train-direct " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train-direct"]
         else "fsv.learn.train_direct",
         dataset=header["spec"], selection=where, episodes=int(df["episode"].nunique()),
     )
-    t0 = time.perf_counter()
+    timing = {}
     with tqdm(total=config.epochs, desc="train-direct", unit="epoch", leave=False, disable=True if args.quiet else None,
               mininterval=0.5) as bar:
-        model = train_direct(samples, names, config, metadata=meta, on_epoch=bar.update)
-    seconds = time.perf_counter() - t0
+        model = train_direct(samples, names, config, metadata=meta, on_epoch=bar.update, timing=timing)
+    seconds = timing["seconds"]
     model.save(args.out)
     m = model.metadata
     val = m["val_loss"][m["best_epoch"]]
