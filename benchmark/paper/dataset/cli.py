@@ -141,9 +141,10 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
     t0 = time.perf_counter()
     man = generate(spec, args.out, workers=args.workers, ray_address=args.ray_address, progress=not args.no_progress)
     failed = int((man["status"] != "ok").sum())
+    paper_rows = int((man["frames"] - man["dropped_contacts"] - man["dropped_gap"] - man["dropped_solver"]).sum())
     print(
         f"dataset {args.out}: {len(man)} episodes ({failed} failed), "
-        + (f"{int(man['rows'].sum())} rows (every frame with kinematics), {int(man['paper_rows'].sum())} of them kept by "
+        + (f"{int(man['rows'].sum())} rows (every frame with kinematics), {paper_rows} of them kept by "
            "the paper's rule; " if spec.rows == "all" else f"{int(man['rows'].sum())} samples kept; ")
         + f"dropped {int(man['dropped_gap'].sum())} for |vision - tactile net force| > {spec.max_gap_n} N, "
         f"{int(man['dropped_contacts'].sum())} with < {spec.min_fingers} fingers or invalid kinematics, "

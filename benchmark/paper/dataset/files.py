@@ -199,7 +199,7 @@ def _build_seconds(parquet_path: str) -> float:
 
 
 MANIFEST_COLUMNS = (
-    "episode", "file", "sha256", "task", "user", "grasp", "mass", "seed", "status", "frames", "rows", "paper_rows",
+    "episode", "file", "sha256", "task", "user", "grasp", "mass", "seed", "status", "frames", "rows",
     "dropped_contacts", "dropped_gap", "dropped_solver", "seconds", "kinematics", "contacts",
 )
 
@@ -228,8 +228,7 @@ def write_manifest(out, checked: dict | None = None) -> pd.DataFrame:
         rows.append(dict(
             episode=meta["episode"], file=rel, sha256=checked[rel], task=sc["task"], user=sc["user"],
             grasp=sc["grasp"], mass=sc["mass"], seed=sc["seed"], status=meta["status"],
-            frames=meta.get("frames", 0), rows=meta.get("rows", 0), paper_rows=meta.get("paper_rows", 0),
-            dropped_contacts=meta.get("dropped_contacts", 0),
+            frames=meta.get("frames", 0), rows=meta.get("rows", 0), dropped_contacts=meta.get("dropped_contacts", 0),
             dropped_gap=meta.get("dropped_gap", 0), dropped_solver=meta.get("dropped_solver", 0),
             seconds=_build_seconds(path), kinematics=meta["kinematics"], contacts=meta["contacts"],
         ))
