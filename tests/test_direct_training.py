@@ -17,7 +17,7 @@ def test_the_model_records_its_data_and_trains_to_the_same_bits_twice(direct_dat
     model = load_direct(out / "model.npz")
     m = model.metadata
     assert m["dataset"] == spec.as_dict() and m["episodes"] == 2 and m["command"].startswith("fsv")
-    assert m["samples"] == 61 and m["held_out_samples"] == 61  # one of the two episodes held out
+    assert m["samples"] == 61 and m["held_out_samples"] == 61 and m["rows_left_out"] == 0  # one episode held out
     assert model.num_parameters == (61 * 16 + 16) + (16 * 16 + 16) + (16 * 21 + 21)  # 5 fingers: 61 inputs, 21 outputs
     assert run(["train-direct", "--data", str(out / "data"), "--out", str(tmp_path / "again.npz"), "--epochs", "3",
                 "--hidden", "16,16", "--quiet"]) == 0

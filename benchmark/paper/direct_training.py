@@ -93,21 +93,21 @@ def direct_samples(df: pd.DataFrame, models: dict, config: DirectConfig) -> tupl
         config: The inputs' window and the off-table height.
 
     Returns:
-        ``(samples, finger names)``: one sample per row, in the table's order.
+        ``(samples, finger names)``: one sample per row with finite inputs (every row of such a
+        dataset, whose rows have kinematics; a tracked contact without a point would be left out),
+        in the table's order.
     """
     names = finger_names_of(df)
     xs, order = [], []
     for episode, rows in df.groupby("episode", sort=False):
         om, gravity = models[episode]
         kin, con = _timeline(rows)
-        x, valid = direct_inputs(kin, con, om, gravity, window=config.window)
-        frames = rows["frame"].to_numpy()
-        if not valid[frames].all():
-            raise InputError(f"episode {episode}: rows without valid kinematics (a dataset of `generate --rows all` "
-                             "holds none)")
-        xs.append(x[frames])
+        x, _ = direct_inputs(kin, con, om, gravity, window=config.window)
+        xs.append(x[rows["frame"].to_numpy()])
         order.append(rows.index.to_numpy())
     x = np.concatenate(xs)[np.argsort(np.concatenate(order), kind="stable")]
+    keep = np.all(np.isfinite(x), axis=1)
+    df, x = df[keep], x[keep]
     force = np.concatenate([df[[f"F_true_{a}_{n}" for a in _AX]].to_numpy(float) for n in names], axis=1)
     table = df[[f"env_{q}_{a}" for q in "FT" for a in _AX]].to_numpy(float)
     active = df[[f"active_{n}" for n in names]].to_numpy(bool)
@@ -154,6 +154,7 @@ def run(args: argparse.Namespace):
         command="fsv-bench train-direct " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train-direct"]
         else "fsv.learn.train_direct",
         dataset=header["spec"], selection=where, episodes=int(df["episode"].nunique()),
+        rows_left_out=int(len(df) - len(samples)),  # rows whose inputs are not all finite
     )
     timing = {}
     with tqdm(total=config.epochs, desc="train-direct", unit="epoch", leave=False, disable=True if args.quiet else None,

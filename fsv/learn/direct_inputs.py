@@ -21,8 +21,8 @@ Per frame, in this order (``input_names`` names them):
 * per finger k: ``active_k`` (0 or 1), ``point_{x,y,z}_k`` [m] and ``normal_{x,y,z}_k``, the contact
   point and the unit normal into the box in the object frame, zero where the finger is not in contact.
 
-A frame without valid kinematics (``Kinematics.valid`` False, or a pose that is not finite) has NaN
-inputs. Element-wise arithmetic in a fixed order only (no BLAS, no einsum, whose sums follow the
+A frame without valid kinematics (``Kinematics.valid`` False, or a pose that is not finite), or
+with any other input not finite, has NaN inputs and is not valid. Element-wise arithmetic in a fixed order only (no BLAS, no einsum, whose sums follow the
 operands' memory layout): the same bits on every machine, from a dataset's table or a tracker.
 """
 
@@ -132,5 +132,6 @@ def direct_inputs(kinematics: Kinematics, contacts: Contacts, object_model: Obje
         blocks += [active[:, k, None].astype(float), np.where(on[:, k], contacts.point[:, k], 0.0),
                    np.where(on[:, k], contacts.normal[:, k], 0.0)]
     x = np.concatenate(blocks, axis=1)
+    valid &= np.all(np.isfinite(x), axis=1)  # e.g. a contact without a point
     x[~valid] = np.nan
     return x, valid
