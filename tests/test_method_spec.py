@@ -74,3 +74,10 @@ def test_the_direct_method_without_its_model_is_refused_before_any_work(tmp_path
     assert main(["--method", "direct", "--internal", "none", "--out", str(out)]) == 2
     assert "--method replaces every stage" in _one_error_line(capsys)
     assert not out.exists()
+
+
+def test_the_direct_methods_label_names_its_network_and_its_oracles(direct_dataset):
+    model = str(direct_dataset[1] / "model.npz")
+    label = method_label(MethodSpec(method="direct", direct_model=model, oracle=("contacts", "kinematics")))
+    assert label.startswith("direct (tracker: reference tracker; differentiator: oracle; forces: direct network")
+    assert f"model {model}, 1,621 parameters" in label and "internal: none; contacts: oracle" in label
