@@ -22,7 +22,7 @@ def test_the_model_records_its_data_and_trains_to_the_same_bits_twice(direct_dat
     assert run(["train-direct", "--data", str(out / "data"), "--out", str(tmp_path / "again.npz"), "--epochs", "3",
                 "--hidden", "16,16", "--quiet"]) == 0
     line = capsys.readouterr().out
-    assert "1,621 parameters" in line and "on 61 samples from 2 episodes (and 61 samples of 1 episodes held out)" in line and "s on one thread" in line
+    assert "1,621 parameters" in line and "on 61 samples of 1 episodes (and 61 samples of 1 episodes held out)" in line and "s on one thread" in line
     a, b = read_direct_state(out / "model.npz"), read_direct_state(tmp_path / "again.npz")
     assert a["sha256"] == b["sha256"]  # weights, normalisation and metadata: the same bits
 

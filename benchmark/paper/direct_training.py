@@ -165,7 +165,7 @@ def run(args: argparse.Namespace):
     m = model.metadata
     val = m["val_loss"][m["best_epoch"]]
     print(f"trained the direct network ({model.num_parameters:,} parameters, {model.num_inputs} inputs, hidden "
-          f"{','.join(map(str, config.hidden))}) on {m['samples']} samples from {m['episodes']} episodes "
+          f"{','.join(map(str, config.hidden))}) on {m['samples']} samples of {m['episodes'] - m['held_out_episodes']} episodes "
           f"(and {m['held_out_samples']} samples of {m['held_out_episodes']} episodes held out) in {seconds:.1f} s on one "
           f"thread; epoch {m['best_epoch'] + 1} of {config.epochs} kept, standardised MSE "
           f"{m['train_loss'][m['best_epoch']]:.4f} on the training samples"
