@@ -86,7 +86,7 @@ DATASETS = {
     "table2-users-0-1": _TABLE2_GRID + ["--users", "0,1"],
     "table2-error-model": _TABLE2_GRID + ["--users", "0,4", "--contacts", "error-model"],
     "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
-    "train": _training_set(TRAIN_PEOPLE),
+    "train": _training_set(TRAIN_PEOPLE) + ["--rows", "all"],
     "train-curve": _training_set(CURVE_PEOPLE),
     "calibration": ["--tasks", "lift", "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "900"],
     "calibration-train": ["--split", "train", "--users", f"0-{TRAIN_PEOPLE - 1}"] + _RECORDING,
@@ -95,8 +95,8 @@ DATASETS = {
     "calibration-test": ["--split", "test", "--users", f"0-{SUITE_PEOPLE - 1}"] + _RECORDING,
 }
 """``fsv-bench generate`` arguments of every dataset a committed result is made from: the Table 2
-cohort's, the shipped model's training set (training people only, :data:`TRAIN_PEOPLE`), the
-learning curve's (:data:`CURVE_PEOPLE`, with their recordings), and the
+cohort's, the shipped models' training set (training people only, :data:`TRAIN_PEOPLE`; every frame, for the
+end-to-end network, of which the paper's networks read the paper's rows), the learning curve's (:data:`CURVE_PEOPLE`, with their recordings), and the
 calibration recordings (the named users' eight 10 s lifts each; every other person's
 :data:`_RECORDING`, never scored)."""
 
@@ -215,6 +215,22 @@ def _compare_model(new: pathlib.Path, old: pathlib.Path) -> list[str]:
     return diffs
 
 
+def _compare_direct_model(new: pathlib.Path, old: pathlib.Path) -> list[str]:
+    from fsv.learn import load_direct  # lazy: scipy, numba, clarabel (0.65 s) off `fsv-bench reproduce --list`
+
+    a, b = load_direct(new), load_direct(old)
+    keys = ("samples", "held_out_samples", "best_epoch", "val_loss")
+    diffs = compare_values({k: a.metadata.get(k) for k in keys}, {k: b.metadata.get(k) for k in keys}, "metadata")
+    if len(a.layers) != len(b.layers):
+        return diffs + [f"layers: {len(b.layers)} -> {len(a.layers)}"]
+    for i, ((Wa, ba), (Wb, bb)) in enumerate(zip(a.layers, b.layers)):
+        for p, u, v in (("weight", Wa, Wb), ("bias", ba, bb)):
+            d = float(np.max(np.abs(u - v))) if u.shape == v.shape else float("inf")
+            if d > REL_TOL:
+                diffs.append(f"layers[{i}].{p}: weights differ by up to {d:.2e}")
+    return diffs
+
+
 def _table2(out_sub: str, data: str, extra: tuple = ()) -> Result:
     path = "results/table2" + (f"/{out_sub}" if out_sub else "")
     return Result(name="table2" + (f"-{out_sub}" if out_sub else ""), path=path, datasets=(data,),
@@ -240,6 +256,9 @@ RESULTS = (
            commands=(("fsv-bench", "train", "--data", "{data}/train", "--out", "{out}", "--folds", "3",
                       "--amount-loss", "relative"),),
            compare=_compare_model),
+    Result(name="direct-model", path="fsv/data/direct_forces.npz", datasets=("train",),
+           commands=(("fsv-bench", "train-direct", "--data", "{data}/train", "--out", "{out}", "--quiet"),),
+           compare=_compare_direct_model),
     Result(name="learning-curve", path="results/learning_curve", datasets=("train-curve", "calibration-train-curve"),
            commands=(("python", "-m", "benchmark.commands.learning_curve", "--data", "{data}/train-curve", "--people",
                       f"5,20,40,{CURVE_PEOPLE}", "--calibration", "{data}/calibration-train-curve", "--suite", "dev",

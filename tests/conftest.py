@@ -129,6 +129,23 @@ def learn_oracle_dataset(tmp_path_factory):
     return spec, out, generate(spec, out, workers=1, progress=False)
 
 
+@pytest.fixture(scope="session")
+def direct_dataset(tmp_path_factory):
+    """Two 2 s lift episodes (seeds 0, 1) with every frame (``rows="all"``), the truth's kinematics
+    and contacts: ``(spec, folder)``; and ``folder / "model.npz"``, a tiny end-to-end network
+    (hidden 16, 16; 3 epochs) trained on it by ``fsv-bench train-direct``."""
+    from benchmark.commands.entry import run
+    from benchmark.paper.dataset import DatasetSpec, generate
+
+    out = tmp_path_factory.mktemp("direct")
+    spec = DatasetSpec(tasks=("lift",), seeds=(0, 1), duration_s=2.0, kinematics="oracle", contacts="oracle",
+                       rows="all")
+    generate(spec, out / "data", workers=1, progress=False)
+    assert run(["train-direct", "--data", str(out / "data"), "--out", str(out / "model.npz"), "--epochs", "3",
+                "--hidden", "16,16", "--quiet"]) == 0
+    return spec, out
+
+
 # --- tracking: the whole method on the rendered 2.5 s lift, once per session ------------
 
 

@@ -226,7 +226,7 @@ def test_a_dataset_of_the_version_without_digests_is_not_resumed(tmp_path):
     import json
 
     (tmp_path / "dataset.json").write_text(json.dumps(dict(format="fsv-bench-dataset", version=1, spec=DatasetSpec().as_dict())))
-    with pytest.raises(DatasetError, match="version 1; this fsv-bench writes version 2"):
+    with pytest.raises(DatasetError, match="version 1; this fsv-bench writes version 3"):
         generate(DatasetSpec(), tmp_path, workers=1, progress=False, build=cheap_build)
 
 
@@ -500,3 +500,61 @@ def test_the_people_design_gives_each_person_their_own_grasp_and_view_and_rotate
     assert spec.as_dict()["design"] == "people" and "design" not in DatasetSpec().as_dict()
     with pytest.raises(DatasetError, match="design source must be one of"):
         DatasetSpec(design="pairs")
+
+
+def _per_finger(df, fmt, names):
+    return np.stack([df[[fmt.format(a, n) for a in "xyz"]].to_numpy(float) for n in names], axis=1)
+
+
+def test_rows_all_hold_every_frame_with_the_truths_3d_forces_and_table_wrench(direct_dataset):
+    """The 3D force's normal part is f_true_; with the truth's kinematics, the table's wrench and the
+    fingers' resultant are Newton–Euler's m R^T (a - g) and I alpha + omega x I omega in the object
+    frame (measured: 6e-15 N and 1e-16 N m)."""
+    from benchmark.paper.dataset import finger_names_of
+    from benchmark.paper.table2 import object_models
+
+    _, out = direct_dataset
+    df = load_dataset(out / "data", rows="all")
+    assert len(df) == 2 * 61 and df["paper_rule"].sum() < len(df)  # 2 s at 30 fps, every frame with kinematics
+    names = finger_names_of(df)
+    F = _per_finger(df, "F_true_{}_{}", names)
+    normal = _per_finger(df, "normal_{}_{}", names)  # the truth's contacts: the truth's normals
+    np.testing.assert_allclose(np.einsum("tki,tki->tk", F, normal), df[[f"f_true_{n}" for n in names]], atol=1e-12)
+    assert (F[~df[[f"true_active_{n}" for n in names]].to_numpy()] == 0).all()
+    R = df[[f"rot_{i}{j}" for i in range(3) for j in range(3)]].to_numpy().reshape(-1, 3, 3)
+    obj = lambda name: np.einsum("tji,tj->ti", R, df[[f"{name}_{a}" for a in "xyz"]].to_numpy())
+    models = object_models(out / "data")
+    for ep in df["episode"].unique():
+        m, g = models[ep]
+        e = (df["episode"] == ep).to_numpy()
+        force = df.loc[e, ["env_F_x", "env_F_y", "env_F_z"]].to_numpy() + F[e].sum(axis=1)
+        np.testing.assert_allclose(force, m.mass_kg * np.einsum("tji,tj->ti", R[e], df.loc[e, ["acc_x", "acc_y", "acc_z"]]
+                                                                 .to_numpy() - g), atol=1e-9)
+        w, al, I = obj("omega")[e], obj("alpha")[e], m.inertia
+        points = _per_finger(df[e], "true_point_{}_{}", names)
+        torque = df.loc[e, ["env_T_x", "env_T_y", "env_T_z"]].to_numpy() + np.cross(points, F[e]).sum(axis=1)
+        np.testing.assert_allclose(torque, al @ I.T + np.cross(w, w @ I.T), atol=1e-10)
+    resting = df["env_F_z"].to_numpy() > 0
+    assert resting.sum() > 10 and (df.loc[resting, "pos_z"] < 0.031).all()  # the table holds the box before the lift
+    paper = df["paper_rule"].to_numpy()
+    f_nom = df[[f"f_nom_{n}" for n in names]].to_numpy()
+    assert np.isnan(f_nom[~paper]).all() and np.isfinite(f_nom[paper]).all()
+
+
+def test_the_paper_rows_of_a_dataset_of_every_frame_are_the_paper_dataset(direct_dataset, tmp_path):
+    from dataclasses import replace
+
+    import pandas as pd
+
+    spec, out = direct_dataset
+
+    generate(replace(spec, rows="paper"), tmp_path, workers=1, progress=False)
+    paper, every = load_dataset(tmp_path), load_dataset(out / "data")  # rows="paper" by default
+    pd.testing.assert_frame_equal(paper, every)
+    assert paper["paper_rule"].all() and len(load_dataset(out / "data", rows="all")) > len(paper)
+    with pytest.raises(DatasetError, match="made with another spec"):  # resuming is refused with other rows
+        generate(replace(spec, rows="paper"), out / "data", workers=1, progress=False, build=cheap_build)
+    with pytest.raises(DatasetError, match="rows source must be one of"):
+        DatasetSpec(rows="some")
+    assert spec.as_dict()["rows"] == "all"
+    assert "rows" not in replace(spec, rows="paper").as_dict()

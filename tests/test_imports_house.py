@@ -77,8 +77,9 @@ def test_every_import_inside_a_function_says_why_it_is_there():
 def test_the_imports_kept_inside_functions_are_few():
     # 433 on 71a8218, before the imports moved to the top; 135 stay (heavy libraries off a start-up,
     # optional ones, the sub-commands' dispatch, an order to keep). One more needs its reason and this ceiling raised.
+    # 138: fsv-bench train-direct's dispatch, torch in fsv.learn.direct_train, fsv.learn in reproduce's comparison.
     rows = function_imports(ROOT)
-    assert len(rows) <= 135, len(rows)
+    assert len(rows) <= 138, len(rows)
 
 
 def test_an_unmarked_import_inside_a_function_is_found(tmp_path):

@@ -45,3 +45,39 @@ def test_labels_name_replaced_stages_and_oracles():
 def test_inconsistent_specs_are_refused(kw, needle):
     with pytest.raises(ValueError, match=needle):
         MethodSpec(**kw)
+
+
+def _one_error_line(capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    return err
+
+
+def test_the_direct_method_without_its_model_is_refused_before_any_work(tmp_path, monkeypatch, capsys):
+    """One line naming the missing file and the command that makes it, exit 2, nothing written."""
+    import benchmark.method.spec as spec_module
+    from benchmark.commands.cli import main
+
+    monkeypatch.setattr(spec_module, "default_direct_path", lambda: str(tmp_path / "absent.npz"))
+    out = tmp_path / "run"
+    assert main(["--method", "direct", "--out", str(out)]) == 2
+    err = _one_error_line(capsys)
+    assert "no model at fsv/data/direct_forces.npz" in err and "fsv-bench train-direct --data DIR" in err
+    assert "--rows all" in err and "--direct-model FILE" in err
+    assert main(["--method", "direct", "--direct-model", str(tmp_path / "missing.npz"), "--out", str(out)]) == 2
+    assert f"no model at {tmp_path / 'missing.npz'}" in _one_error_line(capsys)
+    (tmp_path / "bad.npz").write_text("not a model")
+    assert main(["--method", "direct", "--direct-model", str(tmp_path / "bad.npz"), "--out", str(out)]) == 2
+    assert "is not a readable direct force model" in _one_error_line(capsys)
+    assert main(["--direct-model", str(tmp_path / "bad.npz"), "--out", str(out)]) == 2
+    assert "--direct-model is the model of --method direct" in _one_error_line(capsys)
+    assert main(["--method", "direct", "--internal", "none", "--out", str(out)]) == 2
+    assert "--method replaces every stage" in _one_error_line(capsys)
+    assert not out.exists()
+
+
+def test_the_direct_methods_label_names_its_network_and_its_oracles(direct_dataset):
+    model = str(direct_dataset[1] / "model.npz")
+    label = method_label(MethodSpec(method="direct", direct_model=model, oracle=("contacts", "kinematics")))
+    assert label.startswith("direct (tracker: reference tracker; differentiator: oracle; forces: direct network")
+    assert f"model {model}, 1,621 parameters" in label and "internal: none; contacts: oracle" in label

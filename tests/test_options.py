@@ -34,6 +34,7 @@ COMMANDS = {
     "generate": (["--out", "data"], "benchmark.paper.dataset.cli.generate"),
     "calibrate": (["--data", "data", "--out", "cal.json"], "benchmark.paper.dataset.files.read_header"),
     "train": (["--data", "data", "--out", "model.npz"], "benchmark.paper.training.load_dataset"),
+    "train-direct": (["--data", "data", "--out", "model.npz"], "benchmark.paper.direct_training.check_all_rows"),
     "table2": (["--data", "data"], "benchmark.paper.table2.score"),
     "reproduce": (["--only", "smoke"], "benchmark.reproduce.make"),
     "eval": (["--suite", "smoke", "--out", "ev"], "benchmark.suites.evaluate.evaluate_many"),
@@ -50,13 +51,14 @@ _NAMES = ("nan", "-1", "1e9")
 """Values that are ordinary file or folder names."""
 
 ACCEPTED = {
-    **{(c, "--out", v): "a file or folder name" for c in ("main", "generate", "calibrate", "train", "table2", "eval",
-                                                           "compare", "export", "score", "leaderboard", "sweep")
+    **{(c, "--out", v): "a file or folder name" for c in ("main", "generate", "calibrate", "train", "train-direct",
+                                                           "table2", "eval", "compare", "export", "score", "leaderboard",
+                                                           "sweep")
        for v in _NAMES},
     **{(c, "--cache", v): "a folder name (the cache is made there)" for c in ("eval", "export", "score", "leaderboard",
                                                                               "sweep") for v in _NAMES},
     **{(c, "--data", v): "a folder name, read after this test's stand-in for the work"
-       for c in ("calibrate", "train", "table2") for v in _NAMES},
+       for c in ("calibrate", "train", "train-direct", "table2") for v in _NAMES},
     **{("reproduce", "--data", v): "a folder name (the datasets are generated there)" for v in _NAMES},
     **{("score", "--estimates", v): "a folder name, read after this test's stand-in for the work" for v in _NAMES},
     **{("check", "--inputs", v): "a file name, read after this test's stand-in for the work" for v in _NAMES},

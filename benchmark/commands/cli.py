@@ -42,8 +42,8 @@ from benchmark.world.tasks import TASKS
 from fsv.errors import InputError
 from fsv.provenance import provenance
 
-SUBCOMMANDS = ("generate", "calibrate", "train", "table2", "eval", "compare", "export", "score", "leaderboard",
-               "sweep", "check")
+SUBCOMMANDS = ("generate", "calibrate", "train", "train-direct", "table2", "eval", "compare", "export", "score",
+               "leaderboard", "sweep", "check")
 """The sub-commands this module runs (:func:`subcommand_module`). ``fsv-bench reproduce``, which
 regenerates results by running these commands, sits a floor above and is run by
 :mod:`benchmark.commands.entry`."""
@@ -62,6 +62,8 @@ def subcommand_module(name: str):
             from benchmark.paper import calibration as module  # lazy: a sub-command's libraries, when it runs
         case "train":
             from benchmark.paper import training as module  # lazy: a sub-command's libraries, when it runs
+        case "train-direct":
+            from benchmark.paper import direct_training as module  # lazy: a sub-command's libraries, when it runs
         case "table2":
             from benchmark.paper import table2 as module  # lazy: a sub-command's libraries, when it runs
         case "eval":

@@ -101,9 +101,9 @@ def method_label(spec: MethodSpec) -> str:
         labels["knowledge"] = spec.knowledge
     if spec.protocol != DEFAULT_PROTOCOL:
         labels["protocol"] = spec.protocol
+    for o in spec.oracle:  # a whole method takes them too when make_method built it (--method direct)
+        labels["differentiator" if o == "kinematics" else "contacts"] = "oracle"
     if spec.method:
         head = f"{spec.method}"
         return head + (f" ({'; '.join(f'{k}: {v}' for k, v in labels.items())})" if labels else "")
-    for o in spec.oracle:
-        labels["differentiator" if o == "kinematics" else "contacts"] = "oracle"
     return "; ".join(f"{k}: {v}" for k, v in labels.items())

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -10,8 +11,8 @@ from benchmark.method.load import load_object
 from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
 from benchmark.world.motion import DECLARED
 from fsv.errors import FsvError, InputError
-from fsv.learn import load
-from fsv.method import LearnedInternalForces, Method, StencilDifferentiator, make_method, method_streams
+from fsv.learn import default_direct_path, load, load_direct
+from fsv.method import DirectForces, LearnedInternalForces, Method, StencilDifferentiator, make_method, method_streams
 from fsv.method.baselines import BASELINE_STAGE, BASELINES
 
 ORACLE_STAGES = ("contacts", "kinematics")
@@ -30,13 +31,17 @@ class MethodSpec:
         method: A whole method replacing every stage: an ``fsv.method.Method`` (or a factory of one),
             or any callable ``(inputs: fsv.method.CameraInput, rng) -> fsv.method.Estimate``; or the
             name of a baseline (:data:`fsv.method.baselines.BASELINES`: ``static``,
-            ``zero-kinematics``, ``gravity-forces``, ``no-internal``, ``grip-line``).
+            ``zero-kinematics``, ``gravity-forces``, ``no-internal``, ``grip-line``); or
+            :data:`DIRECT`, the end-to-end network on the reference tracker's outputs
+            (:class:`fsv.method.direct.DirectForces`, its model from ``direct_model``).
         tracker: Replaces the reference tracker.
         differentiator: Replaces the algebraic differentiator; or one of :data:`DIFFERENTIATORS`.
         forces: Replaces the nominal-force programs.
         internal: Replaces the learned internal forces; "none" for nominal forces only.
         internal_model: A model file of ``fsv-bench train`` for the reference internal-force stage
             (default: the shipped model).
+        direct_model: The model file of ``fsv-bench train-direct`` for ``method="direct"``
+            (default: the shipped ``fsv/data/direct_forces.npz``).
         oracle: Inputs replaced by the truth, a subset of :data:`ORACLE_STAGES`.
         knowledge: What the method is told of the hand, the box and the camera
             (:data:`benchmark.method.knowledge.KNOWLEDGE`: "exact" or "lab").
@@ -50,6 +55,7 @@ class MethodSpec:
     forces: str | None = None
     internal: str | None = None
     internal_model: str | None = None
+    direct_model: str | None = None
     oracle: tuple = field(default_factory=tuple)
     knowledge: str = DEFAULT_KNOWLEDGE
     protocol: str = DEFAULT_PROTOCOL
@@ -64,6 +70,8 @@ class MethodSpec:
         if self.internal and self.internal_model:
             raise ValueError("--internal-model is a model for the reference internal-force stage; --internal replaces "
                              "that stage: give one of them")
+        if self.direct_model and self.method != DIRECT:
+            raise ValueError(f"--direct-model is the model of --method {DIRECT}; give both, or neither")
         if self.method and any((self.tracker, self.differentiator, self.forces, self.internal, self.internal_model)):
             raise ValueError("--method replaces every stage; give it alone, or replace single stages with "
                              "--tracker/--differentiator/--forces/--internal")
@@ -75,6 +83,8 @@ class MethodSpec:
 
         if not self.method:
             return ("tracker", self.tracker, self.knowledge)
+        if self.method == DIRECT:  # the reference tracker, its output shared with the reference
+            return ("tracker", None, self.knowledge)
         if self.method in BASELINE_STAGE:
             return (("tracker", None, self.knowledge) if BASELINE_STAGE[self.method] != "tracker"
                     else ("baseline", self.method, self.knowledge))
@@ -104,8 +114,37 @@ class MethodSpec:
         self.build()
 
 
+DIRECT = "direct"
+"""``--method direct``: the reference tracker and differentiator, then the end-to-end network
+(:class:`fsv.method.direct.DirectForces`) as the force stage whose forces are the final ones."""
+
+DIRECT_COMMAND = ("fsv-bench generate --split train --rows all ... --out DIR, then "
+                  "fsv-bench train-direct --data DIR --out {path}")
+"""How a missing direct model is made (the one line of its refusal)."""
+
+
+def direct_method(path: str | None = None):
+    """The method of ``--method direct``: the model at ``path`` (default the shipped one) as the
+    force stage, no internal-force stage. ValueError (one line, naming the file and the command
+    that makes it) when it is missing or unreadable."""
+    shipped = path is None
+    path = default_direct_path() if shipped else path
+    if not os.path.isfile(path):
+        where = "fsv/data/direct_forces.npz" if shipped else path
+        raise ValueError(f"--method {DIRECT}: no model at {where}; make one with "
+                         + DIRECT_COMMAND.format(path=where) + ("" if not shipped else " (or pass --direct-model FILE)"))
+    try:
+        model = load_direct(path)
+    except (FsvError, OSError) as e:
+        raise ValueError(f"--direct-model {path}: {e}") from e
+    source = "shipped model" if shipped else f"model {path}"
+    return make_method(forces=DirectForces(model, source=source), internal=False)
+
+
 @lru_cache(maxsize=16)
 def _build(spec: MethodSpec):
+    if spec.method == DIRECT:
+        return direct_method(spec.direct_model)
     if spec.method in BASELINES:
         return BASELINES[spec.method]()
     if spec.method:

@@ -369,7 +369,8 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, intern
     g = p.add_argument_group("the method (default: the reference; replace a stage by module:attribute)")
     g.add_argument("--method", default=None, metavar="NAME|MODULE:ATTR",
                    help="a whole method: an fsv.method.Method (or a factory of one) or a callable (inputs, rng) -> Estimate; "
-                        "or a stage's trivial baseline: static, zero-kinematics, gravity-forces, no-internal, grip-line")
+                        "or a stage's trivial baseline: static, zero-kinematics, gravity-forces, no-internal, grip-line; "
+                        "or direct: an end-to-end network from the tracker's outputs to each finger's force")
     g.add_argument("--tracker", default=None, metavar="MODULE:ATTR", help="(inputs, rng) -> tracking with .box and .contacts")
     g.add_argument("--differentiator", default=None, metavar="NAME|MODULE:ATTR",
                    help=f"(poses) -> Kinematics, or one of {', '.join(DIFFERENTIATORS)}")
@@ -380,6 +381,9 @@ def add_method_arguments(p: argparse.ArgumentParser, oracle: bool = True, intern
     if internal_model:  # the main command's learning stage has its own
         g.add_argument("--internal-model", default=None, metavar="FILE",
                        help="a model file of `fsv-bench train` for the reference internal-force stage (default: the shipped one)")
+    g.add_argument("--direct-model", default=None, metavar="FILE",
+                   help="with --method direct: a model file of `fsv-bench train-direct` (default: the shipped "
+                        "fsv/data/direct_forces.npz)")
     if oracle:
         g.add_argument("--oracle", default="", metavar="LIST",
                        help=f"inputs replaced by the truth, labelled oracle ({', '.join(ORACLE_STAGES)}; comma-separated)")
@@ -411,6 +415,7 @@ def spec_from_args(args: argparse.Namespace):
 
     spec = MethodSpec(method=args.method, tracker=args.tracker, differentiator=args.differentiator,
                       forces=args.forces, internal=args.internal, internal_model=getattr(args, "internal_model", None),
+                      direct_model=getattr(args, "direct_model", None),
                       oracle=tuple(o for o in getattr(args, "oracle", "").split(",") if o),
                       knowledge=getattr(args, "knowledge", DEFAULT_KNOWLEDGE),
                       protocol=getattr(args, "protocol", DEFAULT_PROTOCOL))

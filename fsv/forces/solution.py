@@ -50,7 +50,7 @@ FALLBACKS = (FrameStatus.LEAST_VIOLATION, FrameStatus.FAILED, FrameStatus.IMPLAU
 """Statuses of frames whose contacts could not explain the motion physically."""
 
 
-KINDS = ("nominal", "decomposition", "reconstruction")
+KINDS = ("nominal", "decomposition", "reconstruction", "direct")
 
 
 @dataclass(frozen=True)
@@ -62,8 +62,14 @@ class ForceSolution:
     (eq. 8). The nominal program has no internal part (``internal`` is zero). Inactive fingers have zero force; frames with
     status NO_KINEMATICS or FAILED have NaN forces.
 
+    A "direct" solution is a network's prediction (:class:`fsv.method.direct.DirectForces`), not a
+    program's: ``force`` and ``nominal`` are the predicted forces, ``internal`` is zero, status
+    OPTIMAL means a prediction was made (valid kinematics) and ``residual`` holds the wrench the
+    prediction leaves unexplained, which no constraint drives to zero.
+
     Attributes:
-        kind: "nominal" (eq. 4-6), "decomposition" (eq. 7-9) or "reconstruction" (eq. 14).
+        kind: "nominal" (eq. 4-6), "decomposition" (eq. 7-9), "reconstruction" (eq. 14) or
+            "direct" (predicted by a network).
         finger_names: The K fingers, thumb first.
         active: Finger contacts used, shape (T, K).
         sliding: Contacts modelled as kinetic, shape (T, K).

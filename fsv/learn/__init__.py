@@ -2,7 +2,10 @@
 
 Modules: :mod:`fsv.learn.config` (what they learn from), :mod:`fsv.learn.nets` (the networks),
 :mod:`fsv.learn.train`, :mod:`fsv.learn.model` (a trained model and its file) and
-:mod:`fsv.learn.forces` (learned forces from a model).
+:mod:`fsv.learn.forces` (learned forces from a model). Beside the paper's networks, an end-to-end
+one from the tracker's outputs to each finger's 3D force (a baseline of the learned family):
+:mod:`fsv.learn.direct_inputs` (its inputs), :mod:`fsv.learn.direct` (the model and its file) and
+:mod:`fsv.learn.direct_train` (its training).
 
 * ``ANN_L2`` predicts the amount of internal force, ||f^(i)||_2 over the fingers in contact, [N].
 * ``ANN_decomp`` predicts each finger's share, f_k^(i) / ||f^(i)||_2 (dimensionless).
@@ -63,11 +66,16 @@ pass is a few NumPy contractions (no BLAS, so the same bits on every BLAS kernel
 """
 
 from fsv.learn.config import AMOUNT_LOSSES, GRIP_INPUTS, LearnConfig, TrainingSet
+from fsv.learn.direct import DirectConfig, DirectForceModel, DirectPrediction, default_direct_path, load_direct
+from fsv.learn.direct_inputs import direct_inputs, input_names
+from fsv.learn.direct_train import DirectSamples, train_direct
 from fsv.learn.forces import AMOUNT_SMOOTHING_S, learned_forces, smooth_over_time
 from fsv.learn.model import FORMAT, VERSION, InternalForceModel, content_sha256, default_model, load, read_state
 from fsv.learn.nets import forward
 from fsv.learn.train import CrossValidation, cross_validate, relative_errors_pct, train
 
 __all__ = ["AMOUNT_LOSSES", "AMOUNT_SMOOTHING_S", "FORMAT", "GRIP_INPUTS", "VERSION", "CrossValidation",
-           "InternalForceModel", "LearnConfig", "TrainingSet", "content_sha256", "cross_validate", "default_model",
-           "forward", "learned_forces", "load", "read_state", "relative_errors_pct", "smooth_over_time", "train"]
+           "DirectConfig", "DirectForceModel", "DirectPrediction", "DirectSamples", "InternalForceModel", "LearnConfig",
+           "TrainingSet", "content_sha256", "cross_validate", "default_direct_path", "default_model", "direct_inputs",
+           "forward", "input_names", "learned_forces", "load", "load_direct", "read_state", "relative_errors_pct",
+           "smooth_over_time", "train", "train_direct"]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from fsv.errors import InputError
 from fsv.learn.config import LearnConfig
 
 
@@ -14,13 +15,21 @@ def _targets(internal: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.n
     return l2, shares
 
 
-def _mlp(n_in: int, hidden: tuple, n_out: int, gen):
-    """A torch MLP (sigmoid hidden layers, linear output) with weights drawn from ``gen``."""
+ACTIVATIONS = ("logistic", "relu")
+"""Hidden-layer activations of :func:`forward`: the logistic (the paper's networks) or the
+rectifier max(h, 0) (the end-to-end network, :mod:`fsv.learn.direct`: no transcendental function,
+so its forward pass has the same bits on every CPU)."""
+
+
+def _mlp(n_in: int, hidden: tuple, n_out: int, gen, activation: str = "logistic"):
+    """A torch MLP (``activation`` hidden layers, linear output) with weights drawn from ``gen``
+    (uniform in +-1 / sqrt(fan-in), torch's default range)."""
     import torch  # lazy: torch (1.2 s) off `import fsv`
 
+    act = {"logistic": torch.nn.Sigmoid, "relu": torch.nn.ReLU}[activation]
     layers, prev = [], n_in
     for h in hidden:
-        layers += [torch.nn.utils.skip_init(torch.nn.Linear, prev, h, dtype=torch.float64), torch.nn.Sigmoid()]
+        layers += [torch.nn.utils.skip_init(torch.nn.Linear, prev, h, dtype=torch.float64), act()]
         prev = h
     layers.append(torch.nn.utils.skip_init(torch.nn.Linear, prev, n_out, dtype=torch.float64))
     with torch.no_grad():
@@ -56,20 +65,26 @@ def _layers(net) -> list:
             for m in net if isinstance(m, torch.nn.Linear)]
 
 
-def forward(layers: list, z: np.ndarray) -> np.ndarray:
-    """An MLP's output: logistic hidden layers, linear output layer.
+def forward(layers: list, z: np.ndarray, activation: str = "logistic") -> np.ndarray:
+    """An MLP's output: hidden layers with ``activation`` (:data:`ACTIVATIONS`), linear output layer.
 
     Args:
         layers: (weight (out, in), bias (out,)) per layer.
         z: Standardised inputs, shape (N, in).
+        activation: "logistic" or "relu".
 
     Returns:
         Shape (N, out of the last layer).
     """
+    if activation not in ACTIVATIONS:
+        raise InputError(f"activation must be one of {ACTIVATIONS}, got {activation!r}")
     h = z
     for i, (W, b) in enumerate(layers):
         h = np.einsum("ni,oi->no", h, W) + b
         if i < len(layers) - 1:
-            with np.errstate(over="ignore"):  # exp(-h) = inf far below 0: the logistic is 0 there
-                h = 1.0 / (1.0 + np.exp(-h))
+            if activation == "relu":
+                h = np.maximum(h, 0.0)
+            else:
+                with np.errstate(over="ignore"):  # exp(-h) = inf far below 0: the logistic is 0 there
+                    h = 1.0 / (1.0 + np.exp(-h))
     return h

@@ -5,6 +5,7 @@ an internal-force stage (each the reference's unless replaced); calling the meth
 :class:`CameraInput` gives an :class:`Estimate`. The stage signatures are in :mod:`fsv.method.stages`.
 """
 
+from fsv.method.direct import DirectForces
 from fsv.method.estimate import Estimate, TrackOutput
 from fsv.method.inputs import GRAVITY, CameraInput
 from fsv.method.method import Method, make_method, method_streams
@@ -17,6 +18,7 @@ __all__ = [
     "STAGES",
     "CameraInput",
     "Differentiator",
+    "DirectForces",
     "Estimate",
     "ForceEstimator",
     "InternalForces",

@@ -37,8 +37,9 @@ class Estimate:
         contacts: The contacts the force stages used (the tracked ones unless an oracle replaced them).
         kinematics: The box kinematics the force stages used.
         nominal: The nominal forces (eq. 4-6), or None when no force stage ran.
-        forces: The method's final forces (the reference: eq. 14 with learned internal forces), or
-            None without an internal-force stage.
+        forces: The method's final forces (the reference: eq. 14 with learned internal forces; a
+            force stage declared ``final``, such as :class:`fsv.method.direct.DirectForces`: its
+            own output, the same object as ``nominal``), or None without either.
         internal_pred: The internal normal forces fed to the final forces, shape (T, K), [N], or None.
         oracle: Names of the stages replaced by truth ("contacts", "kinematics"); empty for a method
             proper.

@@ -17,7 +17,7 @@ from fsv.kinematics import kinematics_in_frame
 from fsv.method.estimate import Estimate
 from fsv.method.inputs import CameraInput
 from fsv.method.reference import LearnedInternalForces, NominalForces, ReferenceTracker, StencilDifferentiator
-from fsv.method.stages import ORACLE, accepts_grip, stage_label
+from fsv.method.stages import ORACLE, accepts_grip, is_final, stage_label
 from fsv.types import Contacts, Kinematics, Poses, check_streams
 
 
@@ -32,6 +32,9 @@ class Method:
         tracker: ``(inputs, rng) -> tracking`` (``.box``, ``.contacts``).
         differentiator: ``(poses) -> Kinematics``.
         forces: ``(kinematics, contacts, object_model, gravity) -> ForceSolution`` (nominal forces), or None.
+            A stage whose ``final`` attribute is True (:func:`fsv.method.stages.is_final`, e.g.
+            :class:`fsv.method.direct.DirectForces`) returns the method's final forces: without an
+            internal-force stage they are the estimate's ``forces`` too.
         internal: ``(kinematics, contacts, object_model, gravity) -> (ForceSolution, predicted)``, or None.
         labels: The name of each stage (``tracker``, ``differentiator``, ``forces``, ``internal``).
     """
@@ -129,6 +132,8 @@ class Method:
             if isinstance(self.internal, LearnedInternalForces):
                 learned_model = self.internal.model_for(inputs.grip)
             timing["learn"] = time.perf_counter() - t0
+        elif nominal is not None and is_final(self.forces):  # its forces are the final ones already
+            full = nominal
         timing["total"] = track_s + time.perf_counter() - t_start
         return Estimate(tracking=tracking, contacts=contacts, kinematics=kinematics, nominal=nominal, forces=full,
                         internal_pred=predicted, oracle=tuple(oracle), timing_s=timing, labels=labels,

@@ -7,7 +7,9 @@ An optional ``name`` attribute labels it in reports; otherwise its qualified nam
   frames) and ``.contacts`` (:class:`fsv.Contacts`, T frames), e.g. :class:`fsv.method.TrackOutput`.
 * :class:`Differentiator`: ``(poses: Poses) -> Kinematics`` (world frame, T frames).
 * :class:`ForceEstimator`: ``(kinematics, contacts, object_model, gravity) -> ForceSolution``: the
-  nominal forces that explain the motion.
+  nominal forces that explain the motion. A force stage whose output is already the method's
+  final forces (a network predicting each finger's force, :class:`fsv.method.direct.DirectForces`)
+  declares it with an attribute ``final = True`` (:func:`is_final`).
 * :class:`InternalForces`: ``(kinematics, contacts, object_model, gravity) -> (ForceSolution,
   predicted)``: the final forces with internal forces added, and the internal normal forces used,
   shape (T, K), [N]. A stage that accepts a keyword ``grip`` is also given the person's grip
@@ -71,6 +73,11 @@ def accepts_grip(stage) -> bool:
         return False
     return any((p.name == "grip" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)) or p.kind == p.VAR_KEYWORD
                for p in params)
+
+
+def is_final(stage) -> bool:
+    """Whether a force stage declares its output the method's final forces (``final`` is True)."""
+    return getattr(stage, "final", False) is True
 
 
 def stage_label(stage) -> str:

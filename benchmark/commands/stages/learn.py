@@ -32,7 +32,11 @@ def run(record: Run, options) -> StageResult:
                       "model": model_block(est.learned_model)}
         if model_info["model"]["grip_inputs"]:
             model_info["grip_calibration"] = None if blind else {"baseline_n": grip.baseline_n, "gain": grip.gain}
-    block = {**labels, "program": est.labels["internal"], **model_info, **block}
+    program = est.labels["internal"]
+    if est.forces is est.nominal:  # a force stage whose forces are the final ones (--method direct)
+        program = est.labels["forces"]
+        model_info = {"direct_model": record.method_spec.direct_model or "fsv/data/direct_forces.npz"}
+    block = {**labels, "program": program, **model_info, **block}
     paper = block["paper_rule"]
     line = (
         f"learning [{oracle_tag(labels)}] (kinematics {labels['kinematics']}, contacts {labels['contacts']}): learned forces' "

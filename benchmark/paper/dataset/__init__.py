@@ -48,7 +48,13 @@ p2_<finger>, p4_<finger>``; per finger ``active_, sliding_, point_{x,y,z}_, norm
 slide_{x,y,z}_`` (object frame), ``f_meas_`` (tactile reading, [N], 0 off contact), ``f_true_`` (the
 truth's normal force, the scoring reference), ``true_active_`` and ``true_point_{x,y,z}_`` (the
 truth's contact, object frame: for scoring and for measuring contact errors only, never an input),
-``f_nom_`` and ``f_int_`` (nominal and internal normal components from eq. 9, [N]); ``net_gap_n``.
+``F_true_{x,y,z}_`` (the truth's 3D force of the finger on the box, object frame, [N], 0 off
+contact); ``f_nom_`` and ``f_int_`` (nominal and internal normal components from eq. 9, [N]; NaN on
+rows the paper's rules do not keep); ``env_F_{x,y,z}``, ``env_T_{x,y,z}`` (the table's force [N]
+and torque about the centre of mass [N m] on the box, object frame); ``paper_rule`` (the paper's
+rules keep the row); ``net_gap_n``. Rows (``DatasetSpec.rows``): the frames the paper's rules keep
+("paper"), or every frame with kinematics ("all", for the end-to-end network of
+``fsv-bench train-direct``).
 With the tracker, each file's metadata also holds the tracker's scores on the episode
 (``benchmark.scores.tracking.score_tracking``). Read them with pandas
 (``pd.read_parquet``) or :func:`load_dataset`.
@@ -71,7 +77,7 @@ from benchmark.paper.dataset.files import (
                                            training_set,
                                            write_manifest,
 )
-from benchmark.paper.dataset.spec import CONTACTS, FORMAT, KINEMATICS, VERSION, DatasetSpec
+from benchmark.paper.dataset.spec import CONTACTS, FORMAT, KINEMATICS, ROWS, VERSION, DatasetSpec
 
-__all__ = ["CONTACTS", "FORMAT", "KINEMATICS", "VERSION", "DatasetSpec", "build_episode", "finger_names_of", "frames_of",
+__all__ = ["CONTACTS", "FORMAT", "KINEMATICS", "ROWS", "VERSION", "DatasetSpec", "build_episode", "finger_names_of", "frames_of",
            "generate", "load_dataset", "read_episode_file", "read_manifest", "training_set", "write_manifest"]

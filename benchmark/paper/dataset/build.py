@@ -46,7 +46,7 @@ from benchmark.world.scenario import Scenario, episode_name
 from benchmark.world.tactile import tactile_normal_forces
 from fsv import Contacts
 from fsv.features import grasp_features
-from fsv.forces import FrameStatus, decompose_forces
+from fsv.forces import FrameStatus, decompose_forces, to_object_frame
 from fsv.method import ReferenceTracker
 from fsv.method.reference import TRACKED_POSES
 
@@ -105,16 +105,21 @@ def build_episode(scenario: Scenario, spec: DatasetSpec) -> pa.Table:
     dec = decompose_forces(_take_kin(kin, idx), _take_con(con, idx), model, measured[idx], gravity=tr.gravity,
                            settings=DATASET_FORCE_SETTINGS)
     ok = dec.status == int(FrameStatus.OPTIMAL)
-    rows = idx[ok]
+    paper = idx[ok]  # the frames the paper's rules keep, with their targets
+    rows = paper if spec.rows == "paper" else np.flatnonzero(kin.valid)
+    paper_rule = np.isin(rows, paper)  # rows and paper ascend: rows[paper_rule] is paper, in order
     stats = dict(
-        frames=len(tr.t), rows=int(len(rows)), dropped_contacts=int(np.sum(~keep_contacts)),
+        frames=len(tr.t), rows=int(len(rows)), paper_rows=int(len(paper)), dropped_contacts=int(np.sum(~keep_contacts)),
         dropped_gap=int(np.sum(keep_contacts & ~keep)), dropped_solver=int(np.sum(~ok)),
     )
     cols = _columns(scenario, tr, kin, con, feats, measured, true_normal_forces(tr), gap, rows)
+    cols["paper_rule"] = paper_rule
     names = tuple(tr.finger_names)
     for k, name in enumerate(names):
-        cols[f"f_nom_{name}"] = dec.nominal_normal[ok, k]
-        cols[f"f_int_{name}"] = dec.internal_normal[ok, k]
+        for prefix, values in (("f_nom", dec.nominal_normal), ("f_int", dec.internal_normal)):
+            col = np.full(len(rows), np.nan)
+            col[paper_rule] = values[ok, k]
+            cols[f"{prefix}_{name}"] = col
     stats["object_model"] = dict(
         size_m=model.size_m.tolist(), mass_kg=model.mass_kg, inertia=model.inertia.tolist(),
         friction=model.friction, table_friction=model.table_friction,
@@ -157,14 +162,31 @@ def _columns(sc, tr, kin, con, feats, measured, true_normal, gap, rows) -> dict:
         cols[f"true_active_{name}"] = np.asarray(tr.contact_active, bool)[rows, k]
         for a in range(3):
             cols[f"true_point_{_AX[a]}_{name}"] = np.asarray(tr.contact_point, float)[rows, k, a]
+        true_force = np.where(np.asarray(tr.contact_active, bool)[rows, k, None],
+                              np.asarray(tr.contact_force, float)[rows, k], 0.0)
+        for a in range(3):
+            cols[f"F_true_{_AX[a]}_{name}"] = true_force[:, a]
+    env = table_wrench_in_object_frame(tr)[rows]
+    for a in range(3):
+        cols[f"env_F_{_AX[a]}"] = env[:, a]
+    for a in range(3):
+        cols[f"env_T_{_AX[a]}"] = env[:, 3 + a]
     cols["net_gap_n"] = gap[rows]
     return cols
+
+
+def table_wrench_in_object_frame(truth) -> np.ndarray:
+    """The table's force and torque on the box about its centre of mass, in the object frame
+    (along the box's edges, by the true orientation), shape (T, 6), [N, N m]; the truth records
+    them in the world frame."""
+    wrench = np.concatenate([np.asarray(truth.env_force, float), np.asarray(truth.env_torque, float)], axis=1)
+    return to_object_frame(truth.box_rot, wrench)
 
 
 def _with_meta(table: pa.Table, sc: Scenario, spec: DatasetSpec, finger_names, stats: dict, status: str) -> pa.Table:
     meta = dict(
         format=FORMAT, version=VERSION, episode=episode_name(sc), scenario=asdict(sc), finger_names=list(finger_names),
-        kinematics=spec.kinematics, contacts=spec.contacts, status=status, **stats,
+        kinematics=spec.kinematics, contacts=spec.contacts, sample_rows=spec.rows, status=status, **stats,
     )
     return table.replace_schema_metadata({b"fsv": json.dumps(meta).encode()})
 

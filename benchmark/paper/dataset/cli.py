@@ -32,7 +32,7 @@ from benchmark.paper.dataset.build import generate
 from benchmark.paper.dataset.files import made_by_generate
 from benchmark.paper.dataset.frames import FramesSpec, check_training_people, generate_frames, made_by_generate_frames
 from benchmark.paper.dataset.shards import COLOUR_ENCODINGS
-from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, DatasetSpec
+from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, ROWS, DatasetSpec
 from benchmark.parallel import check_ray_address
 
 
@@ -85,6 +85,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="contacts (and poses) source: tracker (render and track every episode, the method; "
                         "default), error-model (truth + the paper's contact error, tracker-like poses; cheaper) "
                         "or oracle (the truth's contacts; an ablation)")
+    p.add_argument("--rows", default="paper", choices=ROWS,
+                   help="paper: the frames the paper's sample rules keep (the internal-force networks' samples; "
+                        "default); all: every frame with kinematics, with the column paper_rule marking the paper's "
+                        "(the end-to-end network's samples, `fsv-bench train-direct`)")
     p.add_argument("--workers", type=limits.integer(1, limits.MAX_WORKERS), default=None,
                    help=f"local worker processes, 1 to {limits.MAX_WORKERS} (default: all cores)")
     p.add_argument("--ray-address", default=None, help="run on a Ray cluster at this address (needs the 'ray' extra)")
@@ -123,10 +127,12 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
         tasks=tuple(t.strip() for t in args.tasks.split(",") if t.strip()), users=users,
         grasps=grasps, masses=parse_ints(args.masses, "--masses"), seeds=parse_ints(args.seeds, "--seeds"), views=views, design=args.design,
         duration_s=args.duration,
-        noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts,
+        noise_m=args.noise, kinematics=args.kinematics, contacts=args.contacts, rows=args.rows,
     )
 
     if args.frames:
+        if args.rows != "paper":
+            raise DatasetError("--rows applies to the networks' features, not to --frames (whose shards hold every frame)")
         return run_frames(args, spec)
     if args.streams != ("depth",) or args.colour_encoding != "raw":
         raise DatasetError("--streams and --colour-encoding apply to --frames only (the features come from the depth)")
@@ -135,9 +141,12 @@ def run(args: argparse.Namespace) -> pd.DataFrame:
     t0 = time.perf_counter()
     man = generate(spec, args.out, workers=args.workers, ray_address=args.ray_address, progress=not args.no_progress)
     failed = int((man["status"] != "ok").sum())
+    paper_rows = int((man["frames"] - man["dropped_contacts"] - man["dropped_gap"] - man["dropped_solver"]).sum())
     print(
-        f"dataset {args.out}: {len(man)} episodes ({failed} failed), {int(man['rows'].sum())} samples kept; "
-        f"dropped {int(man['dropped_gap'].sum())} for |vision - tactile net force| > {spec.max_gap_n} N, "
+        f"dataset {args.out}: {len(man)} episodes ({failed} failed), "
+        + (f"{int(man['rows'].sum())} rows (every frame with kinematics), {paper_rows} of them kept by "
+           "the paper's rule; " if spec.rows == "all" else f"{int(man['rows'].sum())} samples kept; ")
+        + f"dropped {int(man['dropped_gap'].sum())} for |vision - tactile net force| > {spec.max_gap_n} N, "
         f"{int(man['dropped_contacts'].sum())} with < {spec.min_fingers} fingers or invalid kinematics, "
         f"{int(man['dropped_solver'].sum())} unsolved; kinematics={spec.kinematics}, contacts={spec.contacts} "
         f"(oracle = from the truth; error-model = truth + the paper's contact error; tracker = rendered and tracked); {time.perf_counter() - t0:.1f} s"

@@ -17,7 +17,7 @@ import pyarrow.parquet as pq
 from benchmark.atomic import claim_folder, remove_stale_temporaries, write_bytes, write_text
 from benchmark.errors import DatasetError, DatasetFileError
 from benchmark.fingerprint import world_fingerprint
-from benchmark.paper.dataset.spec import _AX, FORMAT, VERSION, DatasetSpec
+from benchmark.paper.dataset.spec import _AX, FORMAT, ROWS, VERSION, DatasetSpec
 from benchmark.scores.samples import nominal_excess_n
 from benchmark.sealed_table import file_sha256, read_sealed, seal, to_bytes
 from benchmark.world.scenario import DEFAULT_GRIP_CONTROL, DEFAULT_HAND_SURFACE, episode_name
@@ -168,9 +168,10 @@ def _check_existing(spec: DatasetSpec, out: str, episodes: str) -> dict:
             _, meta, digest = read_episode_file(path, listed.get(rel))
             sc = expected.get(meta["episode"])
             if sc is not None and (meta.get("scenario") != asdict(sc) or meta.get("kinematics") != spec.kinematics
-                                   or meta.get("contacts") != spec.contacts):
-                raise DatasetFileError(f"{path} holds episode {meta['episode']} made with another scenario or "
-                                       f"sources ({meta.get('scenario')}, {meta.get('kinematics')}, {meta.get('contacts')})")
+                                   or meta.get("contacts") != spec.contacts or meta.get("sample_rows") != spec.rows):
+                raise DatasetFileError(f"{path} holds episode {meta['episode']} made with another scenario, "
+                                       f"sources or rows ({meta.get('scenario')}, {meta.get('kinematics')}, "
+                                       f"{meta.get('contacts')}, rows {meta.get('sample_rows')})")
         except DatasetFileError as e:
             print(f"generate: {e}; {'rebuilding' if os.path.basename(path)[:-8] in expected else 'removing'} it",
                   file=sys.stderr)
@@ -271,7 +272,7 @@ def read_episode_frame(out, row) -> pd.DataFrame:
     return pd.read_parquet(io.BytesIO(data))
 
 
-def load_dataset(out, max_excess_n: float | None = None, **where) -> pd.DataFrame:
+def load_dataset(out, max_excess_n: float | None = None, *, rows: str = "paper", **where) -> pd.DataFrame:
     """All kept samples of a dataset as one DataFrame, optionally filtered by scenario fields.
 
     Every file read is checked: the manifest against its digest, each episode file against the
@@ -281,11 +282,16 @@ def load_dataset(out, max_excess_n: float | None = None, **where) -> pd.DataFram
         out: Dataset folder.
         max_excess_n: If given, also drop the rows whose nominal forces exceed the tactile readings
             by more than this (the plausibility rule, :func:`nominal_excess_n`), [N].
+        rows: "paper": the rows the paper's sample rules keep (column ``paper_rule``; every row of
+            a dataset made with ``rows="paper"``), those the internal-force networks learn from;
+            "all": every row (of a dataset made with ``rows="all"``: every frame with kinematics).
         **where: Column filters, e.g. ``user=[0]`` or ``grasp=1`` (a value or a list of values).
 
     Raises:
         DatasetFileError: If a file is corrupt, truncated, renamed or without digests (names it).
     """
+    if rows not in ROWS:
+        raise DatasetError(f"rows must be one of {ROWS}, got {rows!r}")
     out = os.fspath(out)
     man = read_manifest(out)
     man = man[man["status"] == "ok"]
@@ -298,6 +304,10 @@ def load_dataset(out, max_excess_n: float | None = None, **where) -> pd.DataFram
     if not frames:
         raise DatasetError(f"no samples in {out!r} for {where or 'the whole dataset'}")
     df = pd.concat(frames, ignore_index=True)
+    if rows == "paper" and "paper_rule" in df.columns and not df["paper_rule"].all():
+        df = df[df["paper_rule"].to_numpy(bool)].reset_index(drop=True)
+        if df.empty:
+            raise DatasetError(f"no samples in {out!r} for {where or 'the whole dataset'} under the paper's rule")
     if max_excess_n is not None:
         names = finger_names_of(df)
         col = lambda prefix: df[[f"{prefix}_{n}" for n in names]].to_numpy()

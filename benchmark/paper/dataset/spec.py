@@ -12,10 +12,11 @@ from benchmark.world.scenario import Scenario
 from fsv._check import positive
 
 FORMAT = "fsv-bench-dataset"
-VERSION = 2  # version 1 had no digests
+VERSION = 3  # version 1 had no digests; 2 no 3D forces, table wrench, paper_rule column or rows "all"
 KINEMATICS = ("algebraic", "central", "gaussian", "oracle")
 DESIGNS = ("grid", "people")
 CONTACTS = ("tracker", "error-model", "oracle")
+ROWS = ("paper", "all")
 _AX = "xyz"
 
 
@@ -49,6 +50,11 @@ class DatasetSpec:
         tactile_noise_n: Noise of the simulated tactile sensors (``benchmark.world.tactile``), [N].
         max_gap_n: Samples whose vision and tactile net forces differ by more than this are dropped, [N].
         min_fingers: Frames with fewer fingers in contact are dropped.
+        rows: Which frames become rows: "paper" (the frames the paper's sample rules keep, above,
+            whose decomposition was solved) or "all" (every frame with valid kinematics; the
+            column ``paper_rule`` says which of them the paper's rules keep, and ``f_nom_``/``f_int_``
+            are NaN on the others: the decomposition runs on the kept frames only). The
+            end-to-end networks (``fsv-bench train-direct``) learn from "all".
     """
 
     tasks: tuple = ("lift",)
@@ -66,6 +72,7 @@ class DatasetSpec:
     tactile_noise_n: float = 0.1
     max_gap_n: float = 1.5
     min_fingers: int = 2
+    rows: str = "paper"
 
     def __post_init__(self):
         object.__setattr__(self, "tasks", tuple(str(t) for t in self.tasks))
@@ -79,7 +86,7 @@ class DatasetSpec:
         if self.size() > MAX_EPISODES:
             raise DatasetError(f"the dataset's grid holds {self.size():,} episodes, more than the {MAX_EPISODES:,} "
                                "accepted; split it into several datasets")
-        for name, accepted in (("kinematics", KINEMATICS), ("contacts", CONTACTS), ("design", DESIGNS)):
+        for name, accepted in (("kinematics", KINEMATICS), ("contacts", CONTACTS), ("design", DESIGNS), ("rows", ROWS)):
             if getattr(self, name) not in accepted:
                 raise DatasetError(f"{name} source must be one of {accepted}, got {getattr(self, name)!r}")
         if not (np.isfinite(self.tactile_noise_n) and self.tactile_noise_n >= 0):
@@ -127,13 +134,15 @@ class DatasetSpec:
         ]
 
     def as_dict(self) -> dict:
-        """JSON of the spec (``views`` left out while it is the paper's view alone and ``design`` while
-        it is the grid, as before either existed)."""
+        """JSON of the spec (``views`` left out while it is the paper's view alone, ``design`` while
+        it is the grid and ``rows`` while they are the paper's, as before any of them existed)."""
         out = {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v) for f in fields(self)}
         if self.views == (0,):
             del out["views"]
         if self.design == "grid":
             del out["design"]
+        if self.rows == "paper":
+            del out["rows"]
         return out
 
 
