@@ -39,11 +39,15 @@ VARIANTS = {
     "oracle-kinematics": MethodSpec(oracle=("kinematics",)),
     "oracle-contacts-kinematics": MethodSpec(oracle=("contacts", "kinematics")),
     f"{OTHER_KNOWLEDGE}-knowledge": MethodSpec(knowledge=OTHER_KNOWLEDGE),
+    "direct": MethodSpec(method="direct"),
+    "direct-oracle-contacts-kinematics": MethodSpec(method="direct", oracle=("contacts", "kinematics")),
     **{f"baseline-{name}": MethodSpec(method=name, protocol="calibrated" if name == "grip-line" else "blind")
        for name in BASELINE_NAMES},
 }
 """The leaderboard's rows: the reference (algebraic differentiation, lab knowledge, the ``blind`` protocol), the
-same under the ``calibrated`` protocol (:mod:`benchmark.method.protocol`), its variants, and the
+same under the ``calibrated`` protocol (:mod:`benchmark.method.protocol`), its variants, the
+end-to-end network of the learned family (``direct``, :class:`fsv.method.DirectForces`; blind: it is told
+nothing of the person) on the reference's tracking and on the truth's contacts and kinematics, and the
 trivial baseline of each stage (``fsv.method.baselines``) every method must beat (the grip line is
 a calibration, so it is run calibrated)."""
 
