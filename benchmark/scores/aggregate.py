@@ -5,7 +5,6 @@ value)."""
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from benchmark.scores.metrics import WORST
 
@@ -73,6 +72,8 @@ def aggregate(values, statistic: str, worst: float | None = None) -> dict:
     if x.size < 2 or np.all(x == x[0]):
         return {"value": value, "ci_low": value, "ci_high": value, "n": n, "at_worst": at_worst}
     if np.isfinite(x).all():
+        from scipy import stats  # lazy: scipy.stats (0.4 s) off `fsv-bench`'s start-up: one episode has no interval
+
         res = stats.bootstrap((x,), fn, confidence_level=CONFIDENCE, n_resamples=RESAMPLES, method="percentile",
                               rng=np.random.default_rng(BOOTSTRAP_SEED))
         low, high = res.confidence_interval
@@ -143,5 +144,7 @@ def paired_test(differences) -> dict:
     beyond = 2.0 * (np.abs(finite).max() if finite.size else 1.0) + 1.0  # the test sees ranks and signs only
     ranked = np.where(np.isinf(nonzero), np.sign(nonzero) * beyond, nonzero)
     method = "exact" if nonzero.size <= 50 else "approx"
+    from scipy import stats  # lazy: scipy.stats (0.4 s) off `fsv-bench`'s start-up
+
     p = float(stats.wilcoxon(ranked, alternative="two-sided", method=method).pvalue)
     return {"n": int(nonzero.size), "p": p, "median_diff": median}
