@@ -217,9 +217,12 @@ class _ForkJob(Job):
         self._changed = threading.Condition()
         self._reading = False
         self._count = 0  # the items the child has said are done
+        self._owner = os.getpid()  # the pipe is read in this process only (not in a child forked since)
 
     def _receive(self, enough) -> None:
         """Reads the child's messages until ``enough()`` or the job has ended."""
+        if os.getpid() != self._owner and not (self._done or enough()):
+            raise BenchmarkError(f"the job {self.name} is waited for in a process forked from the one that started it")
         with self._changed:
             while not (self._done or enough()):
                 if self._reading:

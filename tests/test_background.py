@@ -283,6 +283,17 @@ def test_a_streamed_jobs_first_items_reach_the_caller_while_the_child_has_not_ma
     assert job.result() == waiting.result() == 1000.0 * (1 + 2 + 3 + 4)
 
 
+def test_a_streamed_job_waited_for_in_a_process_forked_since_fails_there_instead_of_hanging():
+    bg, job, shared, go = _streamed()
+    job.wait_for(1)
+    assert Background().fork("picture", job.wait_for, 1).result() is None  # what was there at the fork is there
+    assert "waited for in a process forked from the one that started it" in Background().fork(
+        "picture", job.wait_for, 4).failure()
+    go()
+    job.wait_for(4)
+    bg.wait()
+
+
 def test_a_streamed_job_that_fails_or_ends_short_raises_where_the_caller_waits_for_its_items():
     from benchmark.background import JobFailed
 
