@@ -19,7 +19,7 @@ from fsv.errors import InputError
 
 @dataclass(frozen=True)
 class DepthVideo:
-    """A depth video from one camera.
+    """A depth video from one camera (frame after frame: :meth:`frames`).
 
     Attributes:
         depth_m: Depth along the optical axis, shape (T, H, W), float32 metres; 0 = no measurement.
