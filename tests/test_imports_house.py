@@ -76,9 +76,11 @@ def test_every_import_inside_a_function_says_why_it_is_there():
 
 def test_the_imports_kept_inside_functions_are_few():
     # 433 on 71a8218, before the imports moved to the top; 135 stay (heavy libraries off a start-up,
-    # optional ones, the sub-commands' dispatch, an order to keep). One more needs its reason and this ceiling raised.
+    # optional ones, the sub-commands' dispatch, an order to keep); 136 since scipy.stats left the main
+    # command's start-up with scipy.signal (issue 48 item 6: benchmark.scores.aggregate._stats).
+    # One more needs its reason and this ceiling raised.
     rows = function_imports(ROOT)
-    assert len(rows) <= 135, len(rows)
+    assert len(rows) <= 136, len(rows)
 
 
 def test_an_unmarked_import_inside_a_function_is_found(tmp_path):
