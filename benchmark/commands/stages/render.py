@@ -38,7 +38,7 @@ from benchmark.commands.digests import colour_digest, digest
 from benchmark.commands.pictures.depth_preview import preview_paths, write_colour_preview, write_preview
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 from benchmark.suites.options import add_streams_argument
-from fsv.types import DepthRecording, DepthVideo, check_streams
+from fsv.types import DepthRecording, check_streams
 
 
 def add_arguments(parser) -> None:
@@ -134,9 +134,8 @@ def _finish_depth(job, buffers: tuple, episode, colour: tuple | None, scenario, 
     """In a thread of the command: waits for the depth's child, makes ``episode`` (whose depth is
     the recording) whole, joins the colour to it if ``colour``, and writes the episode file."""
     annotations, (block, line), depth_digest = job.result()
-    depth, labels = buffers
-    episode = episode.with_depth(DepthVideo(depth_m=depth, fps=episode.depth.fps), episode.calib,
-                                 labels).with_annotations(annotations)
+    episode.depth.depth_m  # noqa: B018 (every frame checked; the recording, whole, is the episode's depth: no copy)
+    episode = episode.with_depth(episode.depth, episode.calib, buffers[1]).with_annotations(annotations)
     if colour is not None:
         joined = _finish_colour(*colour, episode, scenario, out)
         return replace(joined, blocks=(("render", block), *joined.blocks), lines=(line, *joined.lines),
