@@ -12,6 +12,9 @@ chain, on the machine's other core:
 * :meth:`Background.fork`: CPU-bound work whose (small) result the caller needs later, in a forked
   child that sends it back through a pipe (:meth:`Job.result`); large arrays it makes go into
   memory shared with the caller (:func:`shared_empty`), not through the pipe;
+* :meth:`Background.stream`: such work that makes its output in order (the frames of a video) and
+  says through the same pipe how much of it is done, so that the caller may use the first items
+  while the child makes the later ones (:meth:`Job.wait_for`);
 * :meth:`Background.preload`: modules the children will need (matplotlib), imported in a thread
   while the caller works in compiled code, so that each child does not import them again. A fork
   waits for the preload to end (a child must not inherit a half-done import).
@@ -109,6 +112,16 @@ def _child_returning(conn, parent, fn, args, kwargs) -> None:  # pragma: no cove
     os._exit(code)
 
 
+def _child_streaming(conn, parent, fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
+    """A streamed job (:meth:`Background.stream`): ``fn(done, ...)``, where ``done(n)`` sends
+    ``("done", n)`` through ``conn`` ahead of the result."""
+
+    def done(n: int) -> None:
+        conn.send(("done", int(n)))
+
+    _child_returning(conn, parent, fn, (done, *args), kwargs)
+
+
 def shared_empty(shape: tuple, dtype) -> np.ndarray:
     """An uninitialised array in anonymous shared memory: what a child forked after this call
     (:meth:`Background.fork`) writes into it, this process sees, with no copy and no pickling. The
@@ -158,6 +171,15 @@ class Job:
             raise JobFailed(self)
         return self._value
 
+    def wait_for(self, n: int) -> None:
+        """Returns once the job has said that the first ``n`` items of its output are done
+        (:meth:`Background.stream`); a job of another kind once it has ended.
+
+        Raises:
+            JobFailed: The job failed before it got so far (or ended without getting there).
+        """
+        self.result()
+
 
 class _ThreadJob(Job):
     def __init__(self, name: str, fn, args, kwargs):
@@ -181,32 +203,69 @@ class _ThreadJob(Job):
 
 
 class _ForkJob(Job):
-    def __init__(self, name: str, fn, args, kwargs):
+    def __init__(self, name: str, fn, args, kwargs, streamed: bool = False):
         super().__init__(name)
         ctx = multiprocessing.get_context("fork")
         self._conn, child_end = ctx.Pipe(duplex=False)
-        self.process = ctx.Process(target=_child_returning, args=(child_end, os.getpid(), fn, args, kwargs), name=name,
+        target = _child_streaming if streamed else _child_returning
+        self.process = ctx.Process(target=target, args=(child_end, os.getpid(), fn, args, kwargs), name=name,
                                    daemon=True)
         self.process.start()
         child_end.close()  # only the child holds the writing end: its exit, however it comes, ends our read
-        self._lock = threading.Lock()  # a thread may wait for the result while wait() or cancel() does
+        # Threads may wait for the result or for a count of items while wait() or cancel() does: one
+        # reads the pipe at a time (without the lock), the others wait for what it read.
+        self._changed = threading.Condition()
+        self._reading = False
+        self._count = 0  # the items the child has said are done
+        self._owner = os.getpid()  # the pipe is read in this process only (not in a child forked since)
+
+    def _receive(self, enough) -> None:
+        """Reads the child's messages until ``enough()`` or the job has ended."""
+        if os.getpid() != self._owner and not (self._done or enough()):
+            raise BenchmarkError(f"the job {self.name} is waited for in a process forked from the one that started it")
+        with self._changed:
+            while not (self._done or enough()):
+                if self._reading:
+                    self._changed.wait()
+                    continue
+                self._reading = True
+                try:
+                    self._changed.release()
+                    try:
+                        message = self._conn.recv()
+                    except Exception:  # the child's exit (EOF), or a read that Ctrl-C cut short
+                        message = None
+                    finally:
+                        self._changed.acquire()
+                finally:
+                    self._reading = False
+                    self._changed.notify_all()
+                self._take(message)
+
+    def _take(self, message) -> None:
+        kind, payload = message if isinstance(message, tuple) and len(message) == 2 else (None, None)
+        if kind == "done":
+            self._count = payload
+            return
+        self._conn.close()
+        self.process.join()
+        if kind == "value":
+            self._set(payload)
+        elif kind == "error":
+            self._set(error=payload)
+        else:
+            self._set(error=f"the process ended without a result (exit code {self.process.exitcode})")
 
     def _wait(self) -> None:
-        with self._lock:
-            if self._done:
-                return
-            try:
-                kind, payload = self._conn.recv()
-            except (EOFError, OSError):
-                kind, payload = None, None
-            self._conn.close()
-            self.process.join()
-            if kind == "value":
-                self._set(payload)
-            elif kind == "error":
-                self._set(error=payload)
-            else:
-                self._set(error=f"the process ended without a result (exit code {self.process.exitcode})")
+        self._receive(lambda: False)
+
+    def wait_for(self, n: int) -> None:
+        self._receive(lambda: self._count >= n)
+        if self._count >= n:
+            return
+        if self._error is None:  # it returned without saying so: its output is not whole
+            self._error = f"it ended after {self._count} items, not {n}"
+        raise JobFailed(self)
 
     def terminate(self) -> None:
         """Sends SIGTERM (nothing if already reaped); no waitpid here, a thread may be joining it."""
@@ -268,6 +327,19 @@ class Background:
         if self._preload is not None:
             self._preload.join()
         job = _ForkJob(name, fn, args, kwargs)
+        self._jobs.append((name, job))
+        return job
+
+    def stream(self, name: str, fn, *args, **kwargs) -> Job:
+        """:meth:`fork` for work that makes its output in order into :func:`shared_empty` memory:
+        it runs ``fn(done, *args, **kwargs)``, where ``done(n)`` (called with a growing ``n``)
+        says that the first ``n`` items are written, and the caller's :meth:`Job.wait_for` returns
+        once they are (the pipe orders the child's writes before the caller's reads)."""
+        if not self.enabled:
+            return _DoneJob(name, fn(lambda n: None, *args, **kwargs))
+        if self._preload is not None:
+            self._preload.join()
+        job = _ForkJob(name, fn, args, kwargs, streamed=True)
         self._jobs.append((name, job))
         return job
 

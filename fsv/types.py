@@ -8,6 +8,7 @@ Every record checks its shapes on construction and raises :class:`fsv.errors.Inp
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,7 +19,7 @@ from fsv.errors import InputError
 
 @dataclass(frozen=True)
 class DepthVideo:
-    """A depth video from one camera.
+    """A depth video from one camera (frame after frame: :meth:`frames`).
 
     Attributes:
         depth_m: Depth along the optical axis, shape (T, H, W), float32 metres; 0 = no measurement.
@@ -44,6 +45,77 @@ class DepthVideo:
     def t(self) -> np.ndarray:
         """Frame times in [s], shape (T,)."""
         return np.arange(self.num_frames) / self.fps
+
+    def frames(self) -> Iterator[np.ndarray]:
+        """The frames in order, (H, W) float32 [m] each: a reader that goes through the video
+        frame after frame (the reference tracker) takes them from here, and so starts on the first
+        frame of a :class:`DepthRecording` while the later ones are still being recorded."""
+        return iter(self.depth_m)
+
+
+class DepthRecording(DepthVideo):
+    """A depth video still being recorded: its frames are written, in order, into an array that
+    another process (a camera's driver, a renderer) shares with this one.
+
+    To every reader it is the :class:`DepthVideo` it becomes: :attr:`depth_m` waits for the last
+    frame, and every frame is checked as :class:`DepthVideo` checks them. :meth:`frames` hands each
+    frame over as soon as it is written, so that a reader that goes through the video in order
+    works on frame k while the later ones are recorded; the frames are the same bits either way.
+    Pickled, it is the whole :class:`DepthVideo` (after the last frame).
+
+    Args:
+        buffer: The (T, H, W) float32 array the frames are written into [m]; only read here.
+        fps: Frame rate [Hz].
+        wait: ``wait(n)`` returns once the first ``n`` frames are in ``buffer``, with ``n`` from 1
+            to T in any order (a recording that failed raises there, its error is the reader's).
+    """
+
+    def __init__(self, buffer: np.ndarray, fps: float, wait: Callable[[int], None]):
+        if not (isinstance(buffer, np.ndarray) and buffer.dtype == np.float32 and buffer.ndim == 3):
+            got = f"{buffer.dtype} array of shape {buffer.shape}" if isinstance(buffer, np.ndarray) else type(buffer).__name__
+            raise InputError(f"DepthRecording.buffer must be a (T, H, W) float32 array, got {got}")
+        if not callable(wait):
+            raise InputError(f"DepthRecording.wait must be callable, got {type(wait).__name__}")
+        positive("DepthRecording.fps", fps, "a positive number of Hz")
+        view = buffer.view()
+        view.setflags(write=False)
+        object.__setattr__(self, "_buffer", view)
+        object.__setattr__(self, "fps", float(fps))
+        object.__setattr__(self, "_wait", wait)
+        object.__setattr__(self, "_checked", 0)  # frames checked so far (each once)
+
+    def _arrived(self, n: int) -> None:
+        """Returns once the first ``n`` frames are recorded and checked."""
+        if self._checked >= n:
+            return
+        self._wait(n)
+        for k in range(self._checked, n):
+            frame = self._buffer[k]
+            if not np.all(np.isfinite(frame)) or np.any(frame < 0):
+                raise InputError(f"DepthVideo.depth_m must be finite and >= 0 (0 = no measurement): frame {k} is not")
+        object.__setattr__(self, "_checked", n)
+
+    @property
+    def depth_m(self) -> np.ndarray:
+        """The whole video, (T, H, W) float32 [m], read-only (waits for its last frame)."""
+        self._arrived(self.num_frames)
+        return self._buffer
+
+    @property
+    def num_frames(self) -> int:
+        return self._buffer.shape[0]
+
+    def frames(self) -> Iterator[np.ndarray]:
+        for k in range(self.num_frames):
+            self._arrived(k + 1)
+            yield self._buffer[k]
+
+    def __repr__(self) -> str:
+        T, H, W = self._buffer.shape
+        return f"DepthRecording({T} frames of {W}x{H} at {self.fps:g} Hz, {self._checked} recorded)"
+
+    def __reduce__(self):
+        return DepthVideo, (self.depth_m, self.fps)
 
 
 STREAMS = ("depth", "colour")

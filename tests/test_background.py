@@ -226,3 +226,95 @@ def test_a_forked_job_dies_with_a_killed_parent():
         time.sleep(0.05)
     else:
         pytest.fail("the forked job outlived its killed parent")
+
+
+def _rows(done, shared, gate: int | None = None, fail_at: int | None = None, stop_at: int | None = None) -> float:
+    """A streamed job: row k of ``shared`` set to k + 1, then ``done(k + 1)``; after row 0 it waits
+    for a byte on the file descriptor ``gate`` (the test's go-ahead)."""
+    for k in range(shared.shape[0]):
+        if k == fail_at:
+            raise BenchmarkError("planted failure at row 2")
+        if k == stop_at:
+            break
+        shared[k] = k + 1
+        done(k + 1)
+        if k == 0 and gate is not None:
+            os.read(gate, 1)
+    return float(shared.sum())
+
+
+def _streamed(**kwargs):
+    """``(background, job, shared, go)``: a streamed job of :func:`_rows` over 4 rows, blocked after
+    row 0 until ``go()`` (or 10 s, so that a broken stream fails its assertions instead of hanging)."""
+    import threading
+
+    from benchmark.background import shared_empty
+
+    bg = Background()
+    shared = shared_empty((4, 1000), "float32")
+    read, write = os.pipe()
+    job = bg.stream("rows", _rows, shared, read, **kwargs)
+    os.close(read)
+    lock = threading.Lock()
+
+    def go():
+        with lock:
+            if not timer.finished.is_set():
+                timer.cancel()
+                os.write(write, b"x")
+
+    timer = threading.Timer(10.0, go)
+    timer.daemon = True
+    timer.start()
+    return bg, job, shared, go
+
+
+def test_a_streamed_jobs_first_items_reach_the_caller_while_the_child_has_not_made_the_next():
+    bg, job, shared, go = _streamed()
+    waiting = bg.thread("whole", job.result)  # a second reader of the child's pipe, as the episode file's thread is
+    job.wait_for(1)
+    assert np.all(shared[0] == 1) and np.all(shared[1:] == 0)  # row 1 waits for the go-ahead
+    go()
+    job.wait_for(3)
+    assert np.all(shared[:3] == np.arange(1, 4)[:, None])
+    job.wait_for(4)
+    job.wait_for(2)  # already there
+    bg.wait()
+    assert job.result() == waiting.result() == 1000.0 * (1 + 2 + 3 + 4)
+
+
+def test_a_streamed_job_waited_for_in_a_process_forked_since_fails_there_instead_of_hanging():
+    bg, job, shared, go = _streamed()
+    job.wait_for(1)
+    assert Background().fork("picture", job.wait_for, 1).result() is None  # what was there at the fork is there
+    assert "waited for in a process forked from the one that started it" in Background().fork(
+        "picture", job.wait_for, 4).failure()
+    go()
+    job.wait_for(4)
+    bg.wait()
+
+
+def test_a_streamed_job_that_fails_or_ends_short_raises_where_the_caller_waits_for_its_items():
+    from benchmark.background import JobFailed
+
+    bg, job, shared, go = _streamed(fail_at=2)
+    job.wait_for(1)
+    go()
+    with pytest.raises(JobFailed, match=r"^rows failed: BenchmarkError: planted failure at row 2$"):
+        job.wait_for(3)
+    job.wait_for(2)  # what came before the failure is there
+    with pytest.raises(BenchmarkError, match=r"background work failed: rows \(BenchmarkError: planted"):
+        bg.wait()
+    bg, job, shared, go = _streamed(stop_at=2)
+    go()
+    with pytest.raises(JobFailed, match=r"^rows failed: it ended after 2 items, not 4$"):
+        job.wait_for(4)
+    bg.cancel()
+
+
+def test_disabled_streams_at_once():
+    bg = Background(enabled=False)
+    array = np.zeros((3, 2))
+    job = bg.stream("rows", _rows, array)
+    job.wait_for(3)
+    assert job.result() == 12.0 and np.all(array == [[1], [2], [3]])

@@ -184,23 +184,25 @@ def _children(pid: int) -> list:
         return []
 
 
-def test_ctrl_c_while_the_colour_renders_beside_the_command_ends_the_worker_too(tmp_path):
-    """The colour of a depth-only method renders in a forked child beside the depth and the
-    tracker: Ctrl-C while it runs gives 130 within the limit, the previous output as it was,
-    nothing left beside it, and no process of the command's group alive a moment later."""
+@pytest.mark.parametrize("streams", ["depth", "depth,colour"])
+def test_ctrl_c_while_a_stream_renders_beside_the_command_ends_the_worker_too(tmp_path, streams):
+    """The depth (and the colour) of a depth-only method render in forked children beside the
+    tracker: Ctrl-C while one runs (the first forked: the colour's if asked, else the depth's) gives
+    130 within the limit, the previous output as it was, nothing left beside it, and no process of
+    the command's group alive a moment later."""
     out = tmp_path / "run"
     out.mkdir()
     write_marker(out)
     (out / "summary.json").write_text('{"previous": true}')
     cmd = [sys.executable, "-m", "benchmark.commands.entry", "--task", "lift", "--duration", "4", "--streams",
-           "depth,colour", "--quiet", "--no-gif", "--force", "--out", str(out)]
+           streams, "--quiet", "--no-gif", "--force", "--out", str(out)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
                             env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     deadline = time.perf_counter() + 60
     while not _children(proc.pid) and proc.poll() is None and time.perf_counter() < deadline:
-        time.sleep(0.02)  # until the render stage has forked the colour's worker
+        time.sleep(0.02)  # until the render stage has forked a stream's worker
     worker = _children(proc.pid)
-    assert worker, "the colour worker never started"
+    assert worker, "the worker never started"
     time.sleep(0.3)  # inside its rendering
     assert pathlib.Path(f"/proc/{worker[0]}").exists()
     sent = time.perf_counter()
@@ -213,6 +215,6 @@ def test_ctrl_c_while_the_colour_renders_beside_the_command_ends_the_worker_too(
     deadline = time.perf_counter() + 5.0
     while _group_alive(proc.pid) and time.perf_counter() < deadline:
         time.sleep(0.1)
-    assert not _group_alive(proc.pid), "the colour worker outlived the command"
+    assert not _group_alive(proc.pid), "a worker outlived the command"
     assert json.loads((out / "summary.json").read_text()) == {"previous": True}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]

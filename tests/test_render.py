@@ -455,3 +455,49 @@ def test_the_depth_is_the_pinned_rasterisers_and_no_gl_library_takes_part():
     assert out[-1] == "[]", out
     assert out[0] == PINNED_DEPTH_SHA256, out
     assert out[2] == PINNED_SKIN_DEPTH_SHA256, out
+
+
+def test_the_box_and_table_meshes_are_trimeshs_without_importing_it():
+    """``scene.geom_mesh`` builds and moves boxes and planes as trimesh does, bit for bit (the
+    rasteriser's input), so that a render worker need not import trimesh."""
+    import trimesh  # noqa: F401 (the reference)
+
+    from benchmark.world.assets import build_world
+    from benchmark.world.scenario import Scenario
+    from fsv.rotation import quat_to_rot
+
+    world = build_world(Scenario(task="lift"))
+    model = world.model
+    rng = np.random.default_rng(11)
+    poses = [np.eye(4)]
+    for k in range(6):
+        T = np.eye(4)
+        T[:3, :3] = quat_to_rot(rng.standard_normal(4)) if k != 1 else np.eye(3)  # k = 1: a translation only
+        T[:3, 3] = rng.uniform(-0.5, 0.5, 3)
+        poses.append(T)
+    mirror = np.diag([1.0, -1.0, 1.0, 1.0])  # turns the triangles' winding
+    poses.append(mirror)
+    kinds = set()
+    for g in (world.table_geom, world.box_geom):
+        kinds.add(int(model.geom_type[g]))
+        for T in poses:
+            vertices, faces = S.geom_mesh(model, g, T)
+            mesh = S.geom_trimesh(model, g)
+            mesh.apply_transform(T)
+            assert vertices.tobytes() == np.asarray(mesh.vertices, dtype=np.float64).tobytes()
+            assert faces.tobytes() == np.asarray(mesh.faces, dtype=np.int64).tobytes()
+    assert kinds == {int(mujoco.mjtGeom.mjGEOM_PLANE), int(mujoco.mjtGeom.mjGEOM_BOX)}
+    vertices, faces = S.geom_mesh(model, world.box_geom, mirror)
+    assert faces[0].tolist() == [0, 3, 1]  # trimesh's first triangle (1, 3, 0), reversed
+
+
+def test_a_render_worker_imports_no_trimesh():
+    import subprocess
+    import sys
+
+    code = ("import sys; from benchmark.world.scenario import Scenario; from benchmark.world.simulate import simulate; "
+            "from benchmark.camera.render import render; render(simulate(Scenario(task='lift', duration_s=1.0))); "
+            "print('trimesh' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert out.stdout.split()[-1] == "False"

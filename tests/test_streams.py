@@ -14,14 +14,18 @@ from test_evaluate import TINY
 from benchmark.atomic import OUTPUT_MARKER, write_marker
 from benchmark.camera.episode_file import load_episode, save_episode
 from benchmark.camera.render import render
-from benchmark.commands.cli import main
-from benchmark.commands.digests import colour_digest
-from benchmark.commands.pictures.depth_preview import write_colour_preview
+from benchmark.commands.cli import build_parser, main, method_spec_from_args
+from benchmark.commands.digests import colour_digest, stage_digests
+from benchmark.commands.pictures.depth_preview import write_colour_preview, write_preview
 from benchmark.commands.stages import render as render_stage
+from benchmark.commands.stages import track as track_stage
 from benchmark.errors import RenderError
 from benchmark.exchange import load_camera_input
+from benchmark.method import run_method
+from benchmark.method.run import camera_input_and_knowledge
 from benchmark.suites import SUITES
 from benchmark.world.simulate import simulate
+from fsv.types import DepthRecording
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 NODE = shutil.which("node")
@@ -114,6 +118,53 @@ def test_a_method_that_reads_colour_gets_it_rendered_before_tracking(tmp_path, m
     summary = json.loads((out / "summary.json").read_text())
     assert summary["colour"]["frames"] == 31 and summary["digests"]["colour"]
     assert load_episode(out / "episode.npz").colour.num_frames == 31
+
+
+def test_the_depth_rendered_beside_the_tracker_has_the_serial_paths_bits(tmp_path, monkeypatch, capsys):
+    """A depth-only method: a forked child renders the depth frame after frame while the tracker
+    reads each frame once it is there (an ``fsv.types.DepthRecording``); every file, block, line and
+    digest is the serial path's (the depth rendered, then tracked, in this process)."""
+    handed = []
+    real = track_stage.run_method
+    monkeypatch.setattr(track_stage, "run_method",
+                        lambda spec, episode, **kw: handed.append(type(kw["inputs"].depth)) or real(spec, episode, **kw))
+    out = tmp_path / "run"
+    assert main(["--task", "lift", "--duration", "1", "--quiet", "--out", str(out)]) in (0, 1)
+    assert handed == [DepthRecording] and not multiprocessing.active_children()
+    printed = capsys.readouterr().out.splitlines()
+    summary = json.loads((out / "summary.json").read_text())
+    # the serial path: the depth rendered in this process, its preview drawn, the method run on it
+    scenario = load_episode(out / "episode.npz").scenario
+    episode = render(simulate(scenario))
+    serial = tmp_path / "serial"
+    save_episode(episode, serial / "episode.npz")
+    write_preview(episode.depth.depth_m, episode.depth.fps, serial)
+    for name in ("episode.npz", "depth_preview.png", "depth.gif"):
+        assert (out / name).read_bytes() == (serial / name).read_bytes(), name
+    block, line = render_stage.render_summary(scenario, episode.depth, episode.labels, out, True)
+    assert summary["render"] == json.loads(json.dumps(block)) and line in printed
+    assert list(summary).index("render") == list(summary).index("world") + 1  # the block in its place
+    spec = method_spec_from_args(build_parser().parse_args([]))
+    inputs, _ = camera_input_and_knowledge(episode, 1.0, spec.knowledge, spec.protocol)
+    estimate = run_method(spec, episode, inputs=inputs)
+    assert summary["digests"] == stage_digests(episode, estimate)  # the depth, the tracking and every later stage
+
+
+def test_a_failure_of_the_depth_beside_the_tracker_is_one_line_and_leaves_the_output_as_it_was(
+        tmp_path, monkeypatch, capsys):
+    def broken(episode, **kwargs):
+        raise RenderError("planted: the depth renderer failed")
+
+    monkeypatch.setattr(render_stage, "render_depth", broken)  # seen by the forked child
+    out = tmp_path / "run"
+    out.mkdir()
+    write_marker(out)
+    (out / "note.txt").write_text("the previous output")
+    assert main(["--task", "lift", "--duration", "1", "--quiet", "--no-gif", "--force", "--out", str(out)]) == 1
+    assert capsys.readouterr().err == "fsv-bench: failed: depth failed: RenderError: planted: the depth renderer failed\n"
+    assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARKER, "note.txt"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+    assert not multiprocessing.active_children()
 
 
 def test_a_depth_only_run_renders_no_colour(tmp_path):

@@ -104,3 +104,56 @@ def test_stream_names_are_checked_and_ordered_with_the_depth_always_in():
     assert check_streams("depth") == ("depth",)
     with pytest.raises(InputError, match="stream 'rgb': accepted: depth, colour"):
         check_streams("depth,rgb")
+
+
+def _recording(T=4, nan_in=None):
+    """``(recording, buffer, asked)``: a DepthRecording over a (T, 3, 5) buffer whose frames are
+    written when ``wait(n)`` is called (frame k = 0.5 + k m, one NaN pixel in frame ``nan_in``),
+    ``asked`` the n's asked for."""
+    from fsv.types import DepthRecording
+
+    buffer = np.zeros((T, 3, 5), np.float32)
+    asked = []
+
+    def wait(n):
+        for k in range(max(asked, default=0), n):
+            buffer[k] = 0.5 + k
+            buffer[k, 2, 3] = np.nan if k == nan_in else buffer[k, 2, 3]
+        asked.append(n)
+
+    return DepthRecording(buffer, 30.0, wait), buffer, asked
+
+
+def test_a_depth_recording_hands_each_frame_over_once_it_is_recorded_and_is_the_whole_video_when_read_whole():
+    import pickle
+
+    rec, buffer, asked = _recording()
+    assert isinstance(rec, DepthVideo) and rec.num_frames == 4 and list(rec.t) == [0, 1 / 30, 2 / 30, 0.1]
+    assert asked == []  # its length and times are known before any frame
+    frames = rec.frames()
+    first = next(frames)
+    assert asked == [1] and np.all(first == 0.5) and np.all(buffer[1:] == 0)  # frame 0 only
+    assert [float(f[0, 0]) for f in frames] == [1.5, 2.5, 3.5] and asked == [1, 2, 3, 4]
+    assert not first.flags.writeable
+    rec, buffer, asked = _recording()
+    whole = rec.depth_m
+    assert asked == [4] and whole.shape == (4, 3, 5) and not whole.flags.writeable
+    again = pickle.loads(pickle.dumps(rec))
+    assert type(again) is DepthVideo and np.array_equal(again.depth_m, whole) and again.fps == 30.0
+    assert "4 frames of 5x3 at 30 Hz" in repr(rec)
+
+
+def test_a_depth_recording_checks_each_frame_as_a_depth_video_does():
+    from fsv.types import DepthRecording
+
+    rec, _, _ = _recording(nan_in=1)
+    frames = rec.frames()
+    next(frames)
+    with pytest.raises(InputError, match="must be finite and >= 0 .*: frame 1 is not"):
+        next(frames)
+    with pytest.raises(InputError, match="frame 1 is not"):
+        _recording(nan_in=1)[0].depth_m
+    with pytest.raises(InputError, match="float32 array"):
+        DepthRecording(np.zeros((2, 3, 5)), 30.0, lambda n: None)
+    with pytest.raises(InputError, match="fps"):
+        DepthRecording(np.zeros((2, 3, 5), np.float32), 0.0, lambda n: None)

@@ -17,7 +17,7 @@ import numpy as np
 from benchmark.camera import raster_kernels as rk
 from benchmark.camera import skin_kernels as sk
 from benchmark.camera.camera import Camera
-from benchmark.camera.scene import LABEL_PALM, body_pose0, geom_trimesh
+from benchmark.camera.scene import LABEL_PALM, body_pose0, geom_mesh
 from benchmark.errors import BenchmarkError
 from benchmark.world.skin import PULP_EXPONENT_PER_MM, PULP_REACH, PULP_STIFFNESS_N_PER_MM, Skin, skin_of
 from fsv.linalg import mm, mv, rigid_inverse
@@ -55,13 +55,12 @@ def _geometry(model, labels: np.ndarray) -> tuple:
             radius.append(float(model.geom_size[g, 0]))
             clabel.append(labels[g])
         else:
-            mesh = geom_trimesh(model, int(g))
-            mesh.apply_transform(T)
-            verts.append(np.asarray(mesh.vertices, dtype=np.float64))
-            vbody.append(np.full(len(mesh.vertices), body))
-            faces.append(np.asarray(mesh.faces, dtype=np.int64) + count)
-            flabel.append(np.full(len(mesh.faces), labels[g]))
-            count += len(mesh.vertices)
+            vertices, tri = geom_mesh(model, int(g), T)
+            verts.append(vertices)
+            vbody.append(np.full(len(vertices), body))
+            faces.append(tri + count)
+            flabel.append(np.full(len(tri), labels[g]))
+            count += len(vertices)
 
     def stack(parts, shape, dtype):
         return np.ascontiguousarray(np.concatenate(parts).astype(dtype)) if parts else np.zeros(shape, dtype)

@@ -39,7 +39,8 @@ from fsv.types import check_streams
 
 
 def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: np.ndarray, sensor, rng,
-                 skin: HandSkin | None = None, pulps: tuple | None = None, observe=None):
+                 skin: HandSkin | None = None, pulps: tuple | None = None, observe=None, out: tuple | None = None,
+                 on_frame=None):
     """Renders and measures a depth video of a MuJoCo model.
 
     Args:
@@ -56,6 +57,10 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
             (:func:`benchmark.camera.depth.pulp_presses`); None presses no pulp.
         observe: Called as ``observe(k, exact_depth, labels)`` with each frame's exact depth (H, W)
             float32 and labels (before the sensor; e.g. :meth:`benchmark.camera.labelling.Labeller.see`).
+        out: ``(depth, label_images)`` arrays (T, H, W), float32 and uint8, to render into (e.g.
+            memory shared with another process), or None: new ones.
+        on_frame: Called as ``on_frame(k + 1)`` once frame k is in both arrays (the frames are
+            rendered in order: the first k + 1 are done).
 
     Returns:
         ``(depth, label_images)``: measured depth (T, H, W) float32 metres (0 = no measurement)
@@ -66,8 +71,14 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
         raise BenchmarkError(f"num_frames must be >= 1, got {num_frames}")
     data = mujoco.MjData(model)
     shape = (int(num_frames), camera.height, camera.width)
-    depth = np.empty(shape, dtype=np.float32)
-    label_images = np.empty(shape, dtype=np.uint8)
+    if out is None:
+        depth, label_images = np.empty(shape, dtype=np.float32), np.empty(shape, dtype=np.uint8)
+    else:
+        depth, label_images = out
+        if depth.shape != shape or label_images.shape != shape or (depth.dtype, label_images.dtype) != (
+                np.float32, np.uint8):
+            raise BenchmarkError(f"out must be float32 and uint8 arrays of shape {shape}, got {depth.dtype} "
+                                 f"{depth.shape} and {label_images.dtype} {label_images.shape}")
     renderer = DepthRenderer(model, camera, labels, skin=skin)
     for k in range(shape[0]):
         set_frame(data, k)
@@ -76,6 +87,8 @@ def render_video(model, set_frame, num_frames: int, *, camera: Camera, labels: n
         if observe is not None:
             observe(k, exact, label_images[k])
         depth[k] = sensor.measure(exact, camera.K, rng)
+        if on_frame is not None:
+            on_frame(k + 1)
     return depth, label_images
 
 
@@ -108,7 +121,7 @@ def render(episode: Episode, *, sensor: SensorModel | None = None, camera: Camer
     """
     streams = check_streams(streams)
     if episode.depth is None:
-        episode = _render_depth(episode, sensor, camera)
+        episode = render_depth(episode, sensor=sensor, camera=camera)
     if "colour" in streams and episode.colour is None:
         # the colour's labels beside the depth's (an episode read from a file of version 2 has none)
         stream = render_colour_stream(episode, camera=camera, labelled=episode.annotations is not None)
@@ -171,7 +184,12 @@ def scenario_sensor(scenario, sensor: SensorModel | None = None) -> SensorModel:
     return sensor
 
 
-def _render_depth(episode: Episode, sensor: SensorModel | None, camera: Camera | None) -> Episode:
+def render_depth(episode: Episode, *, sensor: SensorModel | None = None, camera: Camera | None = None,
+                 out: tuple | None = None, on_frame=None) -> Episode:
+    """The depth stream of :func:`render` alone: the episode with its ``depth``, ``calib``,
+    ``labels`` and depth ``annotations``, rendered frame after frame into ``out`` (``(depth,
+    labels)`` arrays, :func:`render_video`; None: new ones), calling ``on_frame(k + 1)`` once frame
+    k is there (a reader in another process may take it). The same bits either way."""
     sc = episode.scenario
     sensor = scenario_sensor(sc, sensor)
     camera = camera_of(sc.view) if camera is None else camera
@@ -185,7 +203,7 @@ def _render_depth(episode: Episode, sensor: SensorModel | None, camera: Camera |
     labeller = Labeller(world, truth, camera.calibration())
     depth, labels = render_video(
         world.model, set_k, len(truth.t), camera=camera, labels=world_labels(world), sensor=sensor, rng=sc.rng("depth"),
-        skin=skin, pulps=pulps, observe=labeller.see,
+        skin=skin, pulps=pulps, observe=labeller.see, out=out, on_frame=on_frame,
     )
     episode = episode.with_depth(DepthVideo(depth_m=depth, fps=sc.fps), camera.calibration(), labels)
     return episode.with_annotations(Annotations(keypoints_world=labeller.keypoints_world,

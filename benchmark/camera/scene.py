@@ -37,6 +37,60 @@ def world_labels(world) -> np.ndarray:
     return labels
 
 
+_BOX_VERTICES = ((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (0.0, 1.0, 1.0), (1.0, 0.0, 0.0), (1.0, 0.0, 1.0),
+                 (1.0, 1.0, 0.0), (1.0, 1.0, 1.0))
+_BOX_FACES = ((1, 3, 0), (4, 1, 0), (0, 3, 2), (2, 4, 0), (1, 7, 3), (5, 1, 4), (5, 7, 1), (3, 7, 2), (6, 4, 2), (2, 7, 6),
+              (6, 5, 4), (7, 5, 6))
+"""trimesh's unit cube (``trimesh.creation.box``, trimesh 4-5): its corners and its triangles in its order."""
+
+
+def geom_mesh(model, geom: int, pose: np.ndarray) -> tuple:
+    """``(vertices (V, 3) float64, faces (F, 3) int64)``: :func:`geom_trimesh` of a geom moved by
+    ``pose`` (4, 4), the same numbers. Boxes and planes (every meshed geom of the benchmark's
+    worlds) are built here as trimesh builds and moves them, without importing trimesh (0.3 s of
+    CPU at the start of every render worker); the other kinds go through trimesh."""
+    kind = int(model.geom_type[geom])
+    size = np.asarray(model.geom_size[geom], dtype=float)
+    G = mujoco.mjtGeom
+    if kind == G.mjGEOM_PLANE:
+        hx = size[0] if size[0] > 0 else PLANE_HALF_EXTENT_M
+        hy = size[1] if size[1] > 0 else PLANE_HALF_EXTENT_M
+        lower = np.eye(4)
+        lower[2, 3] = -0.01
+        vertices, faces = _moved(*_box((2 * hx, 2 * hy, 0.02)), lower)
+    elif kind == G.mjGEOM_BOX:
+        vertices, faces = _box(2 * size)
+    else:
+        mesh = geom_trimesh(model, geom)
+        mesh.apply_transform(pose)
+        return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)
+    return _moved(vertices, faces, pose)
+
+
+def _box(extents) -> tuple:
+    """``trimesh.creation.box(extents=extents)``'s vertices and faces."""
+    vertices = np.array(_BOX_VERTICES, order="C", dtype=np.float64)
+    vertices -= 0.5
+    vertices *= np.asanyarray(extents, dtype=np.float64)
+    return vertices, np.array(_BOX_FACES, order="C", dtype=np.int64)
+
+
+def _moved(vertices: np.ndarray, faces: np.ndarray, matrix) -> tuple:
+    """``trimesh.Trimesh.apply_transform`` (trimesh 5) on vertices and faces: the same products (its
+    ``np.dot`` of the homogeneous points, once per geom), its tests for an identity and a mirror."""
+    matrix = np.asanyarray(matrix, order="C", dtype=np.float64)
+    if float(np.ptp(matrix - np.eye(4))) < 1e-8:
+        return vertices, faces
+    if np.abs(matrix - np.eye(4)).max() < 1e-8:
+        moved = np.ascontiguousarray(vertices.copy())
+    else:
+        moved = np.dot(matrix, np.column_stack((vertices, np.ones(len(vertices)))).T).T[:, :3]
+    rotates = not float(np.ptp(matrix[:3, :3] - np.eye(3))) < 1e-6
+    if rotates and bool(np.linalg.det(matrix[:3, :3]) < 0.0):
+        faces = np.ascontiguousarray(np.fliplr(faces))
+    return np.ascontiguousarray(moved, dtype=np.float64), faces
+
+
 def geom_trimesh(model, geom: int):
     """A triangle mesh of one MuJoCo geom in the geom's own frame (not for spheres and capsules).
 

@@ -314,8 +314,8 @@ def run_stages(record: Run, args: argparse.Namespace, background: Background) ->
         result = stage(record, args)
         record = dataclasses.replace(record, **result.updates())
         complete(result, record.out, background)
-        if result.pictures:  # for the later stages' figures, imported while the next stage works
-            background.preload("matplotlib.pyplot")
+        if result.pictures or result.later:  # for the later stages' figures, imported while the next stage works
+            background.preload("matplotlib.pyplot")  # (the render stage's depth, in a child beside it, too)
         parts += [result, *result.later]
         timing[stage.name] = time.perf_counter() - t0
     return parts, timing, dataclasses.replace(record, background=None)

@@ -47,15 +47,15 @@ def stage_digests(episode, estimate, known: dict | None = None) -> dict:
     Args:
         episode: The rendered ``benchmark.world.episode.Episode``.
         estimate: The method's ``fsv.method.Estimate`` on it.
-        known: Digests already computed (the colour's, by the job that rendered it beside the
-            later stages): taken as they are.
+        known: Digests already computed (the depth's and the colour's, by the jobs that rendered
+            them beside the later stages): taken as they are.
     """
     known = known or {}
     tracking = estimate.tracking
     colour = {} if episode.colour is None else {"colour": known.get("colour") or colour_digest(episode.colour)}
     return {
         "truth": digest(episode.truth),
-        "depth": digest(episode.depth),
+        "depth": known.get("depth") or digest(episode.depth),
         **colour,
         "tracking": digest(getattr(tracking, "box", None), getattr(tracking, "contacts", None)),
         "kinematics": digest(estimate.kinematics),

@@ -61,6 +61,9 @@ class Run:
             track stage on.
         inputs: What the method was handed (``fsv.method.CameraInput``: calibration, models, the
             person's grip calibration or None), from the track stage on.
+        learned: The estimate's final forces scored against the truth
+            (:func:`benchmark.scores.learned.score_episode`), from the learn stage on (None before,
+            or for a method without them): the verdict takes its metrics from it.
         background: The command's :class:`benchmark.background.Background`, where a stage may
             start work that finishes beside the later stages (``StageResult.later``); None (a stage
             run on its own) does all its work before it returns.
@@ -74,6 +77,7 @@ class Run:
     estimate: Any = None
     knowledge: Any = None
     inputs: Any = None
+    learned: dict | None = None
     background: Any = None
 
 
@@ -90,6 +94,7 @@ class StageResult:
         estimate: The method's estimate, if this stage ran the method, else None.
         knowledge: What the method was told, if this stage ran it, else None.
         inputs: What the method was handed, if this stage ran it, else None.
+        learned: The final forces' scores, if this stage scored them, else None.
         later: Jobs (:class:`benchmark.background.Job`) of this stage's still running beside the
             later stages; each one's result is a :class:`StageResult` that completes this one at the end.
         digests: ``((name, digest), ...)``: digests of :data:`benchmark.commands.digests.STAGES`
@@ -104,6 +109,7 @@ class StageResult:
     estimate: Any = None
     knowledge: Any = None
     inputs: Any = None
+    learned: dict | None = None
     later: tuple = ()
     digests: tuple = ()
 
@@ -115,7 +121,7 @@ class StageResult:
     def updates(self) -> dict:
         """The fields of :class:`Run` this result replaces."""
         return {k: v for k, v in (("episode", self.episode), ("estimate", self.estimate), ("knowledge", self.knowledge),
-                                  ("inputs", self.inputs)) if v is not None}
+                                  ("inputs", self.inputs), ("learned", self.learned)) if v is not None}
 
 
 def _no_arguments(parser) -> None:

@@ -5,7 +5,6 @@ value)."""
 from __future__ import annotations
 
 import numpy as np
-from scipy import stats
 
 from benchmark.scores.metrics import WORST
 
@@ -28,6 +27,13 @@ def p90(x, axis=None):
 STATISTICS = {"median": np.median, "mean": np.mean, "p90": p90}
 """The statistics a gate or a report takes over a suite's episodes, by name: the median (a typical
 episode), the mean, and the 90th percentile (the tail: one episode in ten is worse)."""
+
+
+def _stats():
+    """``scipy.stats``, imported where an interval or a test is computed."""
+    from scipy import stats  # lazy: scipy.stats (0.4 s of CPU) off `fsv-bench`'s start-up: one episode has no interval
+
+    return stats
 
 
 def span(values, missing: str = "-") -> str:
@@ -73,7 +79,7 @@ def aggregate(values, statistic: str, worst: float | None = None) -> dict:
     if x.size < 2 or np.all(x == x[0]):
         return {"value": value, "ci_low": value, "ci_high": value, "n": n, "at_worst": at_worst}
     if np.isfinite(x).all():
-        res = stats.bootstrap((x,), fn, confidence_level=CONFIDENCE, n_resamples=RESAMPLES, method="percentile",
+        res = _stats().bootstrap((x,), fn, confidence_level=CONFIDENCE, n_resamples=RESAMPLES, method="percentile",
                               rng=np.random.default_rng(BOOTSTRAP_SEED))
         low, high = res.confidence_interval
     else:
@@ -143,5 +149,5 @@ def paired_test(differences) -> dict:
     beyond = 2.0 * (np.abs(finite).max() if finite.size else 1.0) + 1.0  # the test sees ranks and signs only
     ranked = np.where(np.isinf(nonzero), np.sign(nonzero) * beyond, nonzero)
     method = "exact" if nonzero.size <= 50 else "approx"
-    p = float(stats.wilcoxon(ranked, alternative="two-sided", method=method).pvalue)
+    p = float(_stats().wilcoxon(ranked, alternative="two-sided", method=method).pvalue)
     return {"n": int(nonzero.size), "p": p, "median_diff": median}

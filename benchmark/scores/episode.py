@@ -43,7 +43,7 @@ from benchmark.world.grasp_plan import grasp_spec
 from benchmark.world.scenario import episode_name
 
 
-def score_episode(episode, estimate, world_from_method=None) -> dict:
+def score_episode(episode, estimate, world_from_method=None, *, learned: dict | None = None) -> dict:
     """Every metric of one episode.
 
     Args:
@@ -52,6 +52,8 @@ def score_episode(episode, estimate, world_from_method=None) -> dict:
             metrics are NaN when it has no final forces).
         world_from_method: Carries the method's world frame into the true one, (4, 4), when the
             method was told the camera with an error (:mod:`benchmark.scores.frames`); None: the same.
+        learned: :func:`benchmark.scores.learned.score_episode` of this estimate's final forces,
+            if already computed (the main command's learn stage): taken as it is, not computed again.
 
     Returns:
         ``{metric: float}`` for every name in :data:`METRICS`.
@@ -72,7 +74,7 @@ def score_episode(episode, estimate, world_from_method=None) -> dict:
     else:
         out.update(net_force_err_n_rms=np.nan, net_force_err_n_rms_instant=np.nan, net_torque_err_nm_rms=np.nan,
                    least_violation_frac=np.nan)
-    out.update(learned_errors(episode, estimate))
+    out.update(learned_errors(episode, estimate, learned))
     out.update(newton_errors(estimate, tr))
     return {k: float(out[k]) for k in METRICS}
 
@@ -87,12 +89,14 @@ def kinematics_errors(kinematics, truth) -> dict:
     return {"acc_err_rms": float(np.sqrt(np.mean(da * da))), "gyro_err_rms": float(np.sqrt(np.mean(dg * dg)))}
 
 
-def learned_errors(episode, estimate) -> dict:
-    """The final (learned) forces over every contact frame, and Table 2's error under the paper's rule."""
+def learned_errors(episode, estimate, block: dict | None = None) -> dict:
+    """The final (learned) forces over every contact frame, and Table 2's error under the paper's rule
+    (from ``block``, :func:`benchmark.scores.learned.score_episode` of the estimate, if given)."""
     if estimate.forces is None:
         return {"learned_rel_err_pct": np.nan, "learned_mae_n": np.nan, "learned_rel_err_pct_paper": np.nan}
 
-    block = score_learned(episode, estimate.forces, estimate.kinematics, estimate.contacts)
+    if block is None:
+        block = score_learned(episode, estimate.forces, estimate.kinematics, estimate.contacts)
     return {"learned_rel_err_pct": block["rel_err_pct_mean"], "learned_mae_n": block["mae_n"],
             "learned_rel_err_pct_paper": block["paper_rule"]["rel_err_pct_mean"]}
 

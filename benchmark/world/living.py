@@ -28,7 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import butter, sosfilt
+
+from benchmark.world.butterworth import bandpass_sos, sosfilt
 
 TRIAL_CV = 0.10
 """Coefficient of variation of the per-trial grip scale."""
@@ -115,7 +116,7 @@ class LivingGrip:
         lo, hi = TREMOR_BAND_HZ
         tremor = np.zeros(n)
         if hi < nyquist:
-            sos = butter(4, [lo / nyquist, hi / nyquist], btype="bandpass", output="sos")
+            sos = bandpass_sos(4, lo / nyquist, hi / nyquist)  # scipy.signal.butter's, bit for bit
             warm = int(round(1.0 / dt))  # one second of filter warm-up, discarded
             pre = rng.standard_normal(warm)
             band = sosfilt(sos, np.concatenate([pre, white[1]]))[warm:]

@@ -345,6 +345,6 @@ def track_box(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, 
     if not isinstance(depth, DepthVideo):
         raise InputError(f"depth must be an fsv.DepthVideo, got {type(depth).__name__}")
     tracker = BoxTracker(calib, object_model, pos0, rot0, config=config, rng=rng, table_z=table_z)
-    fits = [tracker.update(frame) for frame in depth.depth_m]
+    fits = [tracker.update(frame) for frame in depth.frames()]
     poses = Poses(t=depth.t, pos=np.array([f.pos for f in fits]), rot=np.array([f.rot for f in fits]))
     return poses, np.array([f.inlier_fraction for f in fits])

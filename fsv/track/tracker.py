@@ -5,6 +5,7 @@
 
 from __future__ import annotations
 
+import itertools
 import time
 from dataclasses import dataclass, field
 
@@ -136,10 +137,12 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     cfg = config or TrackerConfig()
     rng = rng if rng is not None else np.random.default_rng(0)
     box_rng, hand_rng = rng.spawn(2)
+    frames = depth.frames()  # in order, each frame read once it is there (a DepthRecording's as it is recorded)
+    first = next(frames, None)
     t0 = time.perf_counter()
     table = TablePlane.believed(cfg.table_z)
-    if cfg.table_fit is not None and depth.num_frames:
-        table = fit_table(depth.depth_m[0], calib, init.box_pos, init.box_rot, object_model, table_z=cfg.table_z,
+    if cfg.table_fit is not None and first is not None:
+        table = fit_table(first, calib, init.box_pos, init.box_rot, object_model, table_z=cfg.table_z,
                           config=cfg.table_fit)
     to_table = table_frame(table)
     t_table = time.perf_counter() - t0
@@ -158,7 +161,7 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     qpos = np.zeros((T, 7 + hand_model.num_joints))
     tips, observed, explained = np.zeros((T, K, 3)), np.zeros((T, K), bool), np.zeros(T)
     t_box = t_hand = t_first = 0.0
-    for i, frame in enumerate(depth.depth_m):
+    for i, frame in enumerate(itertools.chain(() if first is None else (first,), frames)):
         t0 = time.perf_counter()
         fit = boxes.update(frame, occluder=hands.predicted_depth)
         box_pos[i], box_rot[i], inl[i] = fit.pos, fit.rot, fit.inlier_fraction

@@ -22,7 +22,7 @@ def run(record: Run, options) -> StageResult:
     if est.forces is None:
         return StageResult(blocks=(("learning", {**labels, "program": None}),),
                            lines=(f"learning: the method has no internal-force stage ({est.labels['internal']})",))
-    block = score_episode(record.episode, est.forces, kin, contacts)
+    scores = score_episode(record.episode, est.forces, kin, contacts)
     path = options["internal_model"]
     model_info = {}
     if est.learned_model is not None:  # the reference's learned stage: the model it used
@@ -36,7 +36,7 @@ def run(record: Run, options) -> StageResult:
     if est.forces is est.nominal:  # a force stage whose forces are the final ones (--method direct)
         program = est.labels["forces"]
         model_info = {"direct_model": record.method_spec.direct_model or "fsv/data/direct_forces.npz"}
-    block = {**labels, "program": program, **model_info, **block}
+    block = {**labels, "program": program, **model_info, **scores}
     paper = block["paper_rule"]
     line = (
         f"learning [{oracle_tag(labels)}] (kinematics {labels['kinematics']}, contacts {labels['contacts']}): learned forces' "
@@ -47,7 +47,7 @@ def run(record: Run, options) -> StageResult:
         + (f"; the user's grip calibration: {g['baseline_n']:.2f} N + {g['gain']:.2f} N per N of load"
            if (g := block.get("grip_calibration")) else "")
     )
-    return StageResult(blocks=(("learning", block),), lines=(line,))
+    return StageResult(blocks=(("learning", block),), lines=(line,), learned=scores)
 
 
 STAGE = Stage(name="learn", run=run, options=("internal_model",), add_arguments=add_arguments)

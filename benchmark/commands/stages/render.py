@@ -1,5 +1,16 @@
 """The render stage: the episode's depth video from its sensor; the ``render`` block and the depth preview.
 
+The depth of a method that reads no colour is rendered beside the track stage: a child forked at
+the stage's start (:meth:`benchmark.background.Background.stream`) renders the frames in order
+into memory shared with the command and says after each one that it is there, and the stage hands
+the track stage an :class:`fsv.types.DepthRecording` of that memory: the tracker, which reads the
+frames in order, tracks frame k while the child renders the later ones. The child then draws the
+depth preview and returns the annotations, the ``render`` block and the depth's digest; a thread of
+the command joins them to the episode and writes the episode file (with the colour, below). The
+frames, the files, the blocks and the digests are those of rendering the depth before tracking,
+bit for bit: the child renders exactly what :func:`benchmark.camera.render.render` does, and the
+tracker reads the same frames in the same order.
+
 The colour stream, when ``--streams`` asks for it and the method does not read it, is rendered
 beside the depth and the later stages: in a child forked at the stage's start (the colour needs
 only the simulated truth, and no later stage reads it) into memory shared with the command
@@ -20,14 +31,14 @@ from benchmark.camera.appearance import appearance_of
 from benchmark.camera.colour_sensor import colour_preset
 from benchmark.camera.depth import RASTERISER
 from benchmark.camera.episode_file import save_episode
-from benchmark.camera.render import render, render_colour_stream, with_colour_stream
+from benchmark.camera.render import render, render_colour_stream, render_depth, with_colour_stream
 from benchmark.camera.scene import LABEL_BOX
-from benchmark.camera.views import view_of
-from benchmark.commands.digests import colour_digest
+from benchmark.camera.views import camera_of, view_of
+from benchmark.commands.digests import colour_digest, digest
 from benchmark.commands.pictures.depth_preview import preview_paths, write_colour_preview, write_preview
 from benchmark.commands.stage import Picture, Run, Stage, StageResult
 from benchmark.suites.options import add_streams_argument
-from fsv.types import check_streams
+from fsv.types import DepthRecording, check_streams
 
 
 def add_arguments(parser) -> None:
@@ -38,33 +49,20 @@ def add_arguments(parser) -> None:
 
 def run(record: Run, options) -> StageResult:
     """Renders the run's episode (the streams ``--streams`` asks for and those the method reads);
-    the depth preview is drawn beside the next stages, and so is the colour when the method does
-    not read it and the command runs stages beside each other (``record.background``)."""
+    when the command runs stages beside each other (``record.background``), the depth of a method
+    that reads no colour is rendered beside the track stage, and the colour beside the later stages."""
     streams = check_streams([*options["streams"], *record.method_spec.streams])
     beside = None
     if "colour" in streams and "colour" not in record.method_spec.streams and record.background is not None:
         beside = _start_colour(record)
         streams = tuple(s for s in streams if s != "colour")
+    gif = not options["no_gif"]
+    if streams == ("depth",) and record.background is not None and record.episode.depth is None:
+        return _stream_depth(record, gif, beside)
     episode = render(record.episode, streams=streams)
     depth = episode.depth
-    gif = not options["no_gif"]
-    paths = preview_paths(record.out, gif=gif)
-    T, H, W = depth.depth_m.shape
-    block = {
-        "frames": T,
-        "width": W,
-        "height": H,
-        "fps": depth.fps,
-        "noise_m": record.scenario.noise_m,
-        "rasteriser": RASTERISER,
-        "view": view_of(record.scenario.view).record(),
-        "valid_fraction": float(np.mean(depth.depth_m > 0)),
-        "box_pixels_median": float(np.median(np.sum(episode.labels == LABEL_BOX, axis=(1, 2)))),
-        "preview": [p.name for p in paths],
-    }
-    lines = [f"render: {T} depth frames {W}x{H} at {depth.fps:g} Hz, noise {record.scenario.noise_m:g} m, "
-             f"{100 * block['valid_fraction']:.0f} % of pixels measured, box on {block['box_pixels_median']:.0f} px; "
-             f"preview {paths[0]}"]
+    block, line = render_summary(record.scenario, depth, episode.labels, record.out, gif)
+    lines = [line]
     pictures = [Picture("depth preview", write_preview, (depth.depth_m, depth.fps, record.out), {"gif": gif})]
     blocks = [("render", block)]
     if beside is not None:  # the colour, the episode file and the colour block come from the later job
@@ -82,6 +80,69 @@ def run(record: Run, options) -> StageResult:
     # the episode is complete: its archive is compressed beside the later stages
     pictures.append(Picture("episode.npz", save_episode, (episode, record.out / "episode.npz"), in_thread=True))
     return StageResult(blocks=tuple(blocks), lines=tuple(lines), pictures=tuple(pictures), episode=episode)
+
+
+def render_summary(scenario, depth, labels: np.ndarray, out, gif: bool) -> tuple:
+    """``(block, line)``: the ``render`` block of ``summary.json`` and the printed line of a
+    scenario's depth (an ``fsv.DepthVideo``) with its label images (T, H, W), whose preview is in
+    the folder ``out`` (with the GIF if ``gif``)."""
+    paths = preview_paths(out, gif=gif)
+    T, H, W = depth.depth_m.shape
+    block = {
+        "frames": T,
+        "width": W,
+        "height": H,
+        "fps": depth.fps,
+        "noise_m": scenario.noise_m,
+        "rasteriser": RASTERISER,
+        "view": view_of(scenario.view).record(),
+        "valid_fraction": float(np.mean(depth.depth_m > 0)),
+        "box_pixels_median": float(np.median(np.sum(labels == LABEL_BOX, axis=(1, 2)))),
+        "preview": [p.name for p in paths],
+    }
+    line = (f"render: {T} depth frames {W}x{H} at {depth.fps:g} Hz, noise {scenario.noise_m:g} m, "
+            f"{100 * block['valid_fraction']:.0f} % of pixels measured, box on {block['box_pixels_median']:.0f} px; "
+            f"preview {paths[0]}")
+    return block, line
+
+
+def _stream_depth(record: Run, gif: bool, colour: tuple | None) -> StageResult:
+    """Forks the depth's rendering into shared memory and returns at once: the episode with an
+    ``fsv.types.DepthRecording`` of it for the track stage, and a later job that joins the rest
+    (the ``render`` block and line, the depth's digest, the colour of ``colour`` (``(job,
+    buffers)``, or None) and writes the episode file."""
+    sc = record.scenario
+    camera = camera_of(sc.view)
+    shape = (len(record.episode.truth.t), camera.height, camera.width)
+    buffers = (shared_empty(shape, np.float32), shared_empty(shape, np.uint8))
+    job = record.background.stream("depth", _render_depth, record.episode, buffers, record.out, gif)
+    episode = record.episode.with_depth(DepthRecording(buffers[0], sc.fps, job.wait_for), camera.calibration(), None)
+    later = record.background.thread("episode.npz", _finish_depth, job, buffers, episode, colour, sc, record.out)
+    return StageResult(episode=episode, later=(later,))
+
+
+def _render_depth(done, episode, buffers: tuple, out, gif: bool) -> tuple:
+    """In the forked child: renders the depth and its labels into ``buffers``, saying ``done(k + 1)``
+    after frame k, then draws the preview; returns ``(annotations, (block, line), digest)``."""
+    episode = render_depth(episode, out=buffers, on_frame=done)
+    write_preview(episode.depth.depth_m, episode.depth.fps, out, gif=gif)
+    return (episode.annotations, render_summary(episode.scenario, episode.depth, episode.labels, out, gif),
+            digest(episode.depth))
+
+
+def _finish_depth(job, buffers: tuple, episode, colour: tuple | None, scenario, out) -> StageResult:
+    """In a thread of the command: waits for the depth's child, makes ``episode`` (whose depth is
+    the recording) whole, joins the colour to it if ``colour``, and writes the episode file."""
+    annotations, (block, line), depth_digest = job.result()
+    episode.depth.depth_m  # noqa: B018 (every frame checked; the recording, whole, is the episode's depth: no copy)
+    episode = episode.with_depth(episode.depth, episode.calib, buffers[1]).with_annotations(annotations)
+    if colour is not None:
+        joined = _finish_colour(*colour, episode, scenario, out)
+        return replace(joined, blocks=(("render", block), *joined.blocks), lines=(line, *joined.lines),
+                       digests=(("depth", depth_digest), *joined.digests))
+    save_episode(episode, out / "episode.npz")
+    return StageResult(blocks=(("render", block),), lines=(line,), episode=episode,
+                       digests=(("depth", depth_digest),))
 
 
 def colour_summary(scenario, colour, out) -> tuple:

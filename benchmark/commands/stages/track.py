@@ -70,7 +70,7 @@ def run(record: Run, options) -> StageResult:
     )
     # drawn as the method sees it: its calibration, hand and box (the truth in gold, through its calibration)
     picture = Picture("tracking overlay", plot_overlay,
-                      (ep.depth, inputs.calib, tracking, inputs.object_model, inputs.hand_model, overlay),
+                      (_whole(ep.depth), inputs.calib, tracking, inputs.object_model, inputs.hand_model, overlay),
                       {"truth": ep.truth})
     grip = inputs.grip
     person = {"protocol": spec.protocol,
@@ -80,6 +80,14 @@ def run(record: Run, options) -> StageResult:
                            f"({grip.samples} samples of a calibration recording)")
     return StageResult(blocks=(("knowledge", known.record()), ("person", person), ("tracking", block)), lines=(told, line),
                        pictures=(picture,), estimate=estimate, knowledge=known, inputs=inputs)
+
+
+def _whole(depth):
+    """``depth`` (an ``fsv.DepthVideo``) once every frame is there: a depth still being recorded
+    beside the tracker (``fsv.types.DepthRecording``, which a method need not have read to its
+    end) is waited for here, in the process that started it, before a picture's child is forked."""
+    depth.depth_m  # noqa: B018 (read for its wait)
+    return depth
 
 
 STAGE = Stage(name="track", run=run, options=("init_perturbation",), add_arguments=add_arguments)

@@ -1,7 +1,7 @@
 """The verdict stage: the scenario as a suite of one, scored and gated like ``fsv-bench eval``.
 
-The episode's metrics (:func:`benchmark.scores.episode.score_episode` on the method's estimate) are
-checked against the smoke suite's gates (CI's gates for the reference method), or ``--gates FILE``.
+The episode's metrics (:func:`benchmark.scores.episode.score_episode` on the method's estimate, its
+learned forces' errors taken from the learn stage's scores) are checked against the smoke suite's gates (CI's gates for the reference method), or ``--gates FILE``.
 ``summary.json`` gets a ``verdict`` block (metrics, gates, pass/fail); the command exits 1 when a gate
 fails, after writing every file.
 """
@@ -28,7 +28,7 @@ def run(record: Run, options) -> StageResult:
     gates_file = options["gates"]
     gates = load_gates(gates_file) if gates_file else get_suite("smoke").gates
     metrics = score_episode(record.episode, record.estimate,
-                            record.knowledge.world_from_method if record.knowledge else None)
+                            record.knowledge.world_from_method if record.knowledge else None, learned=record.learned)
     results = check_gates(gates, aggregate_all([metrics], METRICS))
     failed = [r.name for r in results if not r.passed]
     block = {
