@@ -12,7 +12,7 @@ from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES, Scenario
 
 SMOKE = Suite(
     name="smoke",
-    version=9,  # 9: a guarded set-down (place, release, free), the grasp trials on the lightest box and an excitation; 8: 8: people grip at their drawn margins (benchmark.world.grip); the tail's gate
+    version=9,  # 9: a guarded set-down, grasp trials on light boxes; 8: drawn margins, the tail's gate
     scenarios=(
         Scenario(task="lift", user=0, grasp=0, mass=0, seed=11, duration_s=4.0),
         Scenario(task="place", user=2, grasp=2, mass=1, seed=12, duration_s=4.0),
@@ -108,7 +108,7 @@ cohort 4) added the tail's."""
 
 STANDARD = Suite(
     name="standard",
-    version=8,  # 8: a guarded set-down (place, release, free), the grasp trials on the lightest box and an excitation; 7: 7: people grip at their drawn margins (benchmark.world.grip); the tail's gate
+    version=8,  # 8: a guarded set-down, grasp trials on light boxes; 7: drawn margins, the tail's gate
     scenarios=split_scenarios("test", STANDARD_TASKS, 4, seed=STANDARD_FIRST_SEED, masses=MASS_COUNT),
     gates=STANDARD_GATES,
     description=(
@@ -125,7 +125,7 @@ STANDARD = Suite(
 
 COHORT = Suite(
     name="cohort",
-    version=5,  # 5: a guarded set-down (place, release, free), the grasp trials on the lightest box and an excitation; 4: 4: people grip at their drawn margins (benchmark.world.grip); the tail's gate
+    version=5,  # 5: a guarded set-down, grasp trials on light boxes; 4: drawn margins, the tail's gate
     scenarios=_grid_scenarios(STANDARD_FIRST_SEED, STANDARD_DRAW_SEED),
     gates=STANDARD_GATES,
     description=(
@@ -138,7 +138,7 @@ COHORT = Suite(
 
 DEV = Suite(
     name="dev",
-    version=7,  # 7: a guarded set-down (place, release, free), the grasp trials on the lightest box and an excitation; 6: 6: people grip at their drawn margins (benchmark.world.grip); the tail's gate
+    version=7,  # 7: a guarded set-down, grasp trials on light boxes; 6: drawn margins, the tail's gate
     scenarios=split_scenarios("dev", STANDARD_TASKS, 4, seed=DEV_FIRST_SEED, masses=MASS_COUNT),
     gates=STANDARD_GATES,
     description=(
