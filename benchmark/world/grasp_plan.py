@@ -370,27 +370,59 @@ def palm_clearance(scenario: Scenario, truth) -> float:
 _CLEARANCE_CUTOFF_M = 0.02
 
 
-def failed_trial(user: int, grasp: int, plan: GraspPlan) -> tuple:
-    """The first trial of :data:`TRIALS` that the person's hand, following ``plan``, fails, and why:
-    ``(Trial, message)``, or ``(None, "")`` if it passes them all. A trial is failed where the hand
-    drops the box or touches it with the palm (``benchmark.world.physics``'s outcome check), or its
-    palm comes closer to the box than :data:`TRIAL_PALM_CLEARANCE_M` (:func:`palm_clearance`)."""
+@dataclass(frozen=True)
+class TrialResult:
+    """How a plan fared in the trials (:func:`run_trials`).
+
+    Attributes:
+        failed: The first trial in which the hand dropped the box or touched it with the palm (the
+            trials stop there), or None.
+        near: The first trial it passed with the palm nearer the box than
+            :data:`TRIAL_PALM_CLEARANCE_M`, or None.
+        message: Why it failed or came near (the ``SimulationError``, or the palm's distance), or "".
+    """
+
+    failed: Trial | None
+    near: Trial | None
+    message: str
+
+    @property
+    def holds(self) -> bool:
+        """Whether it passed every trial with the palm clear."""
+        return self.failed is None and self.near is None
+
+
+def run_trials(user: int, grasp: int, plan: GraspPlan, stop_near: bool = False) -> TrialResult:
+    """Runs :data:`TRIALS` on the person's hand following ``plan``, in order, until the hand drops the
+    box or touches it with the palm (``benchmark.world.physics``'s outcome check); each trial passed
+    is also measured for the palm's clearance from the box (:func:`palm_clearance`).
+
+    Args:
+        user, grasp: The person and the grasp's index.
+        plan: The grasp's plan for that person.
+        stop_near: Stop at the first trial passed with the palm nearer than
+            :data:`TRIAL_PALM_CLEARANCE_M` too.
+    """
+    near, message = None, ""
     for trial in TRIALS:
         scenario = trial.scenario(user, grasp)
         try:
             episode, _ = physics.run(scenario, plan)
         except SimulationError as e:
-            return trial, str(e)
+            return TrialResult(trial, near, str(e))
         gap = palm_clearance(scenario, episode.truth)
-        if gap < TRIAL_PALM_CLEARANCE_M:
-            return trial, (f"the palm came within {gap * 1000:.2f} mm of the box in {scenario} (the trials keep "
-                           f"{TRIAL_PALM_CLEARANCE_M * 1000:g} mm)")
-    return None, ""
+        if near is None and gap < TRIAL_PALM_CLEARANCE_M:
+            near, message = trial, (f"the palm came within {gap * 1000:.2f} mm of the box in {scenario} (the "
+                                    f"trials keep {TRIAL_PALM_CLEARANCE_M * 1000:g} mm)")
+            if stop_near:
+                break
+    return TrialResult(None, near, message)
 
 
 def holds(user: int, grasp: int, plan: GraspPlan) -> bool:
-    """Whether the person's hand, following ``plan``, passes every trial of :data:`TRIALS`."""
-    return failed_trial(user, grasp, plan)[0] is None
+    """Whether the person's hand, following ``plan``, passes every trial of :data:`TRIALS` with the
+    palm clear (:func:`run_trials`)."""
+    return run_trials(user, grasp, plan, stop_near=True).holds
 
 
 @functools.lru_cache(maxsize=64)
@@ -407,16 +439,28 @@ def _drawn(user: int, grasp: int) -> tuple:
 
 
 def _search(user: int, grasp: int) -> tuple:
-    """The drawn grasp chosen from scratch: ``(spec, plan, problem, x)``, x the rounded solution."""
+    """The drawn grasp chosen from scratch: ``(spec, plan, problem, x, trials)``, x the rounded
+    solution, trials its :class:`TrialResult`. The first feasible candidate that passes every trial
+    with the palm clear; if none of :data:`MAX_ATTEMPTS` does, the first that passes them with the
+    palm nearer (a person whose every grasp comes near the box in a trial, as person 1002's first
+    15 candidates do in ``free``)."""
     world = build_world(Scenario(user=user))
     rng = np.random.default_rng(np.random.SeedSequence([int(grasp), *b"grasp"]))
+    fallback = None
     for _ in range(MAX_ATTEMPTS):
         spec = draw_candidate(rng, grasp, world.hand, world.obj.half_extents)
         problem = _PlanProblem(user, spec)
         x = np.round(problem.solve(), PLAN_DECIMALS)
         plan = problem.plan(x)
-        if feasible(plan) and holds(user, grasp, plan):
-            return spec, plan, problem, x
+        if not feasible(plan):
+            continue
+        result = run_trials(user, grasp, plan, stop_near=fallback is not None)
+        if result.holds:
+            return spec, plan, problem, x, result
+        if fallback is None and result.failed is None:
+            fallback = (spec, plan, problem, x, result)
+    if fallback is not None:
+        return fallback
     raise ScenarioError(f"grasp {grasp}: no feasible grasp for user {user} in {MAX_ATTEMPTS} draws; "
                         f"accepted: another grasp index")
 
@@ -431,10 +475,11 @@ def grasp_spec(scenario: Scenario) -> dict:
 
 
 def _drawn_entry(pair: tuple) -> tuple:
-    """The stored form of a drawn pair's choice (a worker's unit of work)."""
+    """The stored form of a drawn pair's choice (a worker's unit of work): ``(key, entry, trials)``."""
     user, grasp = pair
-    spec, _, problem, x = _search(user, grasp)
-    return f"drawn/{user}/{grasp}", {"fingerprint": problem.fingerprint, "spec": spec, "x": [float(v) for v in x]}
+    spec, _, problem, x, result = _search(user, grasp)
+    return (f"drawn/{user}/{grasp}", {"fingerprint": problem.fingerprint, "spec": spec, "x": [float(v) for v in x]},
+            result)
 
 
 def solve_all_plans(workers: int = 1) -> dict:
@@ -449,9 +494,9 @@ def solve_all_plans(workers: int = 1) -> dict:
                                                                   "x": [float(v) for v in problem.solve()]}
     if workers > 1:
         with ProcessPoolExecutor(workers) as pool:
-            plans.update(pool.map(_drawn_entry, STORED_DRAWN))
+            plans.update(e[:2] for e in pool.map(_drawn_entry, STORED_DRAWN))
     else:
-        plans.update(map(_drawn_entry, STORED_DRAWN))
+        plans.update(e[:2] for e in map(_drawn_entry, STORED_DRAWN))
     return {"format": _PLANS_FORMAT, "version": 1,
             "note": "Grasp plans solved by benchmark.world.grasp_plan (python -m benchmark.world.grasp_plan --write-plans); "
                     "stored so that every machine and BLAS kernel builds bit-identical worlds.",
@@ -480,8 +525,9 @@ class Recheck:
 
 def recheck_pair(pair: tuple) -> Recheck:
     """Runs :data:`TRIALS` on one stored drawn pair's stored choice and plan, as stored; a choice that
-    fails one (or whose inputs' fingerprint changed) is drawn again from scratch (:func:`_search`: the
-    first candidate of the grasp's generator that is feasible and holds, solved by today's solver).
+    fails one, comes near the box in one, or whose inputs' fingerprint changed is drawn again from
+    scratch (:func:`_search`, solved by today's solver). A stored choice that only came near is kept
+    where no candidate keeps the palm clear either (the search would end on a near one too).
 
     Args:
         pair: ``(user, grasp)``, one of :data:`STORED_DRAWN`.
@@ -496,14 +542,21 @@ def recheck_pair(pair: tuple) -> Recheck:
     if entry is None:
         raise ScenarioError(f"{key} is not a stored drawn choice; accepted: the pairs of STORED_DRAWN")
     problem = _PlanProblem(user, entry["spec"])
+    near_only = False
     if problem.fingerprint != entry["fingerprint"]:
         failed, message = "inputs", "the stored choice's fingerprint does not match its inputs"
     else:
-        trial, message = failed_trial(user, grasp, problem.plan(np.array(entry["x"], dtype=float)))
-        if trial is None:
+        result = run_trials(user, grasp, problem.plan(np.array(entry["x"], dtype=float)))
+        if result.holds:
             return Recheck(key, "", "", None, time.perf_counter() - t0)
-        failed = f"{trial.task}@{trial.mass}"
-    _, new = _drawn_entry((user, grasp))
+        trial, near_only = result.failed or result.near, result.failed is None
+        failed, message = f"{trial.task}@{trial.mass}" + (" (near)" if near_only else ""), result.message
+    try:
+        _, new, drawn = _drawn_entry((user, grasp))
+    except ScenarioError as e:
+        return Recheck(key, failed, f"{message}; kept: {e}", None, time.perf_counter() - t0)
+    if near_only and not drawn.holds:
+        return Recheck(key, failed, f"{message}; kept: no candidate keeps the palm clear", None, time.perf_counter() - t0)
     return Recheck(key, failed, message, new, time.perf_counter() - t0)
 
 
@@ -549,7 +602,8 @@ def recheck_stored(users=None, workers: int = 1, report=print, path=None) -> lis
                 data = json.loads(path.read_text())
                 data["plans"][r.key] = r.entry
                 write_text(str(path), json.dumps(data, indent=1) + "\n")
-            report(f"{r.key}: " + (f"failed {r.failed}, drawn again: {r.entry['spec']['name']}" if r.failed else "holds")
+            again = f"drawn again: {r.entry['spec']['name']}" if r.entry is not None else "kept"
+            report(f"{r.key}: " + (f"failed {r.failed}, {again}" if r.failed else "holds")
                    + f" ({r.seconds:.0f} s)" + (f"; {r.message}" if r.message else ""))
     if any(r.entry is not None for r in out):
         for cached in (stored_plans, _drawn, _plan):
