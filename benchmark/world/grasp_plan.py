@@ -176,8 +176,10 @@ other drawn pair is solved at run time, to the same bits on every BLAS kernel; r
 stored plans land within 2e-3 rad of the stored ones (median 1.3e-4), 7 in another minimum (up to
 0.47 rad; all feasible), so the store is not yet a cache of today's solver. A change of the world
 the trials simulate can leave a stored choice failing them: ``--recheck`` after such a change (the
-grip's last two changes left 12 of the 80 training people's choices failing ``free`` with the
-heaviest box, three of them failing episodes of the shipped training set; drawn again)."""
+grip's last two changes left 25 of the 176 choices failing ``free`` or ``shake`` with the heaviest
+box, among them persons 1002 and 1020, whose three failed episodes of the shipped training set
+were; with the light-box trial and the palm's clearance, 37 were drawn again: docs/findings.md,
+"Stale choices, light boxes and near misses")."""
 
 
 class _PlanProblem:
