@@ -177,8 +177,8 @@ stored plans land within 2e-3 rad of the stored ones (median 1.3e-4), 7 in anoth
 0.47 rad; all feasible), so the store is not yet a cache of today's solver. A change of the world
 the trials simulate can leave a stored choice failing them: ``--recheck`` after such a change (the
 grip's last two changes left 25 of the 176 choices failing ``free`` or ``shake`` with the heaviest
-box, among them persons 1002 and 1020, whose three failed episodes of the shipped training set
-were; with the light-box trial and the palm's clearance, 37 were drawn again: docs/findings.md,
+box, among them persons 1002 and 1020, the people of the shipped training set's three failed
+episodes; with the light-box trial and the palm's clearance, 37 were drawn again: docs/findings.md,
 "Stale choices, light boxes and near misses")."""
 
 
