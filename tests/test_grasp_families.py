@@ -62,10 +62,10 @@ def test_the_named_grasps_keep_their_spots_and_family():
 def test_a_drawn_grasp_holds_the_heaviest_box_in_every_trial_and_a_plan_into_the_box_does_not():
     from dataclasses import replace
 
-    from benchmark.world.grasp_plan import TRIAL_TASKS, holds
+    from benchmark.world.grasp_plan import TRIALS, holds
 
     plan = plan_grasp(Scenario(user=123, grasp=9))
-    assert len(TRIAL_TASKS) >= 2 and holds(123, 9, plan)
+    assert len(TRIALS) >= 2 and holds(123, 9, plan)
     # the same grasp with the palm 3 cm lower, nearer the box's top: the palm hits it while closing
     sunk = replace(plan, palm_pos=plan.palm_pos + np.array([0.0, 0.0, -0.03]))
     assert not holds(123, 9, sunk)
