@@ -36,7 +36,7 @@ import numpy as np
 
 from fsv.errors import InputError, one_line
 from fsv.learn.direct_inputs import check_window, direct_inputs, input_names, lowest_height
-from fsv.learn.model import _holds_objects, content_sha256, write_npz
+from fsv.learn.model import _holds_objects, checked_state, content_sha256, write_npz
 from fsv.learn.nets import forward
 from fsv.provenance import provenance
 
@@ -270,24 +270,7 @@ def load_direct(path) -> DirectForceModel:
             content does not match the digest stored in it; the message names the file.
     """
     path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise InputError(f"no direct force model at {path!r}")
-    try:
-        st = read_direct_state(path)
-    except Exception as e:  # a truncated, corrupt or foreign file: bad input
-        raise InputError(f"{path!r} is not a readable direct force model: {one_line(e)}") from e
-    if st.get("format") != FORMAT:
-        raise InputError(f"{path!r} is not an {FORMAT} file")
-    if st.get("version") != VERSION:
-        raise InputError(f"{path!r} is an {FORMAT} file of version {st.get('version')!r}; this fsv reads version "
-                         f"{VERSION} (train the model again)")
-    try:
-        digest = content_sha256(st)
-    except InputError as e:
-        raise InputError(f"{path!r} is corrupt: {e}") from e
-    if st.get("sha256") != digest:
-        raise InputError(f"{path!r} is corrupt: its content has SHA-256 {digest[:16]}..., the file records "
-                         f"{str(st.get('sha256'))[:16]}...")
+    st = checked_state(path, read_direct_state, what="direct force model", file_format=FORMAT, version=VERSION)
     try:
         config = DirectConfig(**{k: tuple(v) if k == "hidden" else v for k, v in dict(st["config"]).items()})
         return DirectForceModel(config, st["finger_names"], st["x_mean"], st["x_std"], st["y_mean"], st["y_std"],

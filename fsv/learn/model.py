@@ -241,6 +241,34 @@ def _holds_objects(archive, member: str) -> bool:
         return read(fp)[2].hasobject
 
 
+def checked_state(path: str, read, *, what: str, file_format: str, version: int) -> dict:
+    """A model file's state read by ``read(path)`` and checked: it exists, reads, has the format
+    ``file_format`` and ``version``, and its content matches the SHA-256 stored in it.
+
+    Raises:
+        InputError: Naming the file and what is wrong (``what`` names the kind of model).
+    """
+    if not os.path.isfile(path):
+        raise InputError(f"no {what} at {path!r}")
+    try:
+        st = read(path)
+    except Exception as e:  # a truncated, corrupt or foreign file: report it as bad input
+        raise InputError(f"{path!r} is not a readable {what}: {one_line(e)}") from e
+    if not isinstance(st, dict) or st.get("format") != file_format:
+        raise InputError(f"{path!r} is not an {file_format} file")
+    if st.get("version") != version:
+        raise InputError(f"{path!r} is an {file_format} file of version {st.get('version')!r}; this fsv reads version "
+                         f"{version} (train the model again)")
+    try:
+        digest = content_sha256(st)
+    except InputError as e:
+        raise InputError(f"{path!r} is corrupt: {e}") from e
+    if st.get("sha256") != digest:
+        raise InputError(f"{path!r} is corrupt: its content has SHA-256 {digest[:16]}..., the file records "
+                         f"{str(st.get('sha256'))[:16]}...")
+    return st
+
+
 def load(path) -> InternalForceModel:
     """Reads a model written by :meth:`InternalForceModel.save` and checks its digest.
 
@@ -250,24 +278,7 @@ def load(path) -> InternalForceModel:
             file); the message names the file.
     """
     path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise InputError(f"no internal-force model at {path!r}")
-    try:
-        st = read_state(path)
-    except Exception as e:  # a truncated, corrupt or foreign file: report it as bad input
-        raise InputError(f"{path!r} is not a readable internal-force model: {one_line(e)}") from e
-    if not isinstance(st, dict) or st.get("format") != FORMAT:
-        raise InputError(f"{path!r} is not an {FORMAT} file")
-    if st.get("version") != VERSION:
-        raise InputError(f"{path!r} is an {FORMAT} file of version {st.get('version')!r}; this fsv reads version "
-                         f"{VERSION} (train the model again)")
-    try:
-        digest = content_sha256(st)
-    except InputError as e:
-        raise InputError(f"{path!r} is corrupt: {e}") from e
-    if st.get("sha256") != digest:
-        raise InputError(f"{path!r} is corrupt: its content has SHA-256 {digest[:16]}..., the file records "
-                         f"{str(st.get('sha256'))[:16]}...")
+    st = checked_state(path, read_state, what="internal-force model", file_format=FORMAT, version=VERSION)
     try:
         config = LearnConfig(**dict(st["config"]))
         K = len(st["finger_names"])
