@@ -87,7 +87,7 @@ DATASETS = {
     "table2-error-model": _TABLE2_GRID + ["--users", "0,4", "--contacts", "error-model"],
     "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
     "train": _training_set(TRAIN_PEOPLE) + ["--rows", "all"],
-    "train-curve": _training_set(CURVE_PEOPLE),
+    "train-curve": _training_set(CURVE_PEOPLE) + ["--rows", "all"],
     "calibration": ["--tasks", "lift", "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "900"],
     "calibration-train": ["--split", "train", "--users", f"0-{TRAIN_PEOPLE - 1}"] + _RECORDING,
     "calibration-train-curve": ["--split", "train", "--users", f"0-{CURVE_PEOPLE - 1}"] + _RECORDING,
