@@ -139,6 +139,61 @@ def _timeline(rows: pd.DataFrame) -> tuple[Kinematics, Contacts]:
     return kin, con
 
 
+def train_on(datasets, config: DirectConfig, *, where: dict | None = None, command: str = "fsv.learn.train_direct",
+             on_epoch=None, timing: dict | None = None):
+    """Trains the direct network on the rows of one or more datasets of every frame.
+
+    Args:
+        datasets: Dataset folders made with ``fsv-bench generate --rows all`` (their episodes are
+            taken in this order; an episode name in two of them is refused).
+        config: The network and its training (:class:`fsv.learn.DirectConfig`).
+        where: Row selection, e.g. ``{"user": [1000, 1001], "seed": [100]}``.
+        command: The command line stored in the model's metadata.
+        on_epoch, timing: As :func:`fsv.learn.train_direct`.
+
+    Returns:
+        The model (:class:`fsv.learn.DirectForceModel`).
+
+    Raises:
+        InputError: A dataset of the paper's rows only, an episode in two datasets, or a dev or
+            test person among the selected rows (one line each).
+    """
+    datasets = [str(d) for d in datasets]
+    where = dict(where or {})
+    headers = [check_all_rows(d) for d in datasets]
+    frames, models = [], {}
+    for d in datasets:
+        df = load_dataset(d, rows="all", **where)
+        twice = sorted(set(df["episode"].unique()) & set(models))
+        if twice:
+            raise InputError(f"--data {d}: episode {twice[0]} is in another dataset too; accepted: datasets of "
+                             "other episodes")
+        models.update(object_models(d))
+        frames.append(df)
+    df = pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
+    check_training_people(df["user"].unique())
+    samples, names = direct_samples(df, models, config)
+    spec = headers[0]["spec"] if len(headers) == 1 else [h["spec"] for h in headers]
+    meta = dict(command=command, dataset=spec, selection=where, episodes=int(df["episode"].nunique()),
+                rows_left_out=int(len(df) - len(samples)))  # rows whose inputs are not all finite
+    return train_direct(samples, names, config, metadata=meta, on_epoch=on_epoch, timing=timing)
+
+
+def train_job(job: tuple) -> dict:
+    """One model of a learning curve: ``job = (datasets, users, out)`` trains the network with the
+    shipped model's choices (:class:`fsv.learn.DirectConfig`'s defaults) on ``users``' episodes of
+    ``datasets`` and saves it to ``out``; returns what the curve reports of the training (episodes,
+    samples, held-out samples, the epoch kept, counting from 1, parameters, seconds)."""
+    datasets, users, out = job
+    timing = {}
+    model = train_on(datasets, DirectConfig(), where={"user": list(users)},
+                     command=f"direct-curve: the first {len(users)} people", timing=timing)
+    model.save(out)
+    m = model.metadata
+    return {"episodes": m["episodes"], "samples": m["samples"], "held_out_samples": m["held_out_samples"],
+            "best_epoch": m["best_epoch"] + 1, "parameters": model.num_parameters, "train_seconds": timing["seconds"]}
+
+
 def run(args: argparse.Namespace):
     check_file_out(args.out, force=args.force)
     where = {} if args.seeds is None else dict(seed=list(parse_ints(args.seeds, "--seeds")))
@@ -146,20 +201,12 @@ def run(args: argparse.Namespace):
         where["user"] = list(parse_ints(args.users, "--users"))
     config = DirectConfig(hidden=args.hidden, window=args.window, epochs=args.epochs, batch=args.batch, lr=args.lr,
                           val_fraction=args.val_fraction, seed=args.seed)
-    header = check_all_rows(args.data)
-    df = load_dataset(args.data, rows="all", **where)
-    check_training_people(df["user"].unique())
-    samples, names = direct_samples(df, object_models(args.data), config)
-    meta = dict(
-        command="fsv-bench train-direct " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train-direct"]
-        else "fsv.learn.train_direct",
-        dataset=header["spec"], selection=where, episodes=int(df["episode"].nunique()),
-        rows_left_out=int(len(df) - len(samples)),  # rows whose inputs are not all finite
-    )
+    command = ("fsv-bench train-direct " + " ".join(sys.argv[2:]) if sys.argv[1:2] == ["train-direct"]
+               else "fsv.learn.train_direct")
     timing = {}
     with tqdm(total=config.epochs, desc="train-direct", unit="epoch", leave=False, disable=True if args.quiet else None,
               mininterval=0.5) as bar:
-        model = train_direct(samples, names, config, metadata=meta, on_epoch=bar.update, timing=timing)
+        model = train_on([args.data], config, where=where, command=command, on_epoch=bar.update, timing=timing)
     seconds = timing["seconds"]
     model.save(args.out)
     m = model.metadata
