@@ -31,11 +31,11 @@ def _dataset(folder, users, rows="all"):
 def test_the_table_has_a_row_per_number_of_people_and_the_reference_below():
     rows = [{"people": 40, "episodes": 480, "samples": 130000, "aggregate": _agg(2.0)},
             {"people": 80, "episodes": 960, "samples": 260000, "aggregate": _agg(1.5)}]
-    table = curve_markdown(SUITES["dev"], rows, _agg(1.0))
+    table = curve_markdown(SUITES["dev"], rows, _agg(1.0), DirectConfig(window=2))
     assert f"Scored on `dev` v{SUITES['dev'].version} (48 episodes" in table
     assert "| 40 | 480 | 130000 | 2 [1, 3] |" in table and "| 80 | 960 | 260000 | 1.5 [0.5, 2.5] |" in table
     assert "| reference | | | 1 [0, 2] |" in table
-    assert "per-contact MAE [N] (mean)" in table and "net force, p90 [N] (p90)" in table
+    assert "hidden 128,128, window 2, at most 60 epochs" in table and "per-contact MAE [N] (mean)" in table and "net force, p90 [N] (p90)" in table
     assert sum(line.startswith("|") for line in table.splitlines()) == 2 + 2 + 1  # heading, rule, 2 rows, reference
 
 
@@ -57,9 +57,14 @@ def test_bad_values_are_refused_in_one_line_before_any_work(tmp_path, capsys):
              (["--data", str(a), "--people", "2", "--workers", "0"], "--workers 0: accepted: 1 or more"),
              (["--data", str(a), "--data", str(paper), "--people", "1"], "fsv-bench generate --rows all"),
              (["--data", str(a), "--data", str(a), "--people", "1"], "person 1000 is in --data"),
-             (["--data", str(a), "--people", "1", "--suite", "nope"], "nope")]
+             (["--data", str(a), "--people", "1", "--suite", "nope"], "nope"),
+             (["--data", str(a), "--people", "1", "--window", "-1"], "--window")]
     for argv, message in cases:
-        assert main(argv + ["--out", str(out)]) == 2
+        try:
+            code = main(argv + ["--out", str(out)])
+        except SystemExit as e:  # the parser's own refusals
+            code = e.code
+        assert code == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and message in err, (argv, err)
         assert not out.exists()
@@ -69,15 +74,16 @@ def test_the_models_are_trained_largest_first_on_the_first_people(monkeypatch, t
     seen = []
 
     def job(job):
-        datasets, users, out = job
-        seen.append((datasets, users, out))
+        datasets, users, out, config = job
+        seen.append((datasets, users, out, config))
         return {"samples": len(users)}
 
     monkeypatch.setattr(direct_training, "train_job", job)
-    meta = train_models(["a", "b"], [1000, 1001, 1002, 1003], [1, 4, 2], tmp_path)
-    assert [(len(u), pathlib_name(o)) for _, u, o in seen] == [(4, "direct-people-4.npz"), (2, "direct-people-2.npz"),
+    meta = train_models(["a", "b"], [1000, 1001, 1002, 1003], [1, 4, 2], tmp_path, config={"window": 2})
+    assert all(c == {"window": 2} for *_, c in seen)
+    assert [(len(u), pathlib_name(o)) for _, u, o, _ in seen] == [(4, "direct-people-4.npz"), (2, "direct-people-2.npz"),
                                                                (1, "direct-people-1.npz")]
-    assert seen[1][1] == [1000, 1001] and all(d == ["a", "b"] for d, _, _ in seen)
+    assert seen[1][1] == [1000, 1001] and all(d == ["a", "b"] for d, *_ in seen)
     assert meta == {1: {"samples": 1}, 4: {"samples": 4}, 2: {"samples": 2}} and list(meta) == [1, 4, 2]
     assert model_file(160) == "direct-people-160.npz"
 
@@ -113,8 +119,10 @@ def test_training_on_several_datasets_takes_every_episode_and_one_dataset_gives_
 
 def test_a_curve_job_trains_the_shipped_models_network_on_the_people_and_saves_it(direct_dataset, tmp_path):
     _, out = direct_dataset
-    summary = train_job(([str(out / "data")], [0], str(tmp_path / "m.npz")))
+    summary = train_job(([str(out / "data")], [0], str(tmp_path / "m.npz"), {}))
     assert summary["episodes"] == 2 and summary["samples"] == 61 and summary["held_out_samples"] == 61
     assert summary["parameters"] == 27_157 and 1 <= summary["best_epoch"] <= DirectConfig().epochs  # 128-128, 5 fingers
     state = read_direct_state(tmp_path / "m.npz")
     assert state["metadata"]["selection"] == {"user": [0]} and state["metadata"]["command"].startswith("direct-curve")
+    wide = train_job(([str(out / "data")], [0], str(tmp_path / "w.npz"), {"window": 2, "hidden": (8,)}))
+    assert wide["parameters"] == (61 + 2 * 2 * 9) * 8 + 8 + 8 * 21 + 21  # window 2: 36 more inputs

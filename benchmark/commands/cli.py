@@ -18,7 +18,6 @@ import argparse
 import dataclasses
 import hashlib
 import json
-import math
 import pathlib
 import re
 import shutil
@@ -29,6 +28,7 @@ from benchmark import interrupt
 from benchmark.atomic import check_out, staging_folder, swap_folder
 from benchmark.background import Background
 from benchmark.commands.digests import stage_digests
+from benchmark.commands.parser import OneLineParser
 from benchmark.commands.report import write_json
 from benchmark.commands.stage import Run, StageResult, complete
 from benchmark.commands.stages import STAGES
@@ -112,7 +112,7 @@ def subcommand_parser(name: str, module=None) -> tuple:
     """``(module, parser)`` of ``fsv-bench <name>``: the sub-command's module (``module``, or
     :func:`subcommand_module`'s) and its parser."""
     module = subcommand_module(name) if module is None else module
-    p = _Parser(prog=f"fsv-bench {name}", description=plain(module.__doc__.strip().splitlines()[0]))
+    p = OneLineParser(prog=f"fsv-bench {name}", description=plain(module.__doc__.strip().splitlines()[0]))
     module.add_arguments(p)
     return module, p
 
@@ -149,27 +149,9 @@ def split_note(scenario: Scenario) -> str | None:
             f"{SPLITS['dev'].stop - 1})")
 
 
-class _Parser(argparse.ArgumentParser):
-    """An argument parser whose errors are one line and exit status 2. No option takes an empty value,
-    and no ``type=float`` option a NaN or an infinity (options that accept ``inf`` have their own type,
-    ``benchmark.limits.number``)."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-    def _get_values(self, action, arg_strings):
-        for text in arg_strings:
-            if not text.strip():
-                raise argparse.ArgumentError(action, f"expected a value, got {text!r}")
-        value = super()._get_values(action, arg_strings)
-        if action.type is float and isinstance(value, float) and not math.isfinite(value):
-            raise argparse.ArgumentError(action, f"expected a finite number, got {arg_strings[0]!r}")
-        return value
-
-
 def build_parser() -> argparse.ArgumentParser:
     """The command's parser, with every stage's options."""
-    p = _Parser(
+    p = OneLineParser(
         prog="fsv-bench",
         description="Simulate a hand-box manipulation and score force sensing from vision.",
         epilog="sub-commands: " + ", ".join(f"'fsv-bench {name} --help'" for name in ALL_SUBCOMMANDS)

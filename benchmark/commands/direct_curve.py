@@ -1,10 +1,11 @@
 """Does the learned method gain from more people? ``python -m benchmark.commands.direct_curve``.
 
     python -m benchmark.commands.direct_curve --data DIR [--data DIR ...] --people 40,80,160 --suite dev
-        --out DIR [--workers N] [--cache DIR] [--quiet]
+        --out DIR [--window W] [--hidden 128,128] [--workers N] [--cache DIR] [--quiet]
 
 Trains the end-to-end force network (``--method direct``, :class:`fsv.method.DirectForces`) as the
-shipped one is trained (``fsv-bench train-direct``'s defaults, :class:`fsv.learn.DirectConfig`) on
+shipped one is trained (``fsv-bench train-direct``'s defaults, :class:`fsv.learn.DirectConfig`, or
+the ``--window`` and ``--hidden`` given: one curve per choice, to choose on ``dev``) on
 the first N people of the training datasets (``fsv-bench generate --split train --design people
 --rows all``; the people of several ``--data`` folders are taken in their order, folder after
 folder) for each N of ``--people``, then scores each model on the suite (``dev``: people never
@@ -17,6 +18,7 @@ epochs and seconds, every aggregate) and ``direct_curve.md``; the models go to `
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import pathlib
 import shutil
@@ -24,15 +26,19 @@ import sys
 
 from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_text
 from benchmark.commands.learning_curve import people_of
+from benchmark.commands.parser import OneLineParser
 from benchmark.errors import DatasetError
+from benchmark.limits import integer
 from benchmark.method import MethodSpec
 from benchmark.paper import direct_training
 from benchmark.paper.dataset.cli import parse_ints
-from benchmark.paper.direct_training import check_all_rows
+from benchmark.paper.direct_training import check_all_rows, hidden_sizes
 from benchmark.parallel import run_jobs
 from benchmark.suites import get_suite
 from benchmark.suites.evaluate import check_cache_args, evaluate_many, strict
 from fsv.errors import InputError
+from fsv.learn import DirectConfig
+from fsv.learn.direct_inputs import MAX_WINDOW
 from fsv.provenance import provenance
 
 COLUMNS = (("force_mae_n", "mean", "per-contact MAE [N]"), ("force_rmse_n", "mean", "per-contact RMSE [N]"),
@@ -65,25 +71,29 @@ def people_of_all(datasets: list) -> list:
     return everyone
 
 
-def train_models(datasets: list, everyone: list, counts: list, folder: pathlib.Path, workers: int = 1) -> dict:
+def train_models(datasets: list, everyone: list, counts: list, folder: pathlib.Path, workers: int = 1,
+                 config: dict | None = None) -> dict:
     """Trains the N-people model for every N of ``counts`` into ``folder`` (:func:`model_file`), the
     largest first, on ``workers`` local processes (training is single-threaded; a model is the same
-    whichever process trains it). Returns ``{n: training summary}``."""
+    whichever process trains it), with ``config`` (keyword arguments of :class:`fsv.learn.DirectConfig`;
+    default: its defaults). Returns ``{n: training summary}``."""
     order = sorted(counts, reverse=True)
-    jobs = [([str(d) for d in datasets], everyone[:n], str(folder / model_file(n))) for n in order]
+    jobs = [([str(d) for d in datasets], everyone[:n], str(folder / model_file(n)), dict(config or {}))
+            for n in order]
     meta = {}
     for i, summary in run_jobs(direct_training.train_job, jobs, workers=workers):
         meta[order[i]] = summary
     return {n: meta[n] for n in counts}
 
 
-def curve_markdown(suite, rows: list, reference: dict) -> str:
+def curve_markdown(suite, rows: list, reference: dict, config: DirectConfig = DirectConfig()) -> str:
     """The table of the curve: per number of people, each cell's statistic [95 % interval]; the
-    reference method's row below for comparison."""
+    reference method's row below for comparison; ``config``, the network's, named above."""
     lines = ["# Learning curve of the learned method (`--method direct`) against the number of training people",
              "", f"Scored on `{suite.name}` v{suite.version} ({len(suite.scenarios)} episodes, people never "
-             "trained on), blind protocol; each cell the suite statistic named in its heading over the episodes "
-             "[95 % bootstrap interval]. The reference method (model-based, its shipped internal-force model) "
+             "trained on), blind protocol; the network: hidden "
+             f"{','.join(map(str, config.hidden))}, window {config.window}, at most {config.epochs} epochs. Each "
+             "cell the suite statistic named in its heading over the episodes [95 % bootstrap interval]. The reference method (model-based, its shipped internal-force model) "
              "on the same episodes below.", "",
              "| training people | episodes | samples | " + " | ".join(f"{h} ({s})" for _, s, h in COLUMNS) + " |",
              "|---|---|---|" + "---|" * len(COLUMNS)]
@@ -102,12 +112,17 @@ def _cells(aggregate: dict) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m benchmark.commands.direct_curve", description=__doc__.split("\n\n")[0])
+    p = OneLineParser(prog="python -m benchmark.commands.direct_curve", description=__doc__.split("\n\n")[0])
     p.add_argument("--data", action="append", required=True,
                    help="a training dataset of every frame (fsv-bench generate --split train --design people --rows "
                         "all); repeat for several, their people taken folder after folder")
     p.add_argument("--people", default="40,80,160", help="numbers of training people (default 40,80,160)")
     p.add_argument("--suite", default="dev", help="suite to score on (default dev)")
+    p.add_argument("--window", type=integer(0, MAX_WINDOW), default=DirectConfig.window,
+                   help=f"frames of kinematics on either side among the inputs, 0 to {MAX_WINDOW} (default "
+                        f"{DirectConfig.window})")
+    p.add_argument("--hidden", type=hidden_sizes, default=DirectConfig.hidden,
+                   help=f"hidden layer sizes (default {','.join(map(str, DirectConfig.hidden))})")
     p.add_argument("--out", required=True, help="output folder")
     p.add_argument("--workers", type=int, default=1, help="local processes for training and scoring (default 1)")
     p.add_argument("--cache", default=None)
@@ -133,16 +148,18 @@ def main(argv=None) -> int:
     tmp = staging_folder(out)
     try:
         (tmp / "models").mkdir(parents=True)
-        meta = train_models(args.data, everyone, counts, tmp / "models", workers=args.workers)
+        config = {"window": args.window, "hidden": tuple(args.hidden)}
+        meta = train_models(args.data, everyone, counts, tmp / "models", workers=args.workers, config=config)
         specs = [MethodSpec(method="direct", direct_model=str(tmp / "models" / model_file(n))) for n in counts]
         docs = evaluate_many(suite, specs + [MethodSpec()], cache=args.cache, progress=not args.quiet,
                              workers=args.workers)
         rows = [{"people": n, "users": everyone[:n], **meta[n], "aggregate": docs[i]["aggregate"]}
                 for i, n in enumerate(counts)]
-        doc = {"suite": {"name": suite.name, "version": suite.version, "n": len(suite.scenarios)}, "rows": rows,
+        doc = {"suite": {"name": suite.name, "version": suite.version, "n": len(suite.scenarios)},
+               "config": dataclasses.asdict(DirectConfig(**config)), "rows": rows,
                "reference": docs[-1]["aggregate"], "provenance": provenance()}
         write_text(tmp / "direct_curve.json", json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
-        table = curve_markdown(suite, rows, docs[-1]["aggregate"])
+        table = curve_markdown(suite, rows, docs[-1]["aggregate"], DirectConfig(**config))
         write_text(tmp / "direct_curve.md", table)
         swap_folder(tmp, out)
     except BaseException:

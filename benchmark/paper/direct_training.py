@@ -180,13 +180,14 @@ def train_on(datasets, config: DirectConfig, *, where: dict | None = None, comma
 
 
 def train_job(job: tuple) -> dict:
-    """One model of a learning curve: ``job = (datasets, users, out)`` trains the network with the
-    shipped model's choices (:class:`fsv.learn.DirectConfig`'s defaults) on ``users``' episodes of
-    ``datasets`` and saves it to ``out``; returns what the curve reports of the training (episodes,
-    samples, held-out samples, the epoch kept, counting from 1, parameters, seconds)."""
-    datasets, users, out = job
+    """One model of a learning curve: ``job = (datasets, users, out, config)`` trains the network
+    with ``config`` (keyword arguments of :class:`fsv.learn.DirectConfig`; ``{}``: the shipped
+    model's choices) on ``users``' episodes of ``datasets`` and saves it to ``out``; returns what the
+    curve reports of the training (episodes, samples, held-out samples, the epoch kept, counting
+    from 1, parameters, seconds)."""
+    datasets, users, out, config = job
     timing = {}
-    model = train_on(datasets, DirectConfig(), where={"user": list(users)},
+    model = train_on(datasets, DirectConfig(**config), where={"user": list(users)},
                      command=f"direct-curve: the first {len(users)} people", timing=timing)
     model.save(out)
     m = model.metadata
