@@ -165,3 +165,17 @@ def test_the_findings_quote_the_committed_colour_ablation():
     tone = {t["skin_tone"]: t for t in doc["tones"]}
     assert f"keeps {100 * tone[10]['gate']['true_kept_share']:.1f} % of the true contacts of the darkest" in text
     assert f"{100 * tone[1]['gate']['true_kept_share']:.1f} % of the lightest (Monk 1)" in text
+
+
+def test_the_direct_windows_table_in_the_methods_page_is_the_committed_choice():
+    text = (ROOT / "docs/methods.md").read_text()
+    rows = [line.replace("**", "") for line in text.splitlines()
+            if line.startswith("| ") and any(f" | {n} | " in line for n in (61, 97, 151))]
+    assert len(rows) == 3
+    for row, w in zip(rows, (0, 2, 5)):
+        doc = json.loads((ROOT / f"results/direct_window/w{w}/direct_curve.json").read_text())
+        r = doc["rows"][0]
+        assert doc["config"]["window"] == w and r["people"] == 40
+        m = r["aggregate"]["force_mae_n"]["mean"]
+        mae = f"{m['value']:.3g} [{m['ci_low']:.3g}, {m['ci_high']:.3g}]"
+        assert f" | {r['parameters']:,} | {r['best_epoch']} | " in row and mae in row, (row, mae)
