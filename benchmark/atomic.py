@@ -366,17 +366,34 @@ def _check_writable(out: pathlib.Path, option: str) -> None:
         raise OutputFolderError(f"{option} {out}: cannot write in {probe} ({e.strerror or e})") from None
 
 
-def write_folder(out: str | os.PathLike, files: dict) -> pathlib.Path:
-    """Writes a command's output folder whole: ``{file name: text}`` into a :func:`staging_folder`,
-    then :func:`swap_folder` into ``out``; an error or an interrupt leaves ``out`` as it was."""
+@contextlib.contextmanager
+def staged_folder(out: str | os.PathLike) -> Iterator[pathlib.Path]:
+    """A command's output folder, written whole: a :func:`staging_folder` to write into, which
+    replaces ``out`` (:func:`swap_folder`) when the block ends without an error.
+
+    Args:
+        out: The output folder (checked before any work by :func:`check_out`).
+
+    Yields:
+        The staging folder (a sibling of ``out``). On any exception, KeyboardInterrupt included, it
+        is removed and ``out`` is left as it was; the exception goes on.
+    """
     tmp = staging_folder(out)
     try:
-        for name, text in files.items():
-            write_text(tmp / name, text)
-        return swap_folder(tmp, out)
+        yield tmp
+        swap_folder(tmp, out)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+
+
+def write_folder(out: str | os.PathLike, files: dict) -> pathlib.Path:
+    """Writes a command's output folder whole: ``{file name: text}`` through :func:`staged_folder`;
+    an error or an interrupt leaves ``out`` as it was. Returns ``out``."""
+    with staged_folder(out) as tmp:
+        for name, text in files.items():
+            write_text(tmp / name, text)
+    return pathlib.Path(out)
 
 
 def write_bytes(path: str | os.PathLike, data: bytes) -> pathlib.Path:

@@ -17,6 +17,7 @@ from benchmark.atomic import (
     is_owned,
     is_replaceable,
     remove_stale_temporaries,
+    staged_folder,
     staging_folder,
     swap_folder,
     write_marker,
@@ -42,6 +43,27 @@ def test_a_failed_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):
             raise KeyboardInterrupt
     assert p.read_text() == "old"
     assert [f.name for f in tmp_path.iterdir()] == ["a.txt"]
+
+
+def test_staged_folder_replaces_the_output_whole_or_leaves_it_as_it_was(tmp_path):
+    out = tmp_path / "out"
+    with staged_folder(out) as tmp:
+        (tmp / "a.txt").write_text("first")
+        assert not out.exists()  # nothing in place until the block ends
+    assert (out / "a.txt").read_text() == "first" and is_owned(out)
+    for error in (RuntimeError("boom"), KeyboardInterrupt()):
+        with pytest.raises(type(error)):
+            with staged_folder(out) as tmp:
+                (tmp / "a.txt").write_text("half")
+                (tmp / "b.txt").write_text("half")
+                raise error
+        assert sorted(f.name for f in out.iterdir()) == sorted(["a.txt", OUTPUT_MARKER])
+        assert (out / "a.txt").read_text() == "first"
+        assert [f.name for f in tmp_path.iterdir()] == ["out"]  # the staging folder is gone
+    with staged_folder(out) as tmp:
+        (tmp / "b.txt").write_text("second")
+    assert sorted(f.name for f in out.iterdir()) == sorted(["b.txt", OUTPUT_MARKER])
+    assert [f.name for f in tmp_path.iterdir()] == ["out"]
 
 
 def test_swap_folder_replaces_a_folder_whole_and_leaves_nothing_behind(tmp_path):

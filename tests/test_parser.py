@@ -29,3 +29,15 @@ def test_good_values_parse():
     p = OneLineParser(prog="prog")
     p.add_argument("--x", type=float)
     assert p.parse_args(["--x", "2.5"]).x == 2.5
+
+
+@pytest.mark.parametrize("module", ["atlas", "colour_ablation", "direct_curve", "humanness", "learning_curve"])
+def test_the_commands_refuse_in_one_line(capsys, module):
+    import importlib
+
+    main = importlib.import_module(f"benchmark.commands.{module}").main
+    with pytest.raises(SystemExit) as e:
+        main(["--no-such-option", "1"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and err.count("\n") == 1, err
+    assert err.startswith(f"python -m benchmark.commands.{module}: error: "), err  # argparse's usage lines: gone

@@ -12,7 +12,6 @@ for: read it there, choose on ``dev``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import pathlib
 from dataclasses import asdict, dataclass
@@ -20,6 +19,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from benchmark.atomic import OutputFolderError, check_out, write_folder
+from benchmark.commands.parser import OneLineParser
 from benchmark.limits import MAX_WORKERS, integer
 from benchmark.method import run_method
 from benchmark.method.run import camera_input_and_knowledge
@@ -214,7 +214,7 @@ def report_markdown(doc: dict) -> str:
 
 def main(argv=None) -> int:
     """``python -m benchmark.commands.atlas``: writes atlas.md and atlas.json."""
-    p = argparse.ArgumentParser(prog="python -m benchmark.commands.atlas", description=__doc__.splitlines()[0])
+    p = OneLineParser(prog="python -m benchmark.commands.atlas", description=__doc__.splitlines()[0])
     p.add_argument("--suite", default="dev", help="suite whose episodes are diagnosed (default dev: choose there)")
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/atlas"),
                    help="output folder, replaced whole if fsv-bench wrote it (default runs/atlas; the committed "

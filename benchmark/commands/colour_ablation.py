@@ -27,7 +27,6 @@ chosen on ``standard``.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import functools
 import json
@@ -40,6 +39,7 @@ import numpy as np
 from benchmark.atomic import OutputFolderError, check_cache, check_out, write_folder
 from benchmark.camera.appearance import _KRAFT, _WHITE_BOARD, appearance_of, hex_to_linear, skin_of
 from benchmark.camera.colour import render_colour
+from benchmark.commands.parser import OneLineParser
 from benchmark.errors import BenchmarkError
 from benchmark.limits import MAX_WORKERS, integer
 from benchmark.method.load import load_object
@@ -386,7 +386,7 @@ def report_markdown(doc: dict) -> str:
 
 def main(argv=None) -> int:
     """``python -m benchmark.commands.colour_ablation``: writes colour_ablation.md and colour_ablation.json."""
-    p = argparse.ArgumentParser(prog="python -m benchmark.commands.colour_ablation", description=__doc__.splitlines()[0])
+    p = OneLineParser(prog="python -m benchmark.commands.colour_ablation", description=__doc__.splitlines()[0])
     p.add_argument("--suite", default="dev", help="suite whose episodes are ablated (default dev: choose there)")
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("runs/colour_ablation"),
                    help="output folder, replaced whole if fsv-bench wrote it (default runs/colour_ablation)")

@@ -21,10 +21,9 @@ import argparse
 import dataclasses
 import json
 import pathlib
-import shutil
 import sys
 
-from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_text
+from benchmark.atomic import OutputFolderError, check_out, staged_folder, write_text
 from benchmark.commands.learning_curve import people_of
 from benchmark.commands.parser import OneLineParser
 from benchmark.errors import DatasetError
@@ -145,8 +144,7 @@ def main(argv=None) -> int:
     except (InputError, DatasetError, OutputFolderError, ValueError) as e:
         print(f"{p.prog}: error: {e}", file=sys.stderr)
         return 2
-    tmp = staging_folder(out)
-    try:
+    with staged_folder(out) as tmp:
         (tmp / "models").mkdir(parents=True)
         config = {"window": args.window, "hidden": tuple(args.hidden)}
         meta = train_models(args.data, everyone, counts, tmp / "models", workers=args.workers, config=config)
@@ -161,10 +159,6 @@ def main(argv=None) -> int:
         write_text(tmp / "direct_curve.json", json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
         table = curve_markdown(suite, rows, docs[-1]["aggregate"], DirectConfig(**config))
         write_text(tmp / "direct_curve.md", table)
-        swap_folder(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     print(table)
     return 0
 

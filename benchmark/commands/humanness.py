@@ -10,17 +10,16 @@ the slip limit.
 
 from __future__ import annotations
 
-import argparse
 import json
 import pathlib
-import shutil
 from dataclasses import asdict
 
 import matplotlib
 import matplotlib.pyplot as plt
 import numpy as np
 
-from benchmark.atomic import OutputFolderError, check_out, save_figure, staging_folder, swap_folder, write_text
+from benchmark.atomic import OutputFolderError, check_out, save_figure, staged_folder, write_text
+from benchmark.commands.parser import OneLineParser
 from benchmark.scores.aggregate import span
 from benchmark.suites import get_suite
 from benchmark.world import living
@@ -192,7 +191,7 @@ def plot_margins(rows: list, path) -> pathlib.Path:
 
 def main(argv=None) -> int:
     """``python -m benchmark.commands.humanness``: writes humanness.md and humanness.json."""
-    p = argparse.ArgumentParser(prog="python -m benchmark.commands.humanness", description=__doc__.splitlines()[0])
+    p = OneLineParser(prog="python -m benchmark.commands.humanness", description=__doc__.splitlines()[0])
     p.add_argument("--suite", default="standard", help="suite whose episodes are simulated (default standard)")
     p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("results/world"),
                    help="output folder, replaced whole if fsv-bench wrote it")
@@ -212,15 +211,10 @@ def main(argv=None) -> int:
 
     doc = {"suite": {"name": suite.name, "version": suite.version},
            "episodes": [{"scenario": asdict(sc), **strict(h)} for sc, h in rows], "provenance": provenance()}
-    tmp = staging_folder(args.out)
-    try:
+    with staged_folder(args.out) as tmp:
         write_text(str(tmp / "humanness.md"), md)
         plot_margins(rows, tmp / FIGURE)
         write_text(str(tmp / "humanness.json"), json.dumps(doc, indent=1, allow_nan=False) + "\n")
-        swap_folder(tmp, args.out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     print(md)
     print(f"written to {args.out}/ (humanness.md, humanness.json, {FIGURE})")
     return 0

@@ -23,10 +23,10 @@ import importlib.resources
 import io
 import json
 import pathlib
-import shutil
 import sys
 
-from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_text
+from benchmark.atomic import OutputFolderError, check_out, staged_folder, write_text
+from benchmark.commands.parser import OneLineParser
 from benchmark.errors import DatasetError
 from benchmark.method import MethodSpec
 from benchmark.method.grip_file import SHIPPED
@@ -132,7 +132,7 @@ def _cell(agg: dict) -> str:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m benchmark.commands.learning_curve", description=__doc__.split("\n\n")[0])
+    p = OneLineParser(prog="python -m benchmark.commands.learning_curve", description=__doc__.split("\n\n")[0])
     p.add_argument("--data", required=True, help="a training dataset (fsv-bench generate --split train --design people)")
     p.add_argument("--people", default="5,20,40", help="numbers of training people (default 5,20,40)")
     p.add_argument("--suite", default="dev", help="suite to score on (default dev)")
@@ -168,35 +168,30 @@ def main(argv=None) -> int:
     except OutputFolderError as e:
         print(f"{p.prog}: error: {e}", file=sys.stderr)
         return 2
-    tmp = staging_folder(out)
     try:
-        (tmp / "models").mkdir(parents=True)
-        if args.calibration:
-            grip = tmp / "models" / "grip_calibration.json"
-            fit_calibration(args.calibration, grip, everyone[:max(counts)], quiet=args.quiet)
-        meta = train_models(args.data, everyone, counts, grip, tmp / "models", workers=args.workers)
-        specs = [MethodSpec(internal_model=str(tmp / "models" / model_file(n, pr)), protocol=pr)
-                 for n in counts for pr in PROTOCOLS]
-        docs = evaluate_many(suite, specs + [MethodSpec(method="no-internal")], cache=args.cache,
-                             progress=not args.quiet, workers=args.workers)
-        rows = []
-        for i, n in enumerate(counts):
-            first = meta[n][PROTOCOLS[0]]  # both models train on the same samples
-            rows.append({"people": n, "users": everyone[:n], "episodes": first["episodes"], "samples": first["samples"],
-                         "aggregate": {pr: docs[i * len(PROTOCOLS) + j]["aggregate"] for j, pr in enumerate(PROTOCOLS)}})
-        doc = {"suite": {"name": suite.name, "version": suite.version, "n": len(suite.scenarios)}, "rows": rows,
-               "no_internal": docs[-1]["aggregate"], "provenance": provenance()}
-        write_text(tmp / "learning_curve.json", json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
-        table = curve_markdown(suite, rows)
-        write_text(tmp / "learning_curve.md", table)
-        swap_folder(tmp, out)
+        with staged_folder(out) as tmp:
+            (tmp / "models").mkdir(parents=True)
+            if args.calibration:
+                grip = tmp / "models" / "grip_calibration.json"
+                fit_calibration(args.calibration, grip, everyone[:max(counts)], quiet=args.quiet)
+            meta = train_models(args.data, everyone, counts, grip, tmp / "models", workers=args.workers)
+            specs = [MethodSpec(internal_model=str(tmp / "models" / model_file(n, pr)), protocol=pr)
+                     for n in counts for pr in PROTOCOLS]
+            docs = evaluate_many(suite, specs + [MethodSpec(method="no-internal")], cache=args.cache,
+                                 progress=not args.quiet, workers=args.workers)
+            rows = []
+            for i, n in enumerate(counts):
+                first = meta[n][PROTOCOLS[0]]  # both models train on the same samples
+                rows.append({"people": n, "users": everyone[:n], "episodes": first["episodes"], "samples": first["samples"],
+                             "aggregate": {pr: docs[i * len(PROTOCOLS) + j]["aggregate"] for j, pr in enumerate(PROTOCOLS)}})
+            doc = {"suite": {"name": suite.name, "version": suite.version, "n": len(suite.scenarios)}, "rows": rows,
+                   "no_internal": docs[-1]["aggregate"], "provenance": provenance()}
+            write_text(tmp / "learning_curve.json", json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
+            table = curve_markdown(suite, rows)
+            write_text(tmp / "learning_curve.md", table)
     except DatasetError as e:  # a recording without a training person: before any training
-        shutil.rmtree(tmp, ignore_errors=True)
         print(f"{p.prog}: error: {e}", file=sys.stderr)
         return 2
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     print(table)
     return 0
 

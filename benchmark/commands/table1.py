@@ -18,11 +18,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import shutil
 import sys
 from pathlib import Path
 
-from benchmark.atomic import OutputFolderError, check_out, staging_folder, swap_folder, write_bytes
+from benchmark.atomic import OutputFolderError, check_out, staged_folder, write_bytes
 from benchmark.commands.pictures.fig4 import plot_fig4
 from benchmark.errors import ScenarioError
 from benchmark.paper.ahrs import IMU_CHOICES, MTI_300, SOURCES, lab_readings
@@ -173,15 +172,10 @@ def main(argv=None) -> int:
             for name, stats in report["sources"].items():
                 print(f"    {name}: {stats['algebraic']['acc_std']:.3f} / {stats['algebraic']['gyro_std']:.3f}")
         if args.out is not None and report is not None:
-            tmp = staging_folder(args.out)
-            try:
+            with staged_folder(args.out) as tmp:
                 write_bytes(tmp / "table1.md", (table.markdown() + "\n").encode())
                 write_bytes(tmp / "table1.csv", table.csv().encode())
                 write_bytes(tmp / "ahrs.json", (json.dumps(report, indent=1) + "\n").encode())
-                swap_folder(tmp, args.out)
-            except BaseException:
-                shutil.rmtree(tmp, ignore_errors=True)
-                raise
             print(f"wrote {', '.join(str(args.out / n) for n in ('table1.md', 'table1.csv', 'ahrs.json'))}")
         elif args.out is not None:
             panels = None
@@ -189,13 +183,8 @@ def main(argv=None) -> int:
             wanted = [f"excite-{kind}{axis}" for kind in "tr" for axis in "xyz"]
             if all(t in by_task for t in wanted):
                 panels = [(episodes[by_task[t]][0], kins[by_task[t]], t) for t in wanted]
-            tmp = staging_folder(args.out)
-            try:
+            with staged_folder(args.out) as tmp:
                 paths = write_outputs(table, episodes[0][0], kins[0], tmp, panels=panels)
-                swap_folder(tmp, args.out)
-            except BaseException:
-                shutil.rmtree(tmp, ignore_errors=True)
-                raise
             print(f"wrote {', '.join(str(args.out / p.name) for p in map(Path, paths.values()))}")
     return 0
 

@@ -15,9 +15,8 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import shutil
 
-from benchmark.atomic import check_out, staging_folder, swap_folder
+from benchmark.atomic import check_out, staged_folder
 from benchmark.exchange import camera_file, estimates_file
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
 from benchmark.method.protocol import DEFAULT_PROTOCOL, check_people
@@ -62,8 +61,7 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
     cache = episode_cache(cache)
     out = pathlib.Path(out)
     suffix = FORMATS[container]
-    tmp = staging_folder(out)
-    try:
+    with staged_folder(out) as tmp:
         episodes = []
         scenarios = suite.scenarios
         if progress:
@@ -87,10 +85,6 @@ def export_suite(suite, out: pathlib.Path, *, cache=None, progress: bool = True,
                               + (" --format hdf5" if suffix == ".h5" else ""),
                  "provenance": provenance()}
         (tmp / "suite.json").write_text(json.dumps(index, indent=1) + "\n")
-        swap_folder(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return index
 
 

@@ -38,14 +38,13 @@ import argparse
 import json
 import math
 import os
-import shutil
 import time
 from dataclasses import asdict, dataclass
 
 import numpy as np
 import pandas as pd
 
-from benchmark.atomic import check_out, save_figure, staging_folder, swap_folder, write_text
+from benchmark.atomic import check_out, save_figure, staged_folder, write_text
 from benchmark.errors import DatasetError
 from benchmark.limits import MAX_EPOCHS, MAX_MEMBERS, MAX_SEED, integer, number
 from benchmark.paper.dataset import (
@@ -380,13 +379,8 @@ def run(args: argparse.Namespace) -> dict:
                               test_seeds=parse_ints(args.test_seeds, "--test-seeds"))
     rule = None if not np.isfinite(args.max_excess) else args.max_excess
     result = score(args.data, protocol, LearnConfig(epochs=args.epochs, seed=args.seed, members=args.members), rule)
-    tmp = staging_folder(args.out)
-    try:
+    with staged_folder(args.out) as tmp:
         write(result, tmp)
-        swap_folder(tmp, args.out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     print(markdown(result))
     print(f"written to {args.out}/ (table2.md, table2.csv, table2.json, fig6.png)")
     return result

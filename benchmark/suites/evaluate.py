@@ -37,8 +37,7 @@ from benchmark.atomic import (
     claim_folder,
     is_owned,
     remove_stale_temporaries,
-    staging_folder,
-    swap_folder,
+    staged_folder,
 )
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.fingerprint import world_fingerprint
@@ -290,8 +289,7 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path, pictures=()) ->
 
     results = [GateResult(**{**g, "ci": tuple(g["ci"]) if g["ci"] is not None else None}) for g in scores["gates"]]
     out = pathlib.Path(out)
-    tmp = staging_folder(out)
-    try:
+    with staged_folder(out) as tmp:
         (tmp / "scores.json").write_text(json.dumps(strict(scores), indent=1, allow_nan=False) + "\n")
         (tmp / "report.md").write_text(report_markdown(suite, scores["method"], scores["episodes"], scores["aggregate"],
                                                        scores["per_task"], results, METRICS,
@@ -301,10 +299,6 @@ def write_outputs(scores: dict, suite: Suite, out: pathlib.Path, pictures=()) ->
             (tmp / "pictures").mkdir()
             for path in pictures:
                 shutil.copyfile(path, tmp / "pictures" / pathlib.Path(path).name)
-        swap_folder(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
 
 
 GATE_KEYS = {"metric": str, "op": str, "limit": (int, float), "statistic": str}

@@ -17,9 +17,8 @@ from __future__ import annotations
 
 import argparse
 import pathlib
-import shutil
 
-from benchmark.atomic import check_out, staging_folder, swap_folder
+from benchmark.atomic import check_out, staged_folder
 from benchmark.method import MethodSpec
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE
 from benchmark.scores.leaderboard import leaderboard_markdown
@@ -71,16 +70,11 @@ def run(args: argparse.Namespace) -> list:
         if not name.startswith("baseline-"):
             scores["baselines"] = block
     out = pathlib.Path(args.out)
-    tmp = staging_folder(out)
-    try:
+    with staged_folder(out) as tmp:
         for name, scores in entries:
             write_outputs(scores, suite, tmp / name)
         table = leaderboard_markdown(suite, entries, BASELINE_STAGE)
         (tmp / "leaderboard.md").write_text(table)
-        swap_folder(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     print(table)
     print(f"written to {out}/ (leaderboard.md, {', '.join(VARIANTS)})")
     if results[0]["verdict"] != "pass":

@@ -22,11 +22,10 @@ import dataclasses
 import json
 import math
 import pathlib
-import shutil
 
 import numpy as np
 
-from benchmark.atomic import check_out, save_figure, staging_folder, swap_folder
+from benchmark.atomic import check_out, save_figure, staged_folder
 from benchmark.errors import ScenarioError
 from benchmark.limits import MAX_EPISODES, MAX_INIT_SCALE, check_grid
 from benchmark.suites import Suite, get_suite
@@ -255,15 +254,10 @@ def run(args: argparse.Namespace) -> dict:
            "aggregate": [r["aggregate"] for r in results], "episodes": [r["episodes"] for r in results],
            "provenance": provenance()}
     out = pathlib.Path(args.out)
-    tmp = staging_folder(out)
-    try:
+    with staged_folder(out) as tmp:
         (tmp / "sweep.json").write_text(json.dumps(strict(doc), indent=1, allow_nan=False) + "\n")
         (tmp / "sweep.md").write_text(sweep_markdown(doc))
         plot_sweep(args.axis, values, results, tmp / "sweep.png")
-        swap_folder(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     print(sweep_markdown(doc))
     print(f"written to {out}/ (sweep.json, sweep.md, sweep.png)")
     return doc
