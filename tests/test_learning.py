@@ -18,7 +18,7 @@ def test_shipped_model_was_trained_by_the_documented_command():
     users = {int(u): c for u, c in model.metadata["grip_calibration"]["users"].items()}
     assert {u: (c["baseline_n"], c["gain"]) for u, c in users.items()} == \
            {u: (c.baseline_n, c.gain) for u, c in read_calibration().items()}  # trained on the shipped lines
-    assert model.metadata["episodes"] == 477 and 95_000 < model.metadata["samples"] < 105_000  # 99,319; 3 of 480 stopped (palm)
+    assert model.metadata["episodes"] == 480 and 95_000 < model.metadata["samples"] < 105_000  # 101,905; every episode simulates
     assert model.metadata["dataset"]["tasks"] == ["lift", "place", "release", "rotate", "shake", "free", "excite-tx",
                                                    "excite-ty", "excite-tz", "excite-rx", "excite-ry", "excite-rz"]
     assert model.metadata["dataset"]["users"] == list(range(1000, 1040)) and model.metadata["dataset"]["seeds"] == [100]

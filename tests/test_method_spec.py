@@ -59,6 +59,7 @@ def test_the_direct_method_without_its_model_is_refused_before_any_work(tmp_path
     from benchmark.commands.cli import main
 
     monkeypatch.setattr(spec_module, "default_direct_path", lambda: str(tmp_path / "absent.npz"))
+    spec_module._build.cache_clear()  # a method built from the shipped model by an earlier test would be reused
     out = tmp_path / "run"
     assert main(["--method", "direct", "--out", str(out)]) == 2
     err = _one_error_line(capsys)
