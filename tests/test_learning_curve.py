@@ -73,7 +73,12 @@ def test_grip_lines_fitted_from_recordings_must_cover_every_training_person(monk
     from benchmark.errors import DatasetError
     from benchmark.paper import calibration
 
-    monkeypatch.setattr(calibration, "run", lambda args: print("user 1000: ...") or {1000: object()})
+    def run(args):  # the real command's options, each at its default (a new option must not break this call)
+        assert args.data == ["rec"] and args.out == str(tmp_path / "g.json") and args.force is False
+        print("user 1000: ...")
+        return {1000: object()}
+
+    monkeypatch.setattr(calibration, "run", run)
     learning_curve.fit_calibration(["rec"], tmp_path / "g.json", [1000], quiet=True)
     assert capsys.readouterr().out == ""
     with pytest.raises(DatasetError, match=r"person 1001 has no recording there \(1 of the 2 training people"):

@@ -77,7 +77,10 @@ def fit_calibration(recordings: list, out: pathlib.Path, people: list, quiet: bo
     """
 
     with contextlib.redirect_stdout(io.StringIO()) if quiet else contextlib.nullcontext():
-        lines = calibration.run(argparse.Namespace(data=[str(r) for r in recordings], out=str(out)))
+        parser = argparse.ArgumentParser()
+        calibration.add_arguments(parser)  # every option of `fsv-bench calibrate`, at its default
+        args = parser.parse_args([a for r in recordings for a in ("--data", str(r))] + ["--out", str(out)])
+        lines = calibration.run(args)
     missing = [u for u in people if u not in lines]
     if missing:
         raise DatasetError(f"--calibration {','.join(map(str, recordings))}: person {missing[0]} has no recording "
