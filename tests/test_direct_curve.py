@@ -79,11 +79,13 @@ def test_the_models_are_trained_largest_first_on_the_first_people(monkeypatch, t
         return {"samples": len(users)}
 
     monkeypatch.setattr(direct_training, "train_job", job)
-    meta = train_models(["a", "b"], [1000, 1001, 1002, 1003], [1, 4, 2], tmp_path, config={"window": 2})
+    a, b = _dataset(tmp_path / "a", [1000, 1001]), _dataset(tmp_path / "b", [1002, 1003])
+    meta = train_models([a, b], [1000, 1001, 1002, 1003], [1, 4, 2], tmp_path, config={"window": 2})
     assert all(c == {"window": 2} for *_, c in seen)
     assert [(len(u), pathlib_name(o)) for _, u, o, _ in seen] == [(4, "direct-people-4.npz"), (2, "direct-people-2.npz"),
                                                                (1, "direct-people-1.npz")]
-    assert seen[1][1] == [1000, 1001] and all(d == ["a", "b"] for d, *_ in seen)
+    # a model reads only the folders that hold its people: the second folder has none of the first two
+    assert seen[1][1] == [1000, 1001] and [d for d, *_ in seen] == [[str(a), str(b)], [str(a)], [str(a)]]
     assert meta == {1: {"samples": 1}, 4: {"samples": 4}, 2: {"samples": 2}} and list(meta) == [1, 4, 2]
     assert model_file(160) == "direct-people-160.npz"
 

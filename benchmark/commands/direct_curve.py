@@ -75,10 +75,12 @@ def train_models(datasets: list, everyone: list, counts: list, folder: pathlib.P
     """Trains the N-people model for every N of ``counts`` into ``folder`` (:func:`model_file`), the
     largest first, on ``workers`` local processes (training is single-threaded; a model is the same
     whichever process trains it), with ``config`` (keyword arguments of :class:`fsv.learn.DirectConfig`;
-    default: its defaults). Returns ``{n: training summary}``."""
+    default: its defaults). Each model reads the datasets that hold some of its first N people (a
+    later folder of other people is not opened; :func:`people_of_all`). Returns ``{n: training summary}``."""
     order = sorted(counts, reverse=True)
-    jobs = [([str(d) for d in datasets], everyone[:n], str(folder / model_file(n)), dict(config or {}))
-            for n in order]
+    holds = {str(d): set(people_of(d)) for d in datasets}
+    jobs = [([d for d, people in holds.items() if people & set(everyone[:n])], everyone[:n],
+             str(folder / model_file(n)), dict(config or {})) for n in order]
     meta = {}
     for i, summary in run_jobs(direct_training.train_job, jobs, workers=workers):
         meta[order[i]] = summary
