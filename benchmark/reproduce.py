@@ -74,11 +74,11 @@ SUITE_PEOPLE = 48
 _RECORDING = ["--design", "people", "--tasks", "lift", "--masses", "0,2", "--seeds", "900,901", "--duration", "6"]
 """A person's calibration recording: two 6 s lifts with their own grasp, the 0.30 and the 0.60 kg box."""
 
-def _training_set(people: int) -> list:
-    """The training split's first ``people`` people, each with their own grasp and view through every
-    task once, the six masses rotating, seed 100."""
-    return ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users", f"0-{people - 1}",
-            "--masses", "0-5", "--seeds", "100"]
+def _training_set(people: int, first: int = 0) -> list:
+    """The training split's ``people`` people from position ``first``, each with their own grasp and
+    view through every task once, the six masses rotating, seed 100."""
+    return ["--split", "train", "--design", "people", "--tasks", _ALL_TASKS, "--users",
+            f"{first}-{first + people - 1}", "--masses", "0-5", "--seeds", "100"]
 
 
 DATASETS = {
@@ -88,6 +88,7 @@ DATASETS = {
     "table2-oracle-contacts": _TABLE2_GRID + ["--users", "0,4", "--contacts", "oracle"],
     "train": _training_set(TRAIN_PEOPLE) + ["--rows", "all"],
     "train-curve": _training_set(CURVE_PEOPLE) + ["--rows", "all"],
+    "train-curve-more": _training_set(CURVE_PEOPLE, first=CURVE_PEOPLE) + ["--rows", "all"],
     "calibration": ["--tasks", "lift", "--users", "0-4", "--grasps", "0-3", "--masses", "0,2", "--seeds", "900"],
     "calibration-train": ["--split", "train", "--users", f"0-{TRAIN_PEOPLE - 1}"] + _RECORDING,
     "calibration-train-curve": ["--split", "train", "--users", f"0-{CURVE_PEOPLE - 1}"] + _RECORDING,
@@ -96,8 +97,9 @@ DATASETS = {
 }
 """``fsv-bench generate`` arguments of every dataset a committed result is made from: the Table 2
 cohort's, the shipped models' training set (training people only, :data:`TRAIN_PEOPLE`; every frame, for the
-end-to-end network, of which the paper's networks read the paper's rows), the learning curve's (:data:`CURVE_PEOPLE`, with their recordings), and the
-calibration recordings (the named users' eight 10 s lifts each; every other person's
+end-to-end network, of which the paper's networks read the paper's rows), the learning curve's (:data:`CURVE_PEOPLE`, with their recordings),
+the learned method's curve's next :data:`CURVE_PEOPLE` training people (1080-1159, whose drawn grasps
+are solved at run time, not stored), and the calibration recordings (the named users' eight 10 s lifts each; every other person's
 :data:`_RECORDING`, never scored)."""
 
 
@@ -264,9 +266,10 @@ RESULTS = (
                       f"5,20,40,{CURVE_PEOPLE}", "--calibration", "{data}/calibration-train-curve", "--suite", "dev",
                       "--workers", "2", "--quiet", "--out", "{out}"),),
            compare=_compare_json("learning_curve.json")),
-    Result(name="direct-curve", path="results/direct_curve", datasets=("train-curve",),
-           commands=(("python", "-m", "benchmark.commands.direct_curve", "--data", "{data}/train-curve", "--people",
-                      f"{TRAIN_PEOPLE},{CURVE_PEOPLE}", "--suite", "dev", "--workers", "2", "--quiet", "--out", "{out}"),),
+    Result(name="direct-curve", path="results/direct_curve", datasets=("train-curve", "train-curve-more"),
+           commands=(("python", "-m", "benchmark.commands.direct_curve", "--data", "{data}/train-curve", "--data",
+                      "{data}/train-curve-more", "--people", f"{TRAIN_PEOPLE},{CURVE_PEOPLE},{2 * CURVE_PEOPLE}",
+                      "--suite", "dev", "--workers", "2", "--quiet", "--out", "{out}"),),
            compare=_compare_json("direct_curve.json")),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
