@@ -2,7 +2,7 @@
 
 import pytest
 
-from benchmark.perf.track import main
+from benchmark.perf.track import baseline_fsv, main
 
 
 def test_a_short_run_against_head_reports_both_versions_and_their_ratio(capsys):
@@ -17,3 +17,16 @@ def test_a_short_run_against_head_reports_both_versions_and_their_ratio(capsys):
 def test_a_bad_baseline_is_named_before_any_work():
     with pytest.raises(SystemExit, match="--baseline 'no-such-rev'"):
         main(["--baseline", "no-such-rev"])
+
+
+def test_a_baseline_is_extracted_once_per_content_into_the_users_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    folder = baseline_fsv("HEAD")
+    assert folder.parent == tmp_path / "fsv-bench" / "perf-baselines" and (folder / "fsv" / "track" / "tracker.py").is_file()
+    stamp = (folder / "fsv" / "__init__.py").stat().st_mtime_ns
+    (folder / "fsv" / "kept.txt").write_text("what a run left (numba's caches)")
+    assert baseline_fsv("HEAD") == folder and (folder / "fsv" / "kept.txt").exists()  # not extracted again
+    assert (folder / "fsv" / "__init__.py").stat().st_mtime_ns == stamp
+    assert [p.name for p in folder.parent.iterdir()] == [folder.name]  # no temporary folder left
+    with pytest.raises(SystemExit, match="--baseline 'no-such-rev'"):
+        baseline_fsv("no-such-rev")

@@ -4,7 +4,8 @@
 
 Simulates and renders one episode, then tracks it (box, hand, contacts) in fresh worker processes
 pinned to one CPU core: this checkout's ``fsv`` and, with ``--baseline``, the ``fsv`` package of a
-git revision (extracted with ``git archive``), alternately for ``--rounds`` rounds so that a change
+git revision (extracted with ``git archive`` once per content and kept, with its compiled kernels,
+in the user's cache: :func:`baseline_fsv`), alternately for ``--rounds`` rounds so that a change
 of the machine's load hits both alike. Each worker tracks the episode twice and times the second
 pass (the first compiles or loads the numba kernels). It prints per version the frames per second
 (wall clock and process CPU time, median over rounds), the stages' milliseconds per frame, the
@@ -21,6 +22,7 @@ import json
 import os
 import pathlib
 import pickle
+import shutil
 import statistics
 import subprocess
 import sys
@@ -74,6 +76,31 @@ def extract_fsv(rev: str, dest: pathlib.Path) -> pathlib.Path:
     return dest
 
 
+def baseline_fsv(rev: str) -> pathlib.Path:
+    """The folder holding the ``fsv`` package of git revision ``rev``, extracted once per content into
+    ``$XDG_CACHE_HOME/fsv-bench/perf-baselines/<the tree's git hash>`` (``~/.cache`` by default) and
+    kept: numba's compiled kernels, cached beside the sources, are then made once per baseline, not
+    at every run (about 10 s of a core for the tracker's). Extracted into a temporary folder and
+    renamed into place, so that runs side by side never see half a package."""
+    tree = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--verify", "--quiet", f"{rev}^{{tree}}:fsv"],
+                          capture_output=True, text=True, check=False)
+    if tree.returncode != 0:
+        raise SystemExit(f"python -m benchmark.perf.track: error: --baseline {rev!r}: not a revision of this "
+                         "checkout with an fsv package; accepted: a commit, branch or tag, e.g. HEAD~1")
+    base = pathlib.Path(os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") / "fsv-bench" / "perf-baselines"
+    folder = base / tree.stdout.strip()
+    if (folder / "fsv").is_dir():
+        return folder
+    base.mkdir(parents=True, exist_ok=True)
+    tmp = pathlib.Path(tempfile.mkdtemp(prefix=".extracting-", dir=base))
+    extract_fsv(rev, tmp)
+    try:
+        tmp.rename(folder)
+    except OSError:  # another run put it there first
+        shutil.rmtree(tmp, ignore_errors=True)
+    return folder
+
+
 def run_worker(job: pathlib.Path, fsv_parent: pathlib.Path, core: int, out: pathlib.Path) -> dict:
     """Tracks the pickled job in a fresh process whose ``fsv`` is the one under ``fsv_parent``."""
     env = dict(os.environ, PYTHONPATH=str(fsv_parent), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
@@ -100,7 +127,7 @@ def main(argv=None) -> int:
         tmp = pathlib.Path(tmp)
         versions = {"this checkout": ROOT}
         if args.baseline:
-            versions[f"baseline {args.baseline}"] = extract_fsv(args.baseline, tmp / "baseline")
+            versions[f"baseline {args.baseline}"] = baseline_fsv(args.baseline)
         sc = Scenario(task=args.task, noise_m=0.01, seed=args.seed, duration_s=args.duration)
         ep, render_wall, render_cpu = _timed(lambda: render(simulate(sc)))
         T = len(ep.truth.t)
