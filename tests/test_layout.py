@@ -27,9 +27,9 @@ def drawn(monkeypatch):
     figures = []
     apply = layout.Margins.apply
 
-    def keep(self, fig):
+    def keep(self, fig, titled=False):
         figures.append(fig)
-        apply(self, fig)
+        apply(self, fig, titled)
 
     monkeypatch.setattr(layout.Margins, "apply", keep)
     return figures
@@ -85,7 +85,12 @@ def test_margins_that_leave_no_room_are_refused():
     try:
         with pytest.raises(ValueError, match="leave no room"):
             layout.Margins(left_in=2.5, right_in=2.0, bottom_in=0.5, top_in=0.5).apply(fig)
-        layout.Margins(left_in=1.0, right_in=0.5, bottom_in=0.6, top_in=0.3).apply(fig)
+        margins = layout.Margins(left_in=1.0, right_in=0.5, bottom_in=0.6, top_in=0.3, title_in=1.8)
+        margins.apply(fig)
         assert fig.subplotpars.left == pytest.approx(0.25) and fig.subplotpars.top == pytest.approx(0.9)
+        margins.apply(fig, titled=True)
+        assert fig.subplotpars.top == pytest.approx(0.3)
+        with pytest.raises(ValueError, match="leave no room"):
+            layout.Margins(left_in=1.0, right_in=0.5, bottom_in=0.6, top_in=0.3, title_in=2.2).apply(fig, titled=True)
     finally:
         plt.close(fig)

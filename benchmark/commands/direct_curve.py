@@ -79,8 +79,11 @@ def train_models(datasets: list, everyone: list, counts: list, folder: pathlib.P
     later folder of other people is not opened; :func:`people_of_all`). Returns ``{n: training summary}``."""
     order = sorted(counts, reverse=True)
     holds = {str(d): set(people_of(d)) for d in datasets}
-    jobs = [([d for d, people in holds.items() if people & set(everyone[:n])], everyone[:n],
-             str(folder / model_file(n)), dict(config or {})) for n in order]
+    jobs = []
+    for n in order:
+        chosen = everyone[:n]
+        reads = [d for d, people in holds.items() if people.intersection(chosen)]
+        jobs.append((reads, chosen, str(folder / model_file(n)), dict(config or {})))
     meta = {}
     for i, summary in run_jobs(direct_training.train_job, jobs, workers=workers):
         meta[order[i]] = summary

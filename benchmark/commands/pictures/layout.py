@@ -20,6 +20,7 @@ class Margins:
 
     Attributes:
         left_in, right_in, bottom_in, top_in: Margins to the figure's edges [in].
+        title_in: What a figure title adds to the top margin [in].
         wspace, hspace: Gaps between panels, as fractions of the mean panel width and height
             (matplotlib's ``subplots_adjust``).
     """
@@ -28,14 +29,17 @@ class Margins:
     right_in: float
     bottom_in: float
     top_in: float
+    title_in: float = 0.0
     wspace: float = 0.2
     hspace: float = 0.2
 
-    def apply(self, fig) -> None:
-        """Sets ``fig``'s subplot parameters (a ``matplotlib.figure.Figure``) to these margins."""
+    def apply(self, fig, titled: bool = False) -> None:
+        """Sets ``fig``'s subplot parameters (a ``matplotlib.figure.Figure``) to these margins, with
+        room for a figure title if ``titled``."""
         width, height = fig.get_size_inches()
-        if self.left_in + self.right_in >= width or self.bottom_in + self.top_in >= height:
+        top = self.top_in + (self.title_in if titled else 0.0)
+        if self.left_in + self.right_in >= width or self.bottom_in + top >= height:
             raise ValueError(f"margins {self} leave no room in a {width:g} x {height:g} in figure")
         fig.subplots_adjust(left=self.left_in / width, right=1 - self.right_in / width,
-                            bottom=self.bottom_in / height, top=1 - self.top_in / height,
+                            bottom=self.bottom_in / height, top=1 - top / height,
                             wspace=self.wspace, hspace=self.hspace)
