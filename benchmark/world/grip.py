@@ -20,6 +20,7 @@ import mujoco
 import numpy as np
 
 from benchmark.world.assets import World, user_of
+from benchmark.world.grip_kernels import hold_passes
 from benchmark.world.living import MOVING_ACC, MOVING_ALPHA, LivingGrip
 from benchmark.world.scenario import Scenario
 from fsv.linalg import dot, inv, mm, mv, rows_mt, solve, vm
@@ -154,22 +155,12 @@ class GripPolicy:
         """
         N, K = f_nom.shape[:2]
         c = np.zeros((N, K))
-        f = f_nom.copy()
+        f = np.array(f_nom, dtype=np.float64, order="C")
         slope = np.full(N, self.slip_slope) if slope is None else np.broadcast_to(np.asarray(slope, dtype=float), (N,))
         order = [*np.flatnonzero(active[1:]) + 1, 0] if active[0] else list(np.flatnonzero(active))
-        for _ in range(HOLD_PASSES):
-            added = 0.0
-            for j in order:  # one digit at a time, the fingers before the thumb that opposes them
-                n = np.einsum("nd,d->n", f[:, j], normals_in[j])
-                t = norm_rows(f[:, j] - n[:, None] * normals_in[j])
-                if held_load is not None:
-                    t = np.maximum(t, held_load[:, j])
-                deficit = np.maximum(np.maximum(slope * t, self.min_finger_force_n) - n, 0.0)
-                c[:, j] += deficit
-                f = f + deficit[:, None, None] * press[j]
-                added = max(added, float(np.max(deficit)))
-            if added <= HOLD_TOLERANCE_N:
-                break
+        # one digit at a time, the fingers before the thumb that opposes them, pass after pass
+        hold_passes(f, c, slope, held_load, press, normals_in, np.asarray(order, dtype=np.int64),
+                    self.min_finger_force_n, HOLD_PASSES, HOLD_TOLERANCE_N)
         if active[0]:
             n0 = np.einsum("nd,d->n", f[:, 0], normals_in[0])
             c[:, 0] += np.maximum(np.asarray(baseline_n, dtype=float) - n0, 0.0)
