@@ -20,7 +20,15 @@ import mujoco
 import numpy as np
 
 from benchmark.world.assets import World, user_of
-from benchmark.world.grip_kernels import hold_passes
+from benchmark.world.grip_kernels import (
+    commanded_forces,
+    contact_loads,
+    correct_feedback,
+    finger_torques,
+    first_order_response,
+    hold_passes,
+    running_max,
+)
 from benchmark.world.living import MOVING_ACC, MOVING_ALPHA, LivingGrip
 from benchmark.world.scenario import Scenario
 from fsv.linalg import dot, inv, mm, mv, rows_mt, solve, vm
@@ -425,7 +433,6 @@ class Human:
         self.policy = pol = replace(pol, safety_margin=pol.safety_margin * living.trial_scale,
                                     baseline_grip_n=pol.baseline_grip_n * living.trial_scale)
         self.ctrl_every = ctrl_every
-        self._jac = np.zeros((3, world.model.nv))
         self.R_palm_obj = _rot(plan.palm_quat)
         self.approach = np.array([0.0, -0.06, 0.12])
         t = np.asarray(times, dtype=float)
@@ -441,9 +448,9 @@ class Human:
                                  for f in world.hand.finger_names]
         tk = t[::ctrl_every]
         self.control = scenario.grip_control
-        self._tk, self._pol, self._living = tk, pol, living
-        target, f_nom, press, self._slope = _grip_target(tk, world, motion, plan, pol, living, phases, releases,
-                                                         self.control)
+        self._pol = pol
+        self._planned = planned_load(tk, world, motion, pol, living, phases, releases)
+        target, f_nom, press, self._slope = _grip_target(self._planned, plan, pol, phases, releases, self.control)
         self.grip_target = target
         self._keep = np.exp(-(tk[1] - tk[0]) / pol.response_s) if len(tk) > 1 else 0.0
         self._modulation = living.modulation(tk, grip_rng)
@@ -468,21 +475,18 @@ class Human:
         self._deficits = np.zeros((self._delay, len(plan.active)))
         self._tick = 0
         self._views = None
-        self._fingers = []
-        for k in np.flatnonzero(plan.active):
-            dofs = world.finger_dofs[k]
-            contiguous = np.array_equal(dofs, np.arange(dofs[0], dofs[-1] + 1))
-            self._fingers.append((int(k), int(world.tip_site[k]), slice(int(dofs[0]), int(dofs[-1]) + 1) if contiguous else dofs))
+        # the digits in contact: their fingertip sites, and (digit, its Jacobian, dof) per torque
+        touching = np.flatnonzero(plan.active)
+        self._tip_sites = [int(world.tip_site[k]) for k in touching]
+        self._jacs = np.zeros((len(touching), 3, world.model.nv))
+        self._torque_rows = np.array([(k, a, dof) for a, k in enumerate(touching) for dof in world.finger_dofs[k]],
+                                     dtype=np.int64).reshape(-1, 3)
 
     def _set_forces(self, start: int, target: np.ndarray, f_nom: np.ndarray, press: np.ndarray) -> None:
         """The commanded forces from control tick ``start`` on: the target through the grip's
         first-order response (continuing from the tick before), times the living modulation,
         capped at MAX_FINGER_FORCE_N, zero while the hand is off the box."""
-        g = self._filtered[start - 1].copy() if start > 0 else np.zeros(target.shape[1])
-        keep = self._keep
-        for i in range(start, len(target)):
-            g = keep * g + (1 - keep) * target[i]
-            self._filtered[i] = g
+        first_order_response(target, self._filtered, start, self._keep)
         grip = self._filtered[start:] * self._modulation[start:, None]
         if self.control == "per-digit":
             forces = f_nom[start:] + np.einsum("nj,jkd->nkd", grip, press)
@@ -524,8 +528,8 @@ class Human:
         points, touching = _digit_points(self.world, data, box_rot)
         self._sensed = np.where((touching & self.active)[:, None], points, self._sensed)  # a digit off for a tick keeps its last
         spot = self._sensed
-        target, f_nom, press, slope = _grip_target(self._tk, self.world, self.motion, self.plan, self._pol,
-                                                   self._living, self.phases, self.releases, self.control, spot=spot)
+        target, f_nom, press, slope = _grip_target(self._planned, self.plan, self._pol, self.phases, self.releases,
+                                                   self.control, spot=spot)
         self.grip_target[tick:] = target[tick:]
         self._slope[tick:] = slope[tick:]
         self._set_forces(tick, target, f_nom, press)
@@ -551,19 +555,17 @@ class Human:
             self._stop_at_touch(data, step)
         if tick in self._replan_ticks:
             self._replan(data, box_rot, tick)
-        f_obj = self.forces_obj[tick]
         if self.on[tick] and self.control == "per-digit":
             self._correct(data, box_rot, tick)
             # the feedback raises each digit's press in proportion to its planned normal force
-            planned = np.maximum(np.einsum("kd,kd->k", self.forces_obj[tick], self.normals), 0.0)
-            f_obj = f_obj + np.einsum("j,jkd->kd", self.feedback * planned, self.press)
+            f = commanded_forces(self.forces_obj[tick], box_rot, self.normals, self.feedback, self.press)
         else:
             self.feedback[:] = 0.0
-        f = rows_mt(f_obj, box_rot)
-        m, jac = self.world.model, self._jac
-        for k, site, dofs in self._fingers:
-            mujoco.mj_jacSite(m, data, jac, None, site)
-            qfrc[dofs] = vm(f[k], jac[:, dofs])
+            f = commanded_forces(self.forces_obj[tick], box_rot)
+        m, jacs = self.world.model, self._jacs
+        for a, site in enumerate(self._tip_sites):
+            mujoco.mj_jacSite(m, data, jacs[a], None, site)
+        finger_torques(f, jacs, self._torque_rows, qfrc)
 
     def _correct(self, data: mujoco.MjData, box_rot: np.ndarray, tick: int) -> None:
         """Tactile feedback on each digit's grip-load ratio: a digit's relative shortfall (how far its
@@ -579,12 +581,11 @@ class Human:
         Johansson & Westling 1984 saw raised after slips and kept), so it rises and falls with the
         planned load instead of lagging it as an added force would."""
         n, t = _digit_loads(self.world, data, box_rot, self.normals)
-        need = np.maximum(self._slope[tick] * t, self.policy.min_finger_force_n)
-        short = (need - n) / np.maximum(need, self.policy.min_finger_force_n)
-        self._deficits[self._tick % self._delay] = np.where(self.active & (n > 0), short, 0.0)  # touch senses only contact
+        write = self._tick % self._delay
         self._tick += 1
-        sensed = self._deficits[self._tick % self._delay]
-        self.feedback = np.where(sensed > 0, self.feedback + self._gain * sensed, self.feedback * self._leak)
+        # touch senses only contact: a digit off the box or not touching it senses no shortfall
+        correct_feedback(n, t, self._slope[tick], self.policy.min_finger_force_n, self.active, self._deficits, write,
+                         self._tick % self._delay, self.feedback, self._gain, self._leak)
 
 
 def _digit_box_contacts(world: World, data: mujoco.MjData):
@@ -607,14 +608,15 @@ def _digit_box_contacts(world: World, data: mujoco.MjData):
 
 def _digit_loads(world: World, data: mujoco.MjData, box_rot: np.ndarray, normals_obj: np.ndarray) -> tuple:
     """Each digit's normal and tangential force on the box now, along its planned normal, [N], (K,) each."""
-    K = len(normals_obj)
-    force = np.zeros((K, 3))
+    fingers, signs, forces, rows = [], [], [], []
     for i, k, f6, sign in _digit_box_contacts(world, data):
-        force[k] += sign * vm(f6[:3], data.contact.frame[i].reshape(3, 3))
-    f_obj = rows_mt(force, box_rot.T)
-    n = np.einsum("kj,kj->k", f_obj, normals_obj)
-    t = norm_rows(f_obj - n[:, None] * normals_obj)
-    return n, t
+        fingers.append(k)
+        signs.append(sign)
+        forces.append(f6[:3].copy())
+        rows.append(i)
+    frames = data.contact.frame[rows].reshape(-1, 3, 3) if rows else np.zeros((0, 3, 3))
+    return contact_loads(np.array(fingers, dtype=np.int64), np.array(signs), np.array(forces).reshape(-1, 3), frames,
+                         box_rot, normals_obj)
 
 
 def _digit_points(world: World, data: mujoco.MjData, box_rot: np.ndarray) -> tuple:
@@ -622,9 +624,11 @@ def _digit_points(world: World, data: mujoco.MjData, box_rot: np.ndarray) -> tup
     and whether it touches, (K,) bool."""
     K = len(world.hand.finger_names)
     weighted, total = np.zeros((K, 3)), np.zeros(K)
+    pos = None
     for i, k, f6, _ in _digit_box_contacts(world, data):
         if f6[0] > 0:
-            weighted[k] += f6[0] * data.contact.pos[i]
+            pos = data.contact.pos if pos is None else pos
+            weighted[k] += f6[0] * pos[i]
             total[k] += f6[0]
     touching = total > 0
     if box_rot is None:
@@ -652,22 +656,31 @@ def _palm_and_posture(t: np.ndarray, motion, plan, ph, releases: bool, R_palm_ob
     return palm_pos, np.array([_quat_of(R) for R in palm_rot]), q
 
 
-def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, releases: bool, control: str,
-                 spot=None) -> tuple:
-    """How hard each digit aims to press on every control tick ``tk``, the per-finger nominal forces
-    and unit presses (object frame) it scales, and the digits' slope: ``(target (N, K), f_nom
-    (N, K, 3), press (K, K, 3), slope (N,))``.
+@dataclass(frozen=True)
+class PlannedLoad:
+    """The load the hand plans for on every control tick, whatever the contacts: what
+    :func:`_grip_target` scales (computed once per episode, :func:`planned_load`).
 
-    The grip follows the load planned anticipation_s ahead of its own response (an internal model of
-    the grip's lag), so that it leads or matches the load. Under ``control`` "per-digit" the digits
-    press for their own loads, the grasp as a whole at the person's margin (raised around lift-off,
-    :func:`_lift_off`; :meth:`GripPolicy.grasp_hold`), each for at least part of its nearby peak
-    load (:func:`load_envelope`), the thumb at least the baseline before the load comes on. Under
-    "whole-hand" only the grasp's squeeze (column 0) is set: the sum of the baseline (relaxing in
-    holds), the grip at which every digit presses with min_finger_force_n without load, and the grip
-    the load's slip limit needs (:meth:`GripPolicy.whole_hand`). ``spot``: the contact points to plan
-    for, (K, 3) [m]; None: the plan's.
+    Attributes:
+        tk: The control ticks' times, (N,) [s].
+        wrench: The wrench the hand must apply to the box, object frame, anticipated and scaled by
+            the load's ramp, (N, 6) [N], [N m].
+        load: The fraction of the box's load on the hand, (N,), in [0, 1].
+        baseline_n: The person's baseline grip, relaxing in holds, (N,) [N].
+        boost: The grip's relative raise around lift-off, (N,).
     """
+
+    tk: np.ndarray
+    wrench: np.ndarray
+    load: np.ndarray
+    baseline_n: np.ndarray
+    boost: np.ndarray
+
+
+def planned_load(tk: np.ndarray, world: World, motion, pol, living, ph, releases: bool) -> PlannedLoad:
+    """The load planned on the control ticks ``tk``: the grip follows the load planned
+    anticipation_s ahead of its own response (an internal model of the grip's lag), so that it
+    leads or matches the load."""
     m = world.model
     mass = float(m.body_mass[world.box_body])
     inertia = np.diag(m.body_inertia[world.box_body])
@@ -685,19 +698,37 @@ def _grip_target(tk: np.ndarray, world: World, motion, plan, pol, living, ph, re
     a_b = np.einsum("nji,nj->ni", rot_a, alpha)
     torque_obj = vm(a_b, inertia) + np.cross(w_b, vm(w_b, inertia))
     wrench = load[:, None] * np.concatenate([force_obj, torque_obj], axis=1)
-    f_nom, press = pol.nominal_and_compressions(wrench, plan.spot if spot is None else spot, plan.normal_in, plan.active)
     moving = (norm_rows(acc) > MOVING_ACC) | (norm_rows(alpha) > MOVING_ALPHA)
     baseline = pol.baseline_grip_n * living.relaxation(tk, moving)
+    return PlannedLoad(tk=tk, wrench=wrench, load=load, baseline_n=baseline, boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph))
+
+
+def _grip_target(planned: PlannedLoad, plan, pol, ph, releases: bool, control: str, spot=None) -> tuple:
+    """How hard each digit aims to press on every control tick of ``planned``, the per-finger
+    nominal forces and unit presses (object frame) it scales, and the digits' slope: ``(target
+    (N, K), f_nom (N, K, 3), press (K, K, 3), slope (N,))``.
+
+    Under ``control`` "per-digit" the digits press for their own loads, the grasp as a whole at the
+    person's margin (raised around lift-off, :func:`_lift_off`; :meth:`GripPolicy.grasp_hold`),
+    each for at least part of its nearby peak load (:func:`load_envelope`), the thumb at least the
+    baseline before the load comes on. Under "whole-hand" only the grasp's squeeze (column 0) is
+    set: the sum of the baseline (relaxing in holds), the grip at which every digit presses with
+    min_finger_force_n without load, and the grip the load's slip limit needs
+    (:meth:`GripPolicy.whole_hand`). ``spot``: the contact points to plan for, (K, 3) [m]; None:
+    the plan's.
+    """
+    tk = planned.tk
+    f_nom, press = pol.nominal_and_compressions(planned.wrench, plan.spot if spot is None else spot, plan.normal_in,
+                                                plan.active)
     if control == "per-digit":
         # the baseline is the grip before the load comes on (the preload, Johansson & Westling 1984):
         # a lower bound on the thumb that fades as the load comes onto the hand
-        target, slope = pol.grasp_hold(f_nom, press, plan.normal_in, plan.active, baseline * (1.0 - load),
-                                       boost=LIFT_OFF_OVERSHOOT * _lift_off(ta, ph),
-                                       held_load=load_envelope(f_nom, plan.normal_in, tk))
+        target, slope = pol.grasp_hold(f_nom, press, plan.normal_in, plan.active, planned.baseline_n * (1.0 - planned.load),
+                                       boost=planned.boost, held_load=load_envelope(f_nom, plan.normal_in, tk))
     else:
         grip_slip, grip_floor = pol.whole_hand(f_nom, press[0], plan.normal_in, plan.active)
         target = np.zeros((len(tk), len(plan.active)))
-        target[:, 0] = baseline + grip_floor + grip_slip
+        target[:, 0] = planned.baseline_n + grip_floor + grip_slip
         slope = np.full(len(tk), pol.slip_slope)
     ramp = _mj((tk - ph.reach_end) / (ph.close_end - ph.reach_end))
     closing = tk < ph.close_end
@@ -724,12 +755,7 @@ def load_envelope(f_nom: np.ndarray, normals_in: np.ndarray, t: np.ndarray) -> n
     if len(t) < 2:
         return ENVELOPE_FRACTION * load
     half = max(1, int(round(ENVELOPE_S / (t[1] - t[0]))))
-    N = len(load)
-    peak = load.copy()
-    for shift in range(1, half + 1):  # a running maximum over +-half ticks
-        peak[:-shift] = np.maximum(peak[:-shift], load[shift:])
-        peak[shift:] = np.maximum(peak[shift:], load[:N - shift])
-    return ENVELOPE_FRACTION * peak
+    return ENVELOPE_FRACTION * running_max(load, half)
 
 
 def _lift_off(t: np.ndarray, ph) -> np.ndarray:

@@ -95,3 +95,191 @@ def _hold_passes(f, c, slope, held, use_held, press, normals, order, min_force, 
                 added = peak
         if added <= tol:
             break
+
+
+def first_order_response(target: np.ndarray, filtered: np.ndarray, start: int, keep: float) -> None:
+    """The grip's first-order response to its target from tick ``start`` on, in place:
+    ``filtered[i] = keep filtered[i - 1] + (1 - keep) target[i]``, from rest before tick 0.
+
+    Args:
+        target: The grip's target per tick, (N, K) [N].
+        filtered: The response, (N, K) [N], float64, C-contiguous: rows ``start:`` are written.
+        start: The first tick written.
+        keep: The fraction of the response kept from one tick to the next, exp(-dt / tau).
+    """
+    _first_order(np.ascontiguousarray(target, dtype=np.float64), filtered, int(start), float(keep))
+
+
+def running_max(x: np.ndarray, half: int) -> np.ndarray:
+    """The largest of ``x`` within ``half`` rows before or after each row, (N, K) -> (N, K)."""
+    return _running_max(np.ascontiguousarray(x, dtype=np.float64), int(half))
+
+
+@_jit
+def _first_order(target, filtered, start, keep):  # pragma: no cover - compiled
+    K = target.shape[1]
+    gain = 1 - keep
+    for k in range(K):
+        g = filtered[start - 1, k] if start > 0 else 0.0
+        for i in range(start, target.shape[0]):
+            g = keep * g + gain * target[i, k]
+            filtered[i, k] = g
+
+
+@_jit
+def _running_max(x, half):  # pragma: no cover - compiled
+    # the order of np.maximum over the shifts 1..half, each first from after, then from before
+    N, K = x.shape
+    peak = x.copy()
+    for shift in range(1, half + 1):
+        for i in range(N - shift):
+            for k in range(K):
+                peak[i, k] = _maximum(peak[i, k], x[i + shift, k])
+        for i in range(shift, N):
+            for k in range(K):
+                peak[i, k] = _maximum(peak[i, k], x[i - shift, k])
+    return peak
+
+
+def contact_loads(fingers: np.ndarray, signs: np.ndarray, forces: np.ndarray, frames: np.ndarray,
+                  box_rot: np.ndarray, normals_obj: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each digit's normal and tangential force on the box from its contacts' forces.
+
+    Args:
+        fingers: The digit of each contact, (C,) int.
+        signs: +1 where the contact's force acts on the box, -1 where on the digit, (C,).
+        forces: Each contact's force in its contact frame, (C, 3) [N].
+        frames: Each contact's frame, rows its axes in the world frame, (C, 3, 3).
+        box_rot: The box's rotation, object to world, (3, 3).
+        normals_obj: The digits' planned normals into the box, object frame, (K, 3).
+
+    Returns:
+        ``(n, t)``: each digit's summed force along its normal and the norm of the rest, (K,) each [N].
+    """
+    return _contact_loads(np.ascontiguousarray(fingers, dtype=np.int64), np.ascontiguousarray(signs, dtype=np.float64),
+                          np.ascontiguousarray(forces, dtype=np.float64), np.ascontiguousarray(frames, dtype=np.float64),
+                          np.ascontiguousarray(box_rot, dtype=np.float64), np.ascontiguousarray(normals_obj, dtype=np.float64))
+
+
+def commanded_forces(forces_obj: np.ndarray, box_rot: np.ndarray, normals_obj: np.ndarray | None = None,
+                     feedback: np.ndarray | None = None, press: np.ndarray | None = None) -> np.ndarray:
+    """The fingertip forces of a control tick in the world frame, (K, 3) [N]: the planned forces
+    (object frame), each digit raised by its feedback times its planned normal force along the
+    digits' unit presses where ``feedback`` is given, rotated by the box's rotation.
+
+    Args:
+        forces_obj: The tick's planned forces, object frame, (K, 3) [N].
+        box_rot: The box's rotation, object to world, (3, 3).
+        normals_obj: The digits' normals into the box, (K, 3); with ``feedback`` and ``press``.
+        feedback: Each digit's raise as a fraction of its planned normal force, (K,).
+        press: Unit presses per digit, (K, K, 3).
+    """
+    K = len(forces_obj)
+    raised = feedback is not None
+    return _commanded_forces(np.ascontiguousarray(forces_obj, dtype=np.float64), np.ascontiguousarray(box_rot, dtype=np.float64),
+                             np.ascontiguousarray(normals_obj if raised else np.zeros((K, 3)), dtype=np.float64),
+                             np.ascontiguousarray(feedback if raised else np.zeros(K), dtype=np.float64),
+                             np.ascontiguousarray(press if raised else np.zeros((K, K, 3)), dtype=np.float64), raised)
+
+
+def finger_torques(forces: np.ndarray, jacobians: np.ndarray, rows: np.ndarray, qfrc: np.ndarray) -> None:
+    """The joint torques tau = J^T f of the fingertip forces, written into ``qfrc``.
+
+    Args:
+        forces: The fingertip forces, world frame, (K, 3) [N].
+        jacobians: Each listed digit's fingertip translation Jacobian, (A, 3, nv).
+        rows: ``(digit, jacobian index, dof)`` per torque written, (R, 3) int.
+        qfrc: The applied generalised forces, (nv,) [N m]: the rows' dofs are written.
+    """
+    _finger_torques(forces, jacobians, rows, qfrc)
+
+
+@_jit
+def _contact_loads(fingers, signs, forces, frames, box_rot, normals):  # pragma: no cover - compiled
+    K = normals.shape[0]
+    force = np.zeros((K, 3))
+    for c in range(fingers.shape[0]):
+        k = fingers[c]
+        for m in range(3):  # vm(f, frame): ((0 + f0 F0m) + f1 F1m) + f2 F2m
+            v = ((0.0 + forces[c, 0] * frames[c, 0, m]) + forces[c, 1] * frames[c, 1, m]) + forces[c, 2] * frames[c, 2, m]
+            force[k, m] += signs[c] * v
+    n = np.empty(K)
+    t = np.empty(K)
+    for k in range(K):
+        f = np.empty(3)
+        for m in range(3):  # rows_mt(force, box_rot.T), the transpose a strided view: in order
+            f[m] = ((0.0 + force[k, 0] * box_rot[0, m]) + force[k, 1] * box_rot[1, m]) + force[k, 2] * box_rot[2, m]
+        u0, u1, u2 = normals[k, 0], normals[k, 1], normals[k, 2]
+        nk = (f[0] * u0 + f[2] * u2) + f[1] * u1  # einsum over a contiguous axis of three
+        d0, d1, d2 = f[0] - nk * u0, f[1] - nk * u1, f[2] - nk * u2
+        n[k] = nk
+        t[k] = math.sqrt((d0 * d0 + d2 * d2) + d1 * d1)
+    return n, t
+
+
+@_jit
+def _commanded_forces(forces_obj, box_rot, normals, feedback, press, raised):  # pragma: no cover - compiled
+    K = forces_obj.shape[0]
+    f_obj = forces_obj.copy()
+    if raised:
+        w = np.empty(K)
+        for j in range(K):
+            planned = (forces_obj[j, 0] * normals[j, 0] + forces_obj[j, 2] * normals[j, 2]) + forces_obj[j, 1] * normals[j, 1]
+            w[j] = feedback[j] * _maximum(planned, 0.0)
+        for k in range(K):
+            for d in range(3):  # einsum("j,jkd->kd"): in order of j
+                s = 0.0
+                for j in range(K):
+                    s = s + w[j] * press[j, k, d]
+                f_obj[k, d] = forces_obj[k, d] + s
+    out = np.empty((K, 3))
+    for k in range(K):
+        for m in range(3):  # rows_mt(f_obj, box_rot), both contiguous: the first and third, then the second
+            out[k, m] = (f_obj[k, 0] * box_rot[m, 0] + f_obj[k, 2] * box_rot[m, 2]) + f_obj[k, 1] * box_rot[m, 1]
+    return out
+
+
+@_jit
+def _finger_torques(forces, jacobians, rows, qfrc):  # pragma: no cover - compiled
+    for r in range(rows.shape[0]):
+        k, a, dof = rows[r, 0], rows[r, 1], rows[r, 2]
+        # vm(f[k], jac[:, dofs]): ((0 + f0 J0) + f1 J1) + f2 J2
+        qfrc[dof] = ((0.0 + forces[k, 0] * jacobians[a, 0, dof]) + forces[k, 1] * jacobians[a, 1, dof]) + forces[k, 2] * jacobians[a, 2, dof]
+
+
+def correct_feedback(n: np.ndarray, t: np.ndarray, slope: float, min_force_n: float, active: np.ndarray,
+                     deficits: np.ndarray, write: int, read: int, feedback: np.ndarray, gain: float, leak: float) -> None:
+    """One tick of the digits' tactile feedback on their grip-load ratios, in place.
+
+    Each digit's relative shortfall, ``(need - n) / max(need, min_force_n)`` with ``need = max(slope
+    t, min_force_n)`` (0 for a digit off the box or not touching it), is written into row ``write``
+    of the delay line ``deficits``; the shortfall sensed, row ``read``, raises the feedback by
+    ``gain`` times itself where positive, else the feedback decays by ``leak``.
+
+    Args:
+        n: Each digit's normal force now, (K,) [N].
+        t: Each digit's tangential force now, (K,) [N].
+        slope: The tick's normal force per newton of tangential load.
+        min_force_n: Every digit's least normal force, [N].
+        active: The digits of the grasp, (K,) bool.
+        deficits: The delay line, (D, K): row ``write`` is written.
+        write: The row written.
+        read: The row sensed (after the write).
+        feedback: Each digit's raise, (K,): updated.
+        gain: The raise per unit of shortfall and tick.
+        leak: The factor a met digit's raise decays by per tick.
+    """
+    _correct_feedback(n, t, float(slope), float(min_force_n), np.ascontiguousarray(active, dtype=np.bool_), deficits,
+                      int(write), int(read), feedback, float(gain), float(leak))
+
+
+@_jit
+def _correct_feedback(n, t, slope, min_force, active, deficits, write, read, feedback, gain, leak):  # pragma: no cover - compiled
+    K = n.shape[0]
+    for k in range(K):
+        need = _maximum(slope * t[k], min_force)
+        short = (need - n[k]) / _maximum(need, min_force)
+        deficits[write, k] = short if (active[k] and n[k] > 0) else 0.0
+    for k in range(K):
+        sensed = deficits[read, k]
+        feedback[k] = feedback[k] + gain * sensed if sensed > 0 else feedback[k] * leak
