@@ -484,14 +484,16 @@ def test_generate_from_the_training_split_draws_its_people_grasps_and_views(tmp_
     from benchmark.world.scenario import Scenario
 
     out = tmp_path / "train"
-    argv = ["generate", "--out", str(out), "--split", "train", "--users", "0-1", "--grasps", "3", "--views", "7",
+    # person 1003's own grasp is one the training sets store (a grasp no set stores is drawn and
+    # searched for where the data is made: test_grasp_families)
+    argv = ["generate", "--out", str(out), "--split", "train", "--users", "3", "--grasps", "3", "--views", "7-8",
             "--duration", "1.5", "--kinematics", "oracle", "--contacts", "oracle", "--workers", "1", "--no-progress"]
     assert main(argv) == 0
     names = sorted(p.name for p in (out / "episodes").glob("*.parquet"))
-    assert names == ["lift-u1000-g1003-m0-s0-v1007.parquet", "lift-u1001-g1003-m0-s0-v1007.parquet"]
-    assert split_of(Scenario(user=1001, grasp=1003, view=1007)) == "train"
+    assert names == ["lift-u1003-g1003-m0-s0-v1007.parquet", "lift-u1003-g1003-m0-s0-v1008.parquet"]
+    assert split_of(Scenario(user=1003, grasp=1003, view=1008)) == "train"
     header = json.loads((out / "dataset.json").read_text())
-    assert header["spec"]["users"] == [1000, 1001] and header["spec"]["views"] == [1007]
+    assert header["spec"]["users"] == [1003] and header["spec"]["grasps"] == [1003] and header["spec"]["views"] == [1007, 1008]
     # a dataset of the paper's view alone keeps the header it had before views existed
     assert "views" not in DatasetSpec().as_dict()
 
