@@ -48,6 +48,16 @@ class HandState:
         object.__setattr__(st, "joints", joints)
         return st
 
+    @classmethod
+    def _fitted(cls, palm_pos: np.ndarray, palm_rot: np.ndarray, joints: np.ndarray) -> "HandState":
+        """A state the compiled fit made (:mod:`fsv.track.hand.lm`), its rotation already projected
+        onto SO(3) there: as :meth:`_from_fit` made it, without projecting it a second time."""
+        st = object.__new__(cls)
+        object.__setattr__(st, "palm_pos", palm_pos)
+        object.__setattr__(st, "palm_rot", palm_rot)
+        object.__setattr__(st, "joints", joints)
+        return st
+
 
 @dataclass(frozen=True)
 class HandFit:

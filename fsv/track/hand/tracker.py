@@ -50,6 +50,7 @@ from fsv.rotation import exp_so3, log_so3
 from fsv.track.articulation import mirror_upper
 from fsv.track.camera import CameraRays
 from fsv.track.capsules import ray_capsules
+from fsv.track.hand import lm
 from fsv.track.hand.config import HandTrackerConfig
 from fsv.track.hand.kinematics import HandKinematics
 from fsv.track.hand.state import HandFit, HandState
@@ -90,6 +91,7 @@ class HandTracker:
         self.rng = rng if rng is not None else np.random.default_rng(0)
         lo, hi = hand_model.joint_range[:, 0], hand_model.joint_range[:, 1]
         self.lo, self.hi = lo, hi
+        self._lo, self._hi = np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64)
         self.history = [HandState(init.palm_pos, init.palm_rot, np.clip(init.joints, lo, hi))]
         K = len(hand_model.finger_names)
         self.hidden = np.zeros(K, dtype=bool)  # unseen in the last frame
@@ -225,6 +227,10 @@ class HandTracker:
         """Levenberg-Marquardt from ``state``: a step is taken only if it lowers the robust cost."""
         c = self.config
         rays = self.rays.ray[idx]
+        if lm.AVAILABLE:
+            fitted = self._solve_compiled(rays, z_obs, free, state, prior, box_pos, box_rot, sigma)
+            if fitted is not None:
+                return fitted
         n = self.model.num_joints
         args = (rays, z_obs, free, prior, box_pos, box_rot, sigma)
         A, g, cost, explained = self._system(state, *args)
@@ -244,6 +250,33 @@ class HandTracker:
             else:
                 lam *= 8
         return state, explained, cost
+
+    def _solve_compiled(self, rays, z_obs, free, state: HandState, prior: HandState, box_pos, box_rot, sigma: float):
+        """:meth:`_solve` in one compiled call (:func:`fsv.track.hand.lm.solve`, the same bits), or
+        None where a rotation update left SO(3) (the NumPy loop takes its singular-value branch)."""
+        c = self.config
+        f64 = np.float64
+        kin = self.kin
+        kin_arrays = (kin.hinge_K, kin.hinge_KK, kin.parent, kin.offset_pos, kin.offset_rot_c, kin.joint_start,
+                      kin.joint_ids, kin.joint_axis, kin.moves)
+        data = (self._geom_segment, self._geom_fromto, self._geom_radius, self.rays.origin,
+                np.ascontiguousarray(rays, dtype=f64), np.ascontiguousarray(z_obs, dtype=f64),
+                np.ascontiguousarray(free[0], dtype=f64), np.ascontiguousarray(free[1], dtype=f64), float(sigma),
+                float(c.cauchy_k), float(c.assign_max_m), self.pen_local, self.pen_segment, self.pen_radius,
+                float(c.penetration_m), self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius,
+                self.flexion, float(c.closure_m), float(c.closure_range_m))
+        status, moved, pos, rot, joints, explained, cost = lm.solve(
+            *(np.ascontiguousarray(v, dtype=f64) for v in (state.palm_pos, state.palm_rot, state.joints,
+                                                           prior.palm_pos, prior.palm_rot, prior.joints)),
+            (sigma / c.smooth_pos_m) ** 2, (sigma / c.smooth_rot_rad) ** 2, (sigma / c.smooth_joint_rad) ** 2,
+            kin_arrays, data, self.rigid, self.anchor, self.anchor_axis, (sigma / c.rigidity_m) ** 2,
+            np.ascontiguousarray(box_pos, dtype=f64), np.ascontiguousarray(box_rot, dtype=f64), self._lo, self._hi,
+            int(c.iterations))
+        if status == lm.SINGULAR:
+            raise np.linalg.LinAlgError("singular matrix")
+        if status == lm.FALLBACK:
+            return None
+        return (HandState._fitted(pos, rot, joints) if moved else state), explained, cost
 
     def predicted_depth(self, index: np.ndarray, inflate_m: float = 0.004) -> np.ndarray:
         """Depth of the predicted hand (capsules inflated by ``inflate_m``) at flat pixel indices,
