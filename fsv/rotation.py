@@ -135,8 +135,8 @@ def angle_between(Ra: np.ndarray, Rb: np.ndarray) -> np.ndarray:
     return np.arccos(np.clip((tr - 1) / 2, -1.0, 1.0))
 
 
-_POLAR_MAX_ITERATIONS = 30  # Newton's polar iteration converges quadratically: 3-5 suffice near SO(3)
-_POLAR_TOLERANCE = 1e-15  # stop once an iteration moves no entry by more than this
+POLAR_MAX_ITERATIONS = 30  # Newton's polar iteration converges quadratically: 3-5 suffice near SO(3)
+POLAR_TOLERANCE = 1e-15  # stop once an iteration moves no entry by more than this
 
 
 def project_to_so3(M: np.ndarray) -> np.ndarray:
@@ -152,9 +152,9 @@ def project_to_so3(M: np.ndarray) -> np.ndarray:
         U, _, Vt = np.linalg.svd(M)
         D = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt))])
         return U @ D @ Vt
-    for _ in range(_POLAR_MAX_ITERATIONS):
+    for _ in range(POLAR_MAX_ITERATIONS):
         nxt = 0.5 * (X + _cofactor3(X) / _det3(X))
-        done = np.max(np.abs(nxt - X)) <= _POLAR_TOLERANCE
+        done = np.max(np.abs(nxt - X)) <= POLAR_TOLERANCE
         X = nxt
         if done:
             break

@@ -448,7 +448,6 @@ class Human:
                                  for f in world.hand.finger_names]
         tk = t[::ctrl_every]
         self.control = scenario.grip_control
-        self._pol = pol
         self._planned = planned_load(tk, world, motion, pol, living, phases, releases)
         target, f_nom, press, self._slope = _grip_target(self._planned, plan, pol, phases, releases, self.control)
         self.grip_target = target
@@ -528,7 +527,7 @@ class Human:
         points, touching = _digit_points(self.world, data, box_rot)
         self._sensed = np.where((touching & self.active)[:, None], points, self._sensed)  # a digit off for a tick keeps its last
         spot = self._sensed
-        target, f_nom, press, slope = _grip_target(self._planned, self.plan, self._pol, self.phases, self.releases,
+        target, f_nom, press, slope = _grip_target(self._planned, self.plan, self.policy, self.phases, self.releases,
                                                    self.control, spot=spot)
         self.grip_target[tick:] = target[tick:]
         self._slope[tick:] = slope[tick:]
@@ -624,11 +623,9 @@ def _digit_points(world: World, data: mujoco.MjData, box_rot: np.ndarray) -> tup
     and whether it touches, (K,) bool."""
     K = len(world.hand.finger_names)
     weighted, total = np.zeros((K, 3)), np.zeros(K)
-    pos = None
     for i, k, f6, _ in _digit_box_contacts(world, data):
         if f6[0] > 0:
-            pos = data.contact.pos if pos is None else pos
-            weighted[k] += f6[0] * pos[i]
+            weighted[k] += f6[0] * data.contact.pos[i]
             total[k] += f6[0]
     touching = total > 0
     if box_rot is None:

@@ -29,6 +29,7 @@ import numpy as np
 from numba import types
 
 from fsv.linalg import _lu_solve
+from fsv.rotation import POLAR_MAX_ITERATIONS, POLAR_TOLERANCE
 from fsv.track.articulation import mirror_upper, pose_chain
 from fsv.track.hand_system import hand_normal_equations, rigidity_rows
 
@@ -50,10 +51,6 @@ _pow = types.ExternalFunction("powf64", types.float64(types.float64, types.float
 OK, SINGULAR, FALLBACK = 0, 1, 2
 """:func:`solve`'s status: done; a damped system was singular (NumPy's loop raises there); a rotation
 left SO(3) (run the NumPy loop)."""
-
-POLAR_MAX_ITERATIONS = 30  # fsv.rotation.project_to_so3's
-POLAR_TOLERANCE = 1e-15
-
 
 @_jit
 def edot(a, b):  # pragma: no cover - compiled

@@ -42,16 +42,12 @@ class HandState:
     def _from_fit(cls, palm_pos: np.ndarray, palm_rot: np.ndarray, joints: np.ndarray) -> "HandState":
         """A state the tracker computed (finite arrays of the right shapes; ``palm_rot`` is
         re-orthonormalised), without the checks of user input."""
-        st = object.__new__(cls)
-        object.__setattr__(st, "palm_pos", palm_pos)
-        object.__setattr__(st, "palm_rot", project_to_so3(palm_rot))
-        object.__setattr__(st, "joints", joints)
-        return st
+        return cls._fitted(palm_pos, project_to_so3(palm_rot), joints)
 
     @classmethod
     def _fitted(cls, palm_pos: np.ndarray, palm_rot: np.ndarray, joints: np.ndarray) -> "HandState":
-        """A state the compiled fit made (:mod:`fsv.track.hand.lm`), its rotation already projected
-        onto SO(3) there: as :meth:`_from_fit` made it, without projecting it a second time."""
+        """:meth:`_from_fit` of a rotation already projected onto SO(3) (by the compiled fit,
+        :mod:`fsv.track.hand.lm`): not projected a second time."""
         st = object.__new__(cls)
         object.__setattr__(st, "palm_pos", palm_pos)
         object.__setattr__(st, "palm_rot", palm_rot)

@@ -89,9 +89,8 @@ class HandTracker:
         self.rays = CameraRays.from_calibration(calib, table_z=table_z)
         self.config = config or HandTrackerConfig()
         self.rng = rng if rng is not None else np.random.default_rng(0)
-        lo, hi = hand_model.joint_range[:, 0], hand_model.joint_range[:, 1]
+        lo, hi = (np.ascontiguousarray(hand_model.joint_range[:, i], dtype=np.float64) for i in (0, 1))
         self.lo, self.hi = lo, hi
-        self._lo, self._hi = np.ascontiguousarray(lo, dtype=np.float64), np.ascontiguousarray(hi, dtype=np.float64)
         self.history = [HandState(init.palm_pos, init.palm_rot, np.clip(init.joints, lo, hi))]
         K = len(hand_model.finger_names)
         self.hidden = np.zeros(K, dtype=bool)  # unseen in the last frame
@@ -123,6 +122,9 @@ class HandTracker:
         self._tip_segment = np.ascontiguousarray(hand_model.fingertip_segment, dtype=np.int64)
         self._tip_offset = np.ascontiguousarray(hand_model.fingertip_offset, dtype=np.float64)
         self._tip_radius = np.ascontiguousarray(hand_model.fingertip_radius, dtype=np.float64)
+        kin = self.kin  # ... and the kinematics as the compiled fit takes them (fsv.track.hand.lm.system)
+        self._kin_arrays = (kin.hinge_K, kin.hinge_KK, kin.parent, kin.offset_pos, kin.offset_rot_c, kin.joint_start,
+                            kin.joint_ids, kin.joint_axis, kin.moves)
 
     def predict(self) -> HandState:
         """Constant-velocity prediction of the palm; joints keep their last values."""
@@ -256,9 +258,6 @@ class HandTracker:
         None where a rotation update left SO(3) (the NumPy loop takes its singular-value branch)."""
         c = self.config
         f64 = np.float64
-        kin = self.kin
-        kin_arrays = (kin.hinge_K, kin.hinge_KK, kin.parent, kin.offset_pos, kin.offset_rot_c, kin.joint_start,
-                      kin.joint_ids, kin.joint_axis, kin.moves)
         data = (self._geom_segment, self._geom_fromto, self._geom_radius, self.rays.origin,
                 np.ascontiguousarray(rays, dtype=f64), np.ascontiguousarray(z_obs, dtype=f64),
                 np.ascontiguousarray(free[0], dtype=f64), np.ascontiguousarray(free[1], dtype=f64), float(sigma),
@@ -269,8 +268,8 @@ class HandTracker:
             *(np.ascontiguousarray(v, dtype=f64) for v in (state.palm_pos, state.palm_rot, state.joints,
                                                            prior.palm_pos, prior.palm_rot, prior.joints)),
             (sigma / c.smooth_pos_m) ** 2, (sigma / c.smooth_rot_rad) ** 2, (sigma / c.smooth_joint_rad) ** 2,
-            kin_arrays, data, self.rigid, self.anchor, self.anchor_axis, (sigma / c.rigidity_m) ** 2,
-            np.ascontiguousarray(box_pos, dtype=f64), np.ascontiguousarray(box_rot, dtype=f64), self._lo, self._hi,
+            self._kin_arrays, data, self.rigid, self.anchor, self.anchor_axis, (sigma / c.rigidity_m) ** 2,
+            np.ascontiguousarray(box_pos, dtype=f64), np.ascontiguousarray(box_rot, dtype=f64), self.lo, self.hi,
             int(c.iterations))
         if status == lm.SINGULAR:
             raise np.linalg.LinAlgError("singular matrix")
