@@ -59,8 +59,27 @@ def _from_interrupt(error: BaseException | None) -> bool:
     return False
 
 
+def _terminable() -> None:  # pragma: no cover - runs in the forked child
+    """SIGTERM's default action, then SIGTERM unblocked (:func:`_start_forked` blocked it for the
+    fork): a cancel() sent before this line is delivered here and ends the child, not the parent's
+    handler (Ray's, which returns) that the child inherited."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
+
+
+def _start_forked(process) -> None:
+    """``process.start()`` (a fork) with SIGTERM blocked in the forking thread for the fork's
+    duration, so that the child starts with it blocked until :func:`_terminable`; the caller's
+    own SIGTERM, if one comes meanwhile, is delivered when the fork returns."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    try:
+        process.start()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
 def _child(fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # cancel() ends it, whatever handler the parent had (Ray's)
+    _terminable()  # cancel() ends it, whatever handler the parent had (Ray's)
     try:
         fn(*args, **kwargs)
     except BaseException as e:
@@ -90,7 +109,7 @@ def _end_with_parent(parent: int) -> None:  # pragma: no cover - runs in the for
 
 def _child_returning(conn, parent, fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
     """A forked job: sends ``("value", fn(...))`` or ``("error", one line)`` through ``conn``, then exits."""
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _terminable()
     _end_with_parent(parent)
     try:
         message = ("value", fn(*args, **kwargs))
@@ -210,7 +229,7 @@ class _ForkJob(Job):
         target = _child_streaming if streamed else _child_returning
         self.process = ctx.Process(target=target, args=(child_end, os.getpid(), fn, args, kwargs), name=name,
                                    daemon=True)
-        self.process.start()
+        _start_forked(self.process)
         child_end.close()  # only the child holds the writing end: its exit, however it comes, ends our read
         # Threads may wait for the result or for a count of items while wait() or cancel() does: one
         # reads the pipe at a time (without the lock), the others wait for what it read.
@@ -313,7 +332,7 @@ class Background:
         if self._preload is not None:
             self._preload.join()
         p = multiprocessing.get_context("fork").Process(target=_child, args=(fn, args, kwargs), name=name, daemon=True)
-        p.start()
+        _start_forked(p)
         self._jobs.append((name, p))
 
     def fork(self, name: str, fn, *args, **kwargs) -> Job:

@@ -1,6 +1,7 @@
 """benchmark.background: jobs beside the caller, their failures reported at the end."""
 
 import os
+import signal
 import sys
 import time
 
@@ -66,6 +67,23 @@ def test_cancel_stops_a_running_child():
     bg.cancel()
     assert time.perf_counter() - t0 < 10
     bg.wait()  # cancelled jobs are forgotten
+
+
+@pytest.mark.parametrize("start", ["process", "fork"])
+def test_cancel_at_once_stops_a_child_whose_parent_has_a_sigterm_handler_that_returns(start):
+    """A library in the parent (Ray's driver) may handle SIGTERM and return; a child forked just
+    before cancel() must not run that handler instead of ending (it did: cancel() then waited the
+    child's whole 60 s, seen when a Ray test had run earlier in the same pytest worker)."""
+    old = signal.signal(signal.SIGTERM, lambda signum, frame: None)
+    try:
+        for _ in range(3):  # the race is at the child's first instructions: cancel() comes at once
+            bg = Background()
+            getattr(bg, start)("sleeper", time.sleep, 60)
+            t0 = time.perf_counter()
+            bg.cancel()
+            assert time.perf_counter() - t0 < 10
+    finally:
+        signal.signal(signal.SIGTERM, old)
 
 
 def test_a_preloaded_module_is_imported_before_the_fork(tmp_path):
