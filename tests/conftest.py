@@ -10,6 +10,7 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+from kernel_python import KernelPythons  # noqa: E402
 
 # Ray, when a test starts a local cluster, stays on the loopback interface (it otherwise swaps
 # 127.0.0.1 for the machine's outward address); Ray reads this when it is imported.
@@ -198,6 +199,32 @@ def tracked_lifts():
         learned = score_episode(ep, est.forces, est.kinematics, est.contacts)
         out.append((ep, est, tracking, forces, learned))
     return out
+
+
+# --- one interpreter per OpenBLAS kernel, shared by the tests that compare kernels ----------
+
+SHARED_ON_ONE_WORKER = {"kernel_python": "openblas-kernels", "ray_cluster": "ray"}
+"""Session fixtures that start costly processes, and the xdist group of the tests that use them."""
+
+
+@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups into the test ids
+def pytest_collection_modifyitems(config, items):
+    """The unit xdist hands a worker (``--dist loadgroup``, pyproject's addopts): a test file, as
+    ``--dist loadfile`` does, so that a module's fixtures are made once; but the tests of a fixture
+    of :data:`SHARED_ON_ONE_WORKER`, whatever their file, are one unit, so that its processes start once."""
+    for item in items:
+        shared = [g for f, g in SHARED_ON_ONE_WORKER.items() if f in getattr(item, "fixturenames", ())]
+        item.add_marker(pytest.mark.xdist_group(shared[0] if shared else item.path.stem))
+
+
+@pytest.fixture(scope="session")
+def kernel_python():
+    """``kernel_python(code, *argv, env={"OPENBLAS_CORETYPE": kernel})``: what the script printed,
+    run as ``python -c`` would in this session's interpreter for that environment
+    (tests/kernel_python.py); it raises with the script's traceback."""
+    pythons = KernelPythons()
+    yield pythons.run
+    pythons.close()
 
 
 @pytest.fixture(scope="session")

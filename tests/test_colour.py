@@ -3,8 +3,6 @@ registration onto the depth, and pinned bits."""
 
 import dataclasses
 import os
-import subprocess
-import sys
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -291,7 +289,5 @@ with the ds325 colour preset: blur, noise and white balance included."""
 
 
 @pytest.mark.parametrize("kernel", ["Haswell", "Sandybridge", "SkylakeX"])
-def test_the_colour_video_is_the_pinned_bits_under_every_openblas_kernel(kernel):
-    env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
-    out = subprocess.run([sys.executable, "-c", _DIGEST], env=env, capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == PINNED_COLOUR_SHA256
+def test_the_colour_video_is_the_pinned_bits_under_every_openblas_kernel(kernel, kernel_python):
+    assert kernel_python(_DIGEST, env={"OPENBLAS_CORETYPE": kernel}).strip() == PINNED_COLOUR_SHA256

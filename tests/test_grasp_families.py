@@ -145,27 +145,19 @@ print(json.dumps({"solved": solved.hexdigest(), "blas": hashlib.sha256((a.T @ a)
 """
 
 
-def test_unstored_plans_are_solved_to_the_same_bits_under_every_openblas_kernel():
+def test_unstored_plans_are_solved_to_the_same_bits_under_every_openblas_kernel(kernel_python):
     """The planner's solver calls no BLAS: three unstored plans (and a small bounded problem) solve
     to one digest under OPENBLAS_CORETYPE=Sandybridge, Haswell and SkylakeX, whose own products
     differ (the control: ``a.T @ a``)."""
     import json
-    import os
-    import pathlib
-    import subprocess
-    import sys
 
     kernels = runnable_kernels()
     if len(kernels) < 2:
         pytest.skip(f"this CPU runs fewer than two of the kernels {sorted(KERNEL_FLAGS)}")
-    root = pathlib.Path(__file__).resolve().parent.parent
     out = {}
     for k in kernels:
-        env = dict(os.environ, OPENBLAS_CORETYPE=k, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]))
-        done = subprocess.run([sys.executable, "-c", _KERNEL_SCRIPT], env=env, cwd=root, capture_output=True,
-                              text=True, timeout=120)
-        assert done.returncode == 0, done.stderr[-2000:]
-        out[k] = json.loads(done.stdout.strip().splitlines()[-1])
+        printed = kernel_python(_KERNEL_SCRIPT, env={"OPENBLAS_CORETYPE": k}, timeout_s=120)
+        out[k] = json.loads(printed.strip().splitlines()[-1])
         assert out[k]["arch"] in (None, [k]), f"OPENBLAS_CORETYPE={k} ran {out[k]['arch']}"  # NumPy's and SciPy's
     assert len({o["blas"] for o in out.values()}) > 1, "the kernels' products agree: this test cannot see BLAS"
     assert len({o["solved"] for o in out.values()}) == 1, {k: o["solved"][:16] for k, o in out.items()}

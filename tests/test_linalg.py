@@ -1,9 +1,5 @@
 """fsv.linalg: fixed-order products and solves equal NumPy's to rounding, and are kernel-independent."""
 
-import os
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 from openblas_kernels import runnable_kernels
@@ -83,11 +79,9 @@ print(hashlib.sha256(b"".join(np.ascontiguousarray(o).tobytes() for o in out)).h
 """
 
 
-def test_same_bits_under_every_openblas_kernel():
+def test_same_bits_under_every_openblas_kernel(kernel_python):
     """The point of the module: OPENBLAS_CORETYPE changes NumPy's BLAS products, not these."""
     digests = set()
     for kernel in ("Haswell", "Sandybridge", "Nehalem", "Prescott", *(["SkylakeX"] if "SkylakeX" in runnable_kernels() else [])):
-        env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
-        out = subprocess.run([sys.executable, "-c", _PROBE], env=env, capture_output=True, text=True, check=True)
-        digests.add(out.stdout.strip())
+        digests.add(kernel_python(_PROBE, env={"OPENBLAS_CORETYPE": kernel}).strip())
     assert len(digests) == 1

@@ -142,21 +142,16 @@ np.savez(sys.argv[1], qpos=est.tracking.hand_qpos, box=est.tracking.box.pos, rot
 """
 
 
-def test_the_method_gives_the_same_answer_under_every_openblas_kernel(tmp_path):
+def test_the_method_gives_the_same_answer_under_every_openblas_kernel(tmp_path, kernel_python):
     """Tracking, contacts and kinematics are bit-identical under the Haswell, Sandybridge, Nehalem,
     Prescott and (where the CPU runs it) SkylakeX kernels; the cone solver (Clarabel calls BLAS through SciPy) may move the forces in the
     last digits (measured: 1e-10 N under Prescott, identical under the others)."""
-    import os
-    import subprocess
-    import sys
-
     runs = {}
     from openblas_kernels import runnable_kernels
 
     for kernel in ("Haswell", "Sandybridge", "Nehalem", "Prescott", *(["SkylakeX"] if "SkylakeX" in runnable_kernels() else [])):
         path = tmp_path / f"{kernel}.npz"
-        subprocess.run([sys.executable, "-c", _METHOD_RUN, str(path)], check=True, capture_output=True,
-                       env=dict(os.environ, OPENBLAS_CORETYPE=kernel))
+        kernel_python(_METHOD_RUN, str(path), env={"OPENBLAS_CORETYPE": kernel})
         runs[kernel] = dict(np.load(path))
     ref = runs.pop("Haswell")
     assert ref["active"].sum() > 50
@@ -178,31 +173,24 @@ print(json.dumps({"code": code, "probe": probe}))
 """
 
 
-def test_an_unstored_person_grasp_and_view_under_lab_knowledge_give_one_digest_per_stage_under_every_kernel(tmp_path):
+def test_an_unstored_person_grasp_and_view_under_lab_knowledge_give_one_digest_per_stage_under_every_kernel(
+        tmp_path, kernel_python):
     """A person, grasp and view in no stored set (user 515, grasp 4322, view 515: a drawn camera whose
     pose once went through BLAS's norm), told as a lab knows them: the truth, depth, tracking,
     kinematics and forces have one digest under every OpenBLAS kernel this CPU runs (Sandybridge,
     Haswell, SkylakeX), whose own BLAS norms differ (the control)."""
     import json
-    import os
-    import pathlib
-    import subprocess
-    import sys
 
     from openblas_kernels import KERNEL_FLAGS, runnable_kernels
 
     kernels = runnable_kernels()
     if len(kernels) < 2:
         pytest.skip(f"this CPU runs fewer than two of the kernels {sorted(KERNEL_FLAGS)}")
-    root = pathlib.Path(__file__).resolve().parent.parent
     digests, probes = {}, {}
     for k in kernels:
         out = tmp_path / k
-        env = dict(os.environ, OPENBLAS_CORETYPE=k, PYTHONPATH=os.pathsep.join([str(root), os.environ.get("PYTHONPATH", "")]))
-        done = subprocess.run([sys.executable, "-c", _UNSTORED_RUN, str(out)], env=env, cwd=root, capture_output=True,
-                              text=True, timeout=300)
-        assert done.returncode == 0, done.stderr[-2000:]
-        probes[k] = json.loads(done.stdout.strip().splitlines()[-1])["probe"]
+        printed = kernel_python(_UNSTORED_RUN, str(out), env={"OPENBLAS_CORETYPE": k})
+        probes[k] = json.loads(printed.strip().splitlines()[-1])["probe"]
         digests[k] = json.loads((out / "summary.json").read_text())["digests"]
     assert set(digests[kernels[0]]) >= {"truth", "depth", "tracking", "kinematics", "nominal_forces", "final_forces"}
     if "SkylakeX" in kernels:  # the control: SkylakeX's ddot sums in another order than the others'

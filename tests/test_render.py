@@ -404,18 +404,12 @@ print(h.hexdigest(), hashlib.sha256(ep.depth.depth_m.tobytes()).hexdigest(),
 """
 
 
-def test_truth_and_depth_are_bit_identical_under_every_openblas_kernel():
+def test_truth_and_depth_are_bit_identical_under_every_openblas_kernel(kernel_python):
     """The simulation loop and the renderer's inputs keep BLAS out (fixed-order fsv.linalg, stored
     grasp plans), so the kernel OpenBLAS picks for the CPU cannot change the world."""
-    import os
-    import subprocess
-    import sys
-
     digests = set()
     for kernel in ("Haswell", "Sandybridge", "Nehalem", "Prescott"):
-        env = dict(os.environ, OPENBLAS_CORETYPE=kernel)
-        out = subprocess.run([sys.executable, "-c", _WORLD_DIGEST], env=env, capture_output=True, text=True, check=True)
-        digests.add(out.stdout.strip())
+        digests.add(kernel_python(_WORLD_DIGEST, env={"OPENBLAS_CORETYPE": kernel}).strip())
     assert len(digests) == 1, digests
 
 
