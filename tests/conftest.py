@@ -201,7 +201,7 @@ def tracked_lifts():
     return out
 
 
-# --- one interpreter per OpenBLAS kernel, shared by the tests that compare kernels ----------
+# --- what an xdist worker is handed; one interpreter per OpenBLAS kernel --------------------
 
 SHARED_ON_ONE_WORKER = {"kernel_python": "openblas-kernels", "ray_cluster": "ray"}
 """Session fixtures that start costly processes, and the xdist group of the tests that use them."""
