@@ -213,8 +213,13 @@ def pytest_collection_modifyitems(config, items):
     ``--dist loadfile`` does, so that a module's fixtures are made once; but the tests of a fixture
     of :data:`SHARED_ON_ONE_WORKER`, whatever their file, are one unit, so that its processes start once."""
     for item in items:
-        shared = [g for f, g in SHARED_ON_ONE_WORKER.items() if f in getattr(item, "fixturenames", ())]
-        item.add_marker(pytest.mark.xdist_group(shared[0] if shared else item.path.stem))
+        item.add_marker(pytest.mark.xdist_group(worker_unit(item)))
+
+
+def worker_unit(item) -> str:
+    """The group of the first fixture of :data:`SHARED_ON_ONE_WORKER` the test uses, else its file's name."""
+    shared = [g for f, g in SHARED_ON_ONE_WORKER.items() if f in getattr(item, "fixturenames", ())]
+    return shared[0] if shared else item.path.stem
 
 
 @pytest.fixture(scope="session")

@@ -1,6 +1,7 @@
 """tests/kernel_python.py: scripts run as ``python -c`` would, in one kept interpreter per environment."""
 
 import pytest
+from conftest import worker_unit
 from kernel_python import KernelPythons, ScriptFailed
 
 _SHOW = """
@@ -48,11 +49,10 @@ def test_a_worker_is_handed_a_file_or_the_tests_of_a_shared_fixture(request):
     every test that uses a fixture of ``SHARED_ON_ONE_WORKER``, and marks each test's id with its
     unit. pytest 9.2 builds ids another way and xdist 3.8's mark is silently lost (every test its
     own unit: module fixtures made on both workers); requirements.lock keeps pytest 9.1."""
-    from conftest import SHARED_ON_ONE_WORKER
-
     if not getattr(request.config.option, "loadgroup", False):
         pytest.skip("not run by an xdist worker with --dist loadgroup")
     for item in request.session.items:
-        shared = [g for f, g in SHARED_ON_ONE_WORKER.items() if f in item.fixturenames]
-        assert item.nodeid.endswith("@" + (shared[0] if shared else item.path.stem)), item.nodeid
+        assert item.nodeid.endswith("@" + worker_unit(item)), item.nodeid
     assert request.node.nodeid.endswith("@test_kernel_python")
+    kernel_tests = [i.nodeid for i in request.session.items if "kernel_python" in i.fixturenames]
+    assert all(i.endswith("@openblas-kernels") for i in kernel_tests), kernel_tests
