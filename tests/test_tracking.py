@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from benchmark.commands.pictures.overlay import plot_overlay
+from benchmark.commands.pictures.overlay import overlay_figure, plot_overlay
 from benchmark.method.init import INIT_PERTURBATION, tracker_init
 from benchmark.scores.forces import score_forces
 from benchmark.scores.tracking import GATES, gate_report, score_tracking
@@ -174,6 +174,24 @@ def test_overlay_is_a_png_strip(tracked_lift, tmp_path):
     # the true box and hand in gold, plain on the grey where they show beside the tracked ones (measured
     # 3.1e-4 of the pixels with the truth, 0 without)
     assert without == 0.0 and share((255, 215, 0), tol=30) > 1e-4
+
+
+@pytest.mark.parametrize("frames", [6, 4, 1])
+def test_the_overlays_fixed_layout_keeps_its_times_and_legend_inside_and_apart(tracked_lift, frames):
+    """Every panel with its time, and the legend, inside the figure; no two panels, and no panel and
+    the legend, on each other (the layout is fixed in inches, never measured)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from test_layout import _check
+
+    ep, est = tracked_lift
+    fig = overlay_figure(ep.depth, ep.calib, est.tracking, ep.object_model, ep.hand_model, frames=frames,
+                         truth=ep.truth)
+    assert len(fig.axes) == frames and all(len(ax.texts) == 1 for ax in fig.axes)
+    _check(fig)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    legend = fig.legends[0].get_window_extent(renderer)
+    assert legend.y0 >= 0 and legend.x0 >= 0 and legend.x1 <= fig.bbox.width
+    assert all(ax.get_tightbbox(renderer).y0 >= legend.y1 for ax in fig.axes)
 
 
 @pytest.mark.accuracy

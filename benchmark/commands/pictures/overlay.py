@@ -27,10 +27,23 @@ _BOX_EDGES = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0
 
 def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, object_model: ObjectModel,
                  hand_model: HandModel, path: str | os.PathLike, frames: int = 6, truth: Truth | None = None) -> Path:
-    """A PNG strip: depth frames (grey: near dark, far light) with the tracked box (green), hand
+    """Writes :func:`overlay_figure` as a PNG (atomically) at ``path`` and returns the path."""
+    fig = overlay_figure(depth, calib, tracking, object_model, hand_model, frames=frames, truth=truth)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return write_bytes(path, buf.getvalue())
+
+
+def overlay_figure(depth: DepthVideo, calib: Calibration, tracking: Tracking, object_model: ObjectModel,
+                   hand_model: HandModel, frames: int = 6, truth: Truth | None = None):
+    """A strip of depth frames (grey: near dark, far light) with the tracked box (green), hand
     capsules (orange), fingertips (red: seen, white: hidden) and active contact points (cyan crosses)
     drawn over them; with ``truth``, the true box (gold dashed), hand (faint gold) and contact
     points (magenta plus signs) beneath. A legend under the strip names every mark.
+
+    The layout is fixed in inches (:data:`PANEL_WIDTH_IN`, :data:`TITLE_IN`, :data:`LEGEND_ENTRY_IN`):
+    each frame's panel is as wide as the strip's crop asks, its time above it, three panels to a
+    row, the legend in as many rows as the strip's width needs; nothing is measured by drawing the figure twice.
 
     Args:
         depth: The depth video.
@@ -38,29 +51,30 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         tracking: The tracker's output.
         object_model: The box (its size).
         hand_model: The hand (its capsules).
-        path: Where to write the PNG (atomically).
         frames: How many evenly spaced frames to show.
         truth: The episode's truth, drawn faintly for comparison (None: the estimate only).
 
     Returns:
-        The path written.
+        A ``matplotlib.figure.Figure`` (no pyplot figure: nothing to close).
     """
-    import matplotlib  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
+    from matplotlib.figure import Figure  # lazy: matplotlib (0.4 s) off `fsv-bench`'s start-up
 
     T = depth.num_frames
     idx = np.unique(np.linspace(0, T - 1, max(1, min(frames, T))).round().astype(int))
     lo, hi = _crop(calib, tracking, object_model, hand_model, idx)
     cols = min(len(idx), PANELS_PER_ROW)
     rows = -(-len(idx) // cols)
-    aspect = (hi[1] - lo[1] + 1) / max(1.0, hi[0] - lo[0] + 1)
-    fig, axes = plt.subplots(rows, cols, figsize=(PANEL_WIDTH_IN * cols, rows * (PANEL_WIDTH_IN * aspect + 0.35) + 0.4),
-                             squeeze=False)
-    for ax in axes.flat[len(idx):]:
-        ax.axis("off")
-    for ax, i in zip(axes.flat, idx):
+    panel_h = PANEL_WIDTH_IN * (hi[1] - lo[1] + 1) / max(1.0, hi[0] - lo[0] + 1)
+    handles = _legend(truth is not None)
+    W = PANEL_WIDTH_IN * cols
+    ncol = max(1, min(len(handles), int((W - 2 * PANEL_PAD_IN) // LEGEND_ENTRY_IN)))
+    H = rows * (panel_h + TITLE_IN) + LEGEND_PAD_IN + LEGEND_ROW_IN * -(-len(handles) // ncol)
+    fig = Figure(figsize=(W, H))
+    for k, i in enumerate(idx):
+        r, c = divmod(k, cols)
+        bottom = H - (r + 1) * (panel_h + TITLE_IN)
+        ax = fig.add_axes(((c * PANEL_WIDTH_IN + PANEL_PAD_IN) / W, bottom / H,
+                           (PANEL_WIDTH_IN - 2 * PANEL_PAD_IN) / W, panel_h / H))
         d = np.where(depth.depth_m[i] > 0, depth.depth_m[i], np.nan)
         crop = d[int(lo[1]) : int(hi[1]) + 1, int(lo[0]) : int(hi[0]) + 1]
         vmin, vmax = (np.nanpercentile(crop, 1), np.nanpercentile(crop, 99)) if np.isfinite(crop).any() else (0, 1)
@@ -68,18 +82,14 @@ def plot_overlay(depth: DepthVideo, calib: Calibration, tracking: Tracking, obje
         if truth is not None:
             _draw_truth(ax, calib, truth, object_model, hand_model, i)
         _draw_estimate(ax, calib, tracking, object_model, hand_model, i)
-        ax.set_title(f"t = {depth.t[i]:.2f} s", fontsize=9)
         ax.set_xlim(lo[0], hi[0])
         ax.set_ylim(hi[1], lo[1])
         ax.axis("off")
-    fig.legend(handles=_legend(truth is not None), loc="lower center", ncol=8 if truth is not None else 5, fontsize=7,
-               frameon=False)
-    fig.tight_layout(rect=(0, 0.4 / fig.get_figheight(), 1, 1))
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    plt.close(fig)
-    path = write_bytes(path, buf.getvalue())
-    return path
+        # the frame's time above its panel, as text: a title would measure the hidden axes' ticks
+        ax.text(0.5, 1 + TITLE_GAP_IN / panel_h, f"t = {depth.t[i]:.2f} s", transform=ax.transAxes, ha="center",
+                va="bottom", fontsize=9)
+    fig.legend(handles=handles, loc="lower center", ncol=ncol, fontsize=7, frameon=False)
+    return fig
 
 
 PANELS_PER_ROW = 3
@@ -87,6 +97,25 @@ PANELS_PER_ROW = 3
 
 PANEL_WIDTH_IN = 4.6
 """Width of one frame's panel [in] (about 500 px at the 110 dpi the picture is saved with)."""
+
+PANEL_PAD_IN = 0.1
+"""Space left and right of each frame inside its panel [in]."""
+
+TITLE_IN = 0.35
+"""Height above each frame for its time [in]."""
+
+TITLE_GAP_IN = 0.06
+"""Gap between a frame and its time [in]."""
+
+LEGEND_ENTRY_IN = 1.2
+"""Width of one entry of the legend at its 7 pt [in] (measured: eight entries 8.7 in, five 5.8 in):
+as many to a row as the strip is wide."""
+
+LEGEND_ROW_IN = 0.18
+"""Height of one row of the legend [in]."""
+
+LEGEND_PAD_IN = 0.22
+"""Space under the strip besides the legend's rows [in] (one row: 0.4 in)."""
 
 TRUTH_COLOUR = "#ffd700"
 """The truth's colour (gold): it stands out on the grey depth at any brightness, unlike white."""
