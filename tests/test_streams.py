@@ -1,5 +1,7 @@
 """The camera's streams end to end: the main command, export, the Node reader and a method that reads colour."""
 
+import contextlib
+import io
 import json
 import multiprocessing
 import pathlib
@@ -120,18 +122,29 @@ def test_a_method_that_reads_colour_gets_it_rendered_before_tracking(tmp_path, m
     assert load_episode(out / "episode.npz").colour.num_frames == 31
 
 
-def test_the_depth_rendered_beside_the_tracker_has_the_serial_paths_bits(tmp_path, monkeypatch, capsys):
+@pytest.fixture(scope="module")
+def depth_only_run(tmp_path_factory):
+    """``fsv-bench --task lift --duration 1`` (the reference method, depth only, the GIF too):
+    ``(output folder, the depth types handed to the method, the printed lines)``."""
+    handed = []
+    real = track_stage.run_method
+    out = tmp_path_factory.mktemp("depth-only") / "run"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(track_stage, "run_method",
+                   lambda spec, episode, **kw: handed.append(type(kw["inputs"].depth)) or real(spec, episode, **kw))
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            assert main(["--task", "lift", "--duration", "1", "--quiet", "--out", str(out)]) in (0, 1)
+    assert not multiprocessing.active_children()
+    return out, handed, buf.getvalue().splitlines()
+
+
+def test_the_depth_rendered_beside_the_tracker_has_the_serial_paths_bits(depth_only_run, tmp_path):
     """A depth-only method: a forked child renders the depth frame after frame while the tracker
     reads each frame once it is there (an ``fsv.types.DepthRecording``); every file, block, line and
     digest is the serial path's (the depth rendered, then tracked, in this process)."""
-    handed = []
-    real = track_stage.run_method
-    monkeypatch.setattr(track_stage, "run_method",
-                        lambda spec, episode, **kw: handed.append(type(kw["inputs"].depth)) or real(spec, episode, **kw))
-    out = tmp_path / "run"
-    assert main(["--task", "lift", "--duration", "1", "--quiet", "--out", str(out)]) in (0, 1)
-    assert handed == [DepthRecording] and not multiprocessing.active_children()
-    printed = capsys.readouterr().out.splitlines()
+    out, handed, printed = depth_only_run
+    assert handed == [DepthRecording]
     summary = json.loads((out / "summary.json").read_text())
     # the serial path: the depth rendered in this process, its preview drawn, the method run on it
     scenario = load_episode(out / "episode.npz").scenario
@@ -167,12 +180,12 @@ def test_a_failure_of_the_depth_beside_the_tracker_is_one_line_and_leaves_the_ou
     assert not multiprocessing.active_children()
 
 
-def test_a_depth_only_run_renders_no_colour(tmp_path):
-    out = tmp_path / "run"
-    assert main(["--task", "lift", "--duration", "1", "--quiet", "--no-gif", "--out", str(out)]) in (0, 1)
+def test_a_depth_only_run_renders_no_colour(depth_only_run):
+    out, _, _ = depth_only_run
     ep = load_episode(out / "episode.npz")
     assert ep.colour is None and ep.streams == ("depth",) and "colour" not in ep.annotations.streams
     assert "colour" not in json.loads((out / "summary.json").read_text())["digests"]
+    assert not (out / "colour_preview.png").exists()
 
 
 @pytest.fixture(scope="module")
