@@ -20,7 +20,7 @@ import functools
 import hashlib
 import pathlib
 
-from benchmark.source import closure_of, modules, normalised_code
+from benchmark.source import LazyImportGraph, closure, modules, normalised_code
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
@@ -58,7 +58,7 @@ def code_of(root: pathlib.Path, entry_points) -> list:
     """The files of every module that ``entry_points`` import, directly or not (with their own)."""
     root = pathlib.Path(root)
     mods = modules(root)
-    return [mods[m] for m in closure_of(root, entry_points)]
+    return [mods[m] for m in closure(LazyImportGraph(root), entry_points)]
 
 
 def world_fingerprint(root: pathlib.Path = ROOT) -> str:

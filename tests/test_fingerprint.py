@@ -83,12 +83,14 @@ def test_the_world_fingerprint_reads_only_the_modules_the_world_imports(tmp_path
     """A module outside the world's closure is never parsed: one that is not even Python leaves the
     world's fingerprint as it was (the whole import graph cannot be built), and the closure read
     lazily is the closure of the whole graph on this project."""
-    from benchmark.source import closure, closure_of, import_graph
+    from benchmark.source import LazyImportGraph, closure, import_graph
 
     root = _tree(tmp_path)
     base = world_fingerprint(root)
     (root / "benchmark/paper/table1.py").write_text("this is not python (\n")
     assert world_fingerprint(root) == base
+    whole = import_graph(ROOT)
     for entry_points in (WORLD_ENTRY_POINTS, RESULTS_ENTRY_POINTS):
-        assert closure_of(ROOT, entry_points) == closure(import_graph(ROOT), entry_points)
-    assert len(closure_of(ROOT, WORLD_ENTRY_POINTS)) < len(closure_of(ROOT, RESULTS_ENTRY_POINTS))
+        lazy = LazyImportGraph(ROOT)
+        assert closure(lazy, entry_points) == closure(whole, entry_points)
+        assert sorted(lazy.parsed) == closure(whole, entry_points) and len(lazy.parsed) < len(whole)
