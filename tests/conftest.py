@@ -234,7 +234,7 @@ def kernel_python():
 
 
 _RAY_ADDRESS = {}
-"""The address of the local Ray cluster this process runs, while it runs (:func:`ray_cluster`)."""
+"""``{"gcs": address}`` of the local Ray cluster :func:`ray_cluster` started, while it runs."""
 
 
 @pytest.fixture
@@ -246,9 +246,9 @@ def ray_cluster():
     5 % of a core (measured: 1.4 s of CPU in 30 s), which the rest of the session would pay."""
     assert os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] == "0"
     ray = pytest.importorskip("ray")
-    if not ray.is_initialized():
-        context = ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
-        _RAY_ADDRESS["gcs"] = context.address_info["gcs_address"]
+    if "gcs" not in _RAY_ADDRESS:
+        _RAY_ADDRESS["gcs"] = ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False).address_info[
+            "gcs_address"]
     return _RAY_ADDRESS["gcs"]
 
 
@@ -260,12 +260,11 @@ def pytest_runtest_teardown(item, nextitem):
 
 
 def pytest_sessionfinish(session):
+    """The Ray cluster, if a test left one running, ends with the session."""
     stop_ray()
 
 
 def stop_ray() -> None:
     """Shuts down the Ray cluster :func:`ray_cluster` started, if one runs."""
-    ray = sys.modules.get("ray")
-    if _RAY_ADDRESS and ray is not None and ray.is_initialized():
-        ray.shutdown()
-    _RAY_ADDRESS.clear()
+    if _RAY_ADDRESS.pop("gcs", None) is not None:
+        sys.modules["ray"].shutdown()

@@ -35,7 +35,8 @@ def drawn(monkeypatch):
     return figures
 
 
-def _check(fig) -> None:
+def check_layout(fig) -> None:
+    """Draws ``fig`` and fails if a text leaves it or two panels (with their labels) meet."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     canvas = FigureCanvasAgg(fig)  # the written figure, closed by pyplot: drawn again here
@@ -62,7 +63,7 @@ def test_fig4_keeps_its_labels_inside_and_apart(drawn, tmp_path, title, scale):
     fig4.plot_fig4(truth, {"algebraic": _kin(truth, scale), "central": _kin(truth, -scale)}, tmp_path / "f4.png",
                    title=title)
     assert len(drawn) == 1 and len(drawn[0].axes) == 6
-    _check(drawn[0])
+    check_layout(drawn[0])
 
 
 @pytest.mark.parametrize("title", ["", "forces — kinematics: algebraic differentiation (L=7 frames, kappa=0.5, "
@@ -75,7 +76,7 @@ def test_fig5_keeps_its_labels_and_legends_inside_and_apart(drawn, tmp_path, tit
     sol = nominal_forces(kin, contacts_from_truth(truth), model)
     fig5.plot_fig5(sol, truth, kin.rot, tmp_path / "f5.png", title=title)
     assert len(drawn) == 1 and len(drawn[0].axes) == 3
-    _check(drawn[0])
+    check_layout(drawn[0])
 
 
 def test_margins_that_leave_no_room_are_refused():

@@ -181,13 +181,13 @@ def test_the_overlays_fixed_layout_keeps_its_times_and_legend_inside_and_apart(t
     """Every panel with its time, and the legend, inside the figure; no two panels, and no panel and
     the legend, on each other (the layout is fixed in inches, never measured)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from test_layout import _check
+    from test_layout import check_layout
 
     ep, est = tracked_lift
     fig = overlay_figure(ep.depth, ep.calib, est.tracking, ep.object_model, ep.hand_model, frames=frames,
                          truth=ep.truth)
     assert len(fig.axes) == frames and all(len(ax.texts) == 1 for ax in fig.axes)
-    _check(fig)
+    check_layout(fig)
     renderer = FigureCanvasAgg(fig).get_renderer()
     legend = fig.legends[0].get_window_extent(renderer)
     assert legend.y0 >= 0 and legend.x0 >= 0 and legend.x1 <= fig.bbox.width
