@@ -11,10 +11,26 @@ from benchmark.commands.cli import main
 from benchmark.commands.entry import run
 
 
-def test_run_writes_episode_and_summary(tmp_path, capsys):
-    out = tmp_path / "run"
-    code = main(["--task", "lift", "--noise", "0.01", "--duration", "1.5", "--seed", "2", "--quiet", "--out", str(out)])
-    text = capsys.readouterr().out
+@pytest.fixture(scope="module")
+def pictured_lift(tmp_path_factory):
+    """``fsv-bench --task lift --noise 0.01 --duration 1.5 --seed 2 --no-gif``, with its pictures:
+    ``(folder, printed lines, exit status)``."""
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("pictured") / "run"
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        code = main(PICTURED_LIFT + ["--out", str(out)])
+    return out, printed.getvalue().splitlines(), code
+
+
+PICTURED_LIFT = ["--task", "lift", "--noise", "0.01", "--duration", "1.5", "--seed", "2", "--quiet", "--no-gif"]
+
+
+def test_run_writes_episode_and_summary(pictured_lift):
+    out, lines, code = pictured_lift
+    text = "\n".join(lines)
     assert "Newton-Euler residual" in text and "grip while held" in text
     assert "user 0 (u0-average, hand 190 x 85 mm), grasp 0 (g0-four-centred)" in text
     summary = json.loads((out / "summary.json").read_text())
@@ -60,7 +76,7 @@ def test_run_writes_episode_and_summary(tmp_path, capsys):
 
 def test_a_broken_tracker_fails_the_verdict_with_exit_1_naming_the_gates(tmp_path, capsys):
     out = tmp_path / "run"
-    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out),
+    code = main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-pictures", "--out", str(out),
                  "--tracker", "external_stages:FrozenTracker"])
     err = capsys.readouterr().err
     assert code == 1 and "median box_pos_err_mm <= 8" in err and "median contact_recall >= 0.85" in err
@@ -184,7 +200,7 @@ def test_the_kinect_preset_runs_end_to_end_and_is_recorded(tmp_path, capsys):
     import json
 
     out = tmp_path / "kinect"
-    code = main(["--task", "lift", "--sensor", "kinect-v1", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out)])
+    code = main(["--task", "lift", "--sensor", "kinect-v1", "--duration", "1.5", "--quiet", "--no-pictures", "--out", str(out)])
     assert code in (0, 1)  # the verdict may fail on a 1.5 s episode; the run itself completes
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenario"]["sensor"] == "kinect-v1"
@@ -201,7 +217,7 @@ def test_a_drawn_person_grasp_and_view_run_end_to_end_and_are_described(tmp_path
 
     out = tmp_path / "drawn"
     code = main(["--task", "lift", "--user", "123", "--grasp", "17", "--view", "5", "--noise", "0.01",
-                 "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out)])
+                 "--duration", "1.5", "--quiet", "--no-pictures", "--out", str(out)])
     assert code in (0, 1)  # the verdict may fail on a 1.5 s episode; the run itself completes
     summary = json.loads((out / "summary.json").read_text())
     sc = summary["scenario"]
@@ -215,7 +231,7 @@ def test_a_drawn_person_grasp_and_view_run_end_to_end_and_are_described(tmp_path
 
 def test_summary_json_is_strict_even_where_a_metric_has_nothing_to_score(tmp_path):
     out = tmp_path / "run"
-    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out),
+    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-pictures", "--out", str(out),
           "--tracker", "external_stages:FrozenTracker"])  # no contacts: contact errors are undefined
     summary = json.loads((out / "summary.json").read_text(),
                          parse_constant=lambda c: pytest.fail(f"non-strict JSON token {c}"))
@@ -300,16 +316,43 @@ def test_a_person_grasp_or_view_of_the_test_split_is_noted_before_any_work(tmp_p
     assert "test split" not in capsys.readouterr().err
 
 
-def test_the_learning_block_names_a_model_only_for_the_learned_stage_not_for_a_label_that_reads_like_it(tmp_path):
+def test_the_learning_block_names_a_model_only_for_the_learned_stage_not_for_a_label_that_reads_like_it(
+        tmp_path, pictured_lift):
     out = tmp_path / "run"
-    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(out),
+    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-pictures", "--out", str(out),
           "--internal", "external_stages:NominalAsLearned"])
     learning = json.loads((out / "summary.json").read_text())["learning"]
     assert learning["program"] == "learned internal forces (an impostor)"
     assert "model" not in learning and "internal_model" not in learning
-    main(["--task", "lift", "--duration", "1.5", "--quiet", "--no-gif", "--out", str(tmp_path / "ref")])
-    learning = json.loads((tmp_path / "ref" / "summary.json").read_text())["learning"]
+    learning = json.loads((pictured_lift[0] / "summary.json").read_text())["learning"]
     assert learning["internal_model"] == "fsv/data/internal_forces_blind.npz" and not learning["model"]["grip_inputs"]
+
+
+def test_no_pictures_draws_none_and_changes_no_number_of_the_run(tmp_path, capsys, pictured_lift):
+    """``--no-pictures`` (for batch runs and CI, and the tests that do not look at pictures): no
+    PNG or GIF, every number and digest of the run with its pictures, no line or block naming a
+    picture, and the same options (a presentation option: the same default folder)."""
+    drawn, drawn_lines, _ = pictured_lift
+    out = tmp_path / "run"
+    main(PICTURED_LIFT[:-1] + ["--no-pictures", "--out", str(out)])
+    lines = capsys.readouterr().out.splitlines()
+    pictures = {"depth_preview.png", "tracking_overlay.png", "fig4_kinematics.png", "forces_fig5.png"}
+    assert {p.name for p in drawn.iterdir()} >= pictures  # the control: the run with pictures drew them
+    assert not [p.name for p in out.iterdir() if p.suffix in (".png", ".gif")]
+    with_, without = (json.loads((d / "summary.json").read_text()) for d in (drawn, out))
+    assert without["digests"] == with_["digests"]
+    assert json.loads((out / "options.json").read_text()) == json.loads((drawn / "options.json").read_text())
+    assert without["render"].pop("preview") == [] and with_["render"].pop("preview") == ["depth_preview.png"]
+    assert without["forces"].pop("plot") is None and with_["forces"].pop("plot") == "forces_fig5.png"
+    assert without["tracking"].pop("overlay") is None and with_["tracking"].pop("overlay") == "tracking_overlay.png"
+    assert "plot" not in without["kinematics_info"]["files"] and with_["kinematics_info"]["files"].pop("plot")
+    for summary in (with_, without):
+        summary.pop("timing_s"), summary["world"].pop("steps_per_s")  # the speeds differ from run to run
+        for key in ("frames_per_s", "frames_per_s_after_first", "first_frame_s", "stage_ms_per_frame"):
+            summary["tracking"].pop(key)
+    assert without == with_
+    assert not [line for line in lines if any(name in line for name in pictures)]
+    assert len(lines) == len(drawn_lines) and sum(a != b for a, b in zip(lines, drawn_lines)) >= 4
 
 
 def test_output_read_only_in_part_ends_the_command_without_a_traceback():

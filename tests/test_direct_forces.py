@@ -61,7 +61,7 @@ def test_fsv_bench_runs_the_direct_method_and_scores_its_forces_as_both_stages(d
 
     model_file = direct_dataset[1] / "model.npz"
     code = main(["--task", "lift", "--duration", "2", "--method", "direct", "--direct-model", str(model_file),
-                 "--no-gif", "--quiet", "--out", str(tmp_path / "run")])
+                 "--no-pictures", "--quiet", "--out", str(tmp_path / "run")])
     assert code in (0, 1)  # 1: a gate of the tiny model failed, not the run
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     f, learning = summary["forces"], summary["learning"]

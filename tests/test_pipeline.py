@@ -166,7 +166,7 @@ import hashlib, json, sys
 import numpy as np
 from benchmark.commands.entry import run
 code = run(["--task", "lift", "--user", "515", "--grasp", "4322", "--view", "515", "--seed", "4324", "--duration", "2",
-            "--noise", "0.01", "--no-gif", "--quiet", "--force", "--out", sys.argv[1]])
+            "--noise", "0.01", "--no-pictures", "--quiet", "--force", "--out", sys.argv[1]])
 x = np.random.default_rng(0).standard_normal((4000, 3))
 probe = hashlib.sha256(np.array([np.linalg.norm(v) for v in x]).tobytes()).hexdigest()  # BLAS's ddot
 print(json.dumps({"code": code, "probe": probe}))

@@ -57,7 +57,7 @@ def test_the_main_command_records_the_protocols_model_and_only_the_line_it_told(
     learned = {}
     for protocol in PROTOCOLS:
         out = tmp_path / protocol
-        assert main(["--task", "lift", "--duration", "2", "--quiet", "--no-gif", "--protocol", protocol,
+        assert main(["--task", "lift", "--duration", "2", "--quiet", "--no-pictures", "--protocol", protocol,
                      "--out", str(out)]) in (0, 1)
         learned[protocol] = json.loads((out / "summary.json").read_text())["learning"]
     blind, calibrated = learned["blind"], learned["calibrated"]

@@ -68,7 +68,8 @@ def test_the_colour_rendered_beside_the_later_stages_has_the_serial_paths_bytes(
     tracker, and the episode file written by a thread; every byte and digest is the serial path's."""
     started = []
     real = render_stage._start_colour
-    monkeypatch.setattr(render_stage, "_start_colour", lambda record: started.append(record.scenario) or real(record))
+    monkeypatch.setattr(render_stage, "_start_colour",
+                        lambda record, drawn: started.append(record.scenario) or real(record, drawn))
     out = tmp_path / "run"
     assert _colour_run(out) in (0, 1)
     assert len(started) == 1 and not multiprocessing.active_children()  # taken, and no worker outlives the command
@@ -102,7 +103,7 @@ def test_a_failure_of_the_colour_beside_the_later_stages_is_one_line_and_leaves_
     out.mkdir()
     write_marker(out)
     (out / "note.txt").write_text("the previous output")
-    assert _colour_run(out, "--force") == 1
+    assert _colour_run(out, "--force", "--no-pictures") == 1
     err = capsys.readouterr().err
     assert err == "fsv-bench: failed: background work failed: colour (RenderError: planted: the colour renderer failed)\n"
     assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARKER, "note.txt"]
@@ -111,12 +112,12 @@ def test_a_failure_of_the_colour_beside_the_later_stages_is_one_line_and_leaves_
 
 
 def test_a_method_that_reads_colour_gets_it_rendered_before_tracking(tmp_path, monkeypatch):
-    def not_beside(record):
+    def not_beside(record, drawn):
         raise AssertionError("the colour of a method that reads it was left to render beside the tracker")
 
     monkeypatch.setattr(render_stage, "_start_colour", not_beside)
     out = tmp_path / "run"
-    assert _colour_run(out, "--method", f"{ROOT / 'examples' / 'skin_colour.py'}:method") in (0, 1)
+    assert _colour_run(out, "--method", f"{ROOT / 'examples' / 'skin_colour.py'}:method", "--no-pictures") in (0, 1)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["colour"]["frames"] == 31 and summary["digests"]["colour"]
     assert load_episode(out / "episode.npz").colour.num_frames == 31
@@ -173,7 +174,7 @@ def test_a_failure_of_the_depth_beside_the_tracker_is_one_line_and_leaves_the_ou
     out.mkdir()
     write_marker(out)
     (out / "note.txt").write_text("the previous output")
-    assert main(["--task", "lift", "--duration", "1", "--quiet", "--no-gif", "--force", "--out", str(out)]) == 1
+    assert main(["--task", "lift", "--duration", "1", "--quiet", "--no-pictures", "--force", "--out", str(out)]) == 1
     assert capsys.readouterr().err == "fsv-bench: failed: depth failed: RenderError: planted: the depth renderer failed\n"
     assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARKER, "note.txt"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]

@@ -183,6 +183,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="replace an output folder of fsv-bench's that was made with other options (or holds no "
                         "options.json); without it that is refused")
     p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--no-pictures", action="store_true",
+                   help="draw no pictures (the depth and colour previews, the tracking overlay, Fig. 4, Fig. 5): "
+                        "the episode, summary.json and the tables only, every number the same (for batch runs and CI)")
     for stage in STAGES:
         stage.add_arguments(p)
     add_method_arguments(p, oracle=False, internal_model=False)
@@ -202,9 +205,9 @@ def _scenario(args: argparse.Namespace) -> Scenario:
                     hand_surface=args.hand_surface, grip_control=args.grip_control)
 
 
-PRESENTATION_OPTIONS = ("help", "out", "force", "quiet", "no_gif")
+PRESENTATION_OPTIONS = ("help", "out", "force", "quiet", "no_gif", "no_pictures")
 """The main command's options that change no number of a run (where it goes, what is printed,
-whether the GIF is drawn); every other option changes the result and is recorded in ``options.json``."""
+which pictures are drawn); every other option changes the result and is recorded in ``options.json``."""
 OPTIONS_FILE = "options.json"
 """The file of a run folder that records the options of the run that wrote it (:func:`run_options`)."""
 
@@ -296,7 +299,7 @@ def run_stages(record: Run, args: argparse.Namespace, background: Background) ->
         result = stage(record, args)
         record = dataclasses.replace(record, **result.updates())
         complete(result, record.out, background)
-        if result.pictures or result.later:  # for the later stages' figures, imported while the next stage works
+        if (result.pictures or result.later) and not args.no_pictures:  # for the later stages' figures, imported while the next stage works
             background.preload("matplotlib.pyplot")  # (the render stage's depth, in a child beside it, too)
         parts += [result, *result.later]
         timing[stage.name] = time.perf_counter() - t0

@@ -67,8 +67,8 @@ def run(record: Run, options) -> StageResult:
             "paper": PAPER_SENSITIVITY_N,
         }
     tag = oracle_tag(labels)
-    plot = record.out / "forces_fig5.png"
-    block["plot"] = plot.name
+    plot = None if options["no_pictures"] else record.out / "forces_fig5.png"
+    block["plot"] = None if plot is None else plot.name
     s = block["sensitivity"]
     rescued = {"static_friction": "held by static friction", "contacts_added": "with contacts added"}
     rescued = "".join(f", {block['status'][k]} {what}" for k, what in rescued.items() if block["status"].get(k))
@@ -81,12 +81,12 @@ def run(record: Run, options) -> StageResult:
         f"(paper {PAPER_SENSITIVITY_N['mean']} ± {PAPER_SENSITIVITY_N['std']} N)"
         + (f", with the tracker's contacts {block['sensitivity_tracker']['normal_diff_n_mean']:+.3f} ± "
            f"{block['sensitivity_tracker']['normal_diff_n_std']:.3f} N" if "sensitivity_tracker" in block else "")
-        + f"; plot {plot.name}"
+        + ("" if plot is None else f"; plot {plot.name}")
     )
-    picture = Picture("Fig. 5", plot_fig5, (sol, ep.truth, rot, plot), {
+    pictures = () if plot is None else (Picture("Fig. 5", plot_fig5, (sol, ep.truth, rot, plot), {
         "learned": est.forces,
-        "title": f"forces — kinematics: {labels['kinematics']}; contacts: {labels['contacts']} [{tag}]"})
-    return StageResult(blocks=(("forces", block),), lines=(line,), pictures=(picture,))
+        "title": f"forces — kinematics: {labels['kinematics']}; contacts: {labels['contacts']} [{tag}]"}),)
+    return StageResult(blocks=(("forces", block),), lines=(line,), pictures=pictures)
 
 
-STAGE = Stage(name="forces", run=run, add_arguments=add_arguments)
+STAGE = Stage(name="forces", run=run, options=("no_pictures",), add_arguments=add_arguments)

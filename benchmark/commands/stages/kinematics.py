@@ -30,7 +30,7 @@ def add_arguments(parser) -> None:
 
 def run(record: Run, options) -> StageResult:
     """Table 1 of the run's episode, its files and Fig. 4; which kinematics the later stages use."""
-    ep, choice = record.episode, options["kinematics"]
+    ep, choice, drawn = record.episode, options["kinematics"], not options["no_pictures"]
     if choice not in CHOICES:
         raise ScenarioError(f"kinematics must be one of {', '.join(CHOICES)}; got {choice!r}")
     estimate = record.estimate
@@ -56,17 +56,18 @@ def run(record: Run, options) -> StageResult:
         "params": table.params,
         "tuning": table.tuning,
         "paper": PAPER,
-        "files": dict(FILES),  # relative to --out, like the other stages
+        "files": {k: v for k, v in FILES.items() if k != "plot" or drawn},  # relative to --out, like the other stages
     }
     plot = record.out / FILES["plot"]
+    figure = f"; Fig. 4: {plot}" if drawn else ""
     lines = ("Table 1: kinematics errors vs the AHRS (ours / paper's), pooled over axes and frames",
              *table.markdown().splitlines(),
-             f"kinematics used by later stages: {'ORACLE (true kinematics, an ablation)' if oracle else used}; "
-             f"Fig. 4: {plot}")
-    picture = Picture("Fig. 4", plot_fig4, (ep.truth, kins, plot), {"title": f"Vision kinematics vs AHRS ({table.poses})"})
+             f"kinematics used by later stages: {'ORACLE (true kinematics, an ablation)' if oracle else used}{figure}")
+    pictures = (Picture("Fig. 4", plot_fig4, (ep.truth, kins, plot), {"title": f"Vision kinematics vs AHRS ({table.poses})"}),
+                ) if drawn else ()
     files = ((FILES["markdown"], (table.markdown() + "\n").encode()), (FILES["csv"], table.csv().encode()))
     return StageResult(blocks=(("kinematics", table.summary()), ("kinematics_info", info)), lines=lines,
-                       files=files, pictures=(picture,))
+                       files=files, pictures=pictures)
 
 
-STAGE = Stage(name="kinematics", run=run, options=("kinematics",), add_arguments=add_arguments)
+STAGE = Stage(name="kinematics", run=run, options=("kinematics", "no_pictures"), add_arguments=add_arguments)

@@ -46,7 +46,7 @@ def run(record: Run, options) -> StageResult:
     stages = dict(getattr(tracking, "timing_s", None) or {})
     first = float(getattr(tracking, "first_frame_s", 0.0))
     scores = score_tracking(tracking_in_true_world(tracking, known.world_from_method), ep.truth)
-    overlay = record.out / "tracking_overlay.png"
+    overlay = None if options["no_pictures"] else record.out / "tracking_overlay.png"
     T = len(ep.truth.t)
     block = {
         **scores,
@@ -57,7 +57,7 @@ def run(record: Run, options) -> StageResult:
         "stage_ms_per_frame": {k: 1e3 * v / T for k, v in stages.items()},
         "tracker": estimate.labels.get("tracker"),
         "init_perturbation": {k: float(v) * scale for k, v in INIT_PERTURBATION.items()},
-        "overlay": overlay.name,
+        "overlay": None if overlay is None else overlay.name,
     }
     paper = PAPER_CONTACT_ERROR_MM
     line = (
@@ -66,12 +66,13 @@ def run(record: Run, options) -> StageResult:
         f"{scores['box_rot_err_deg']:.2f} deg (median), fingertips {scores['fingertip_err_mm']:.1f} mm, "
         f"contact point {scores['contact_err_mm_mean']:+.2f} ± {scores['contact_err_mm_std']:.2f} mm per axis "
         f"(paper {paper['mean']:g} ± {paper['std']:g}), median {scores['contact_err_mm_median_euclid']:.1f} mm, recall "
-        f"{scores['contact_recall']:.2f}, precision {scores['contact_precision']:.2f}; overlay {overlay.name}"
+        f"{scores['contact_recall']:.2f}, precision {scores['contact_precision']:.2f}"
+        + ("" if overlay is None else f"; overlay {overlay.name}")
     )
     # drawn as the method sees it: its calibration, hand and box (the truth in gold, through its calibration)
-    picture = Picture("tracking overlay", plot_overlay,
-                      (_whole(ep.depth), inputs.calib, tracking, inputs.object_model, inputs.hand_model, overlay),
-                      {"truth": ep.truth})
+    pictures = () if overlay is None else (Picture(
+        "tracking overlay", plot_overlay,
+        (_whole(ep.depth), inputs.calib, tracking, inputs.object_model, inputs.hand_model, overlay), {"truth": ep.truth}),)
     grip = inputs.grip
     person = {"protocol": spec.protocol,
               "grip": None if grip is None else {"baseline_n": grip.baseline_n, "gain": grip.gain, "samples": grip.samples}}
@@ -79,7 +80,7 @@ def run(record: Run, options) -> StageResult:
                            f"; person [calibrated]: grip {grip.baseline_n:.2f} N + {grip.gain:.3f} N per N of load "
                            f"({grip.samples} samples of a calibration recording)")
     return StageResult(blocks=(("knowledge", known.record()), ("person", person), ("tracking", block)), lines=(told, line),
-                       pictures=(picture,), estimate=estimate, knowledge=known, inputs=inputs)
+                       pictures=pictures, estimate=estimate, knowledge=known, inputs=inputs)
 
 
 def _whole(depth):
@@ -90,4 +91,4 @@ def _whole(depth):
     return depth
 
 
-STAGE = Stage(name="track", run=run, options=("init_perturbation",), add_arguments=add_arguments)
+STAGE = Stage(name="track", run=run, options=("init_perturbation", "no_pictures"), add_arguments=add_arguments)
