@@ -11,6 +11,7 @@ from fsv.models import HandModel
 from fsv.rotation import cross, quat_to_rot, rot_from_skew, skew_stack
 from fsv.track.articulation import pose_chain
 from fsv.track.hand.state import HandState
+from fsv.track.kernel_args import readonly, readonly_f64
 
 
 class HandKinematics:
@@ -34,22 +35,23 @@ class HandKinematics:
             if p >= 0:
                 moves[b] = moves[p]
             moves[b, self.joints_of[b]] = True
-        self.moves = moves
+        self.moves = readonly(moves, bool)
         self.finger_of_segment = finger_of_segment(model)
         # Constants of :meth:`pose`: every hinge's cross-product matrix K and K @ K (Rodrigues'
         # formula, the same arrays as ``axis_angle_to_rot`` builds on every call).
         K = skew_stack(model.joint_axis)
-        self.hinge_K, self.hinge_KK = K, mm(K, K)
+        self.hinge_K, self.hinge_KK = readonly_f64(K), readonly_f64(mm(K, K))
         # The tree as flat arrays for the compiled chain (parents before children): segment b's
-        # hinges are joint_ids[joint_start[b]:joint_start[b + 1]], in the order they compose.
+        # hinges are joint_ids[joint_start[b]:joint_start[b + 1]], in the order they compose. Read-only,
+        # as every array the compiled fit takes (one specialisation: fsv.track.kernel_args).
         if np.any(model.parent[1:] >= np.arange(1, B)) or model.parent[0] != -1:
             raise InputError("HandModel segments must be ordered parents first, the palm (parent -1) first")
-        self.parent = np.ascontiguousarray(model.parent, dtype=np.int64)
-        self.joint_start = np.concatenate([[0], np.cumsum([len(j) for j in self.joints_of])]).astype(np.int64)
-        self.joint_ids = np.concatenate(self.joints_of).astype(np.int64)
-        self.offset_pos = np.ascontiguousarray(model.offset_pos, dtype=np.float64)
-        self.offset_rot_c = np.ascontiguousarray(self.offset_rot, dtype=np.float64)
-        self.joint_axis = np.ascontiguousarray(model.joint_axis, dtype=np.float64)
+        self.parent = readonly(model.parent, np.int64)
+        self.joint_start = readonly(np.concatenate([[0], np.cumsum([len(j) for j in self.joints_of])]), np.int64)
+        self.joint_ids = readonly(np.concatenate(self.joints_of), np.int64)
+        self.offset_pos = readonly_f64(model.offset_pos)
+        self.offset_rot_c = readonly_f64(self.offset_rot)
+        self.joint_axis = readonly_f64(model.joint_axis)
 
     def hinges(self, joints: np.ndarray) -> np.ndarray:
         """Rotation of every hinge, bit for bit ``axis_angle_to_rot(model.joint_axis, joints)``: (n,) -> (n, 3, 3)."""
@@ -62,7 +64,7 @@ class HandKinematics:
             ``(pos (B, 3), rot (B, 3, 3), axis (n, 3), pivot (n, 3))``: segment origins and
             orientations, and each hinge's world axis and pivot, [m].
         """
-        return pose_chain(np.ascontiguousarray(state.palm_pos), np.ascontiguousarray(state.palm_rot),
+        return pose_chain(readonly_f64(state.palm_pos), readonly_f64(state.palm_rot),
                           self.hinges(state.joints), self.parent, self.offset_pos, self.offset_rot_c,
                           self.joint_start, self.joint_ids, self.joint_axis)
 
