@@ -87,7 +87,7 @@ def _run(episode, estimate, out=None):
     parser = argparse.ArgumentParser()
     add_arguments(parser)
     record = Run(scenario=episode.scenario, out=out, method_spec=None, episode=episode, estimate=estimate)
-    result = STAGE(record, parser.parse_args([]))
+    result = STAGE(record, parser.parse_args([], argparse.Namespace(no_pictures=False)))  # the command's option: drawn
     complete(result, out)
     return types.SimpleNamespace(summary=dict(result.blocks), lines=list(result.lines))
 

@@ -6,6 +6,7 @@ import time
 
 import pytest
 
+from benchmark import parallel
 from benchmark.commands.cli import main
 from benchmark.parallel import RayAddressError, check_ray_address
 
@@ -42,8 +43,9 @@ def _listener(reply: bytes | None):
 
 @pytest.mark.parametrize("reply", [b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n", b"", None],
                          ids=["http", "closes", "silent"])
-def test_a_service_that_is_not_ray_is_refused_within_seconds(tmp_path, capsys, reply):
+def test_a_service_that_is_not_ray_is_refused_within_seconds(tmp_path, capsys, monkeypatch, reply):
     pytest.importorskip("ray")
+    monkeypatch.setattr(parallel, "RAY_CONNECT_TIMEOUT_S", 1.0)  # the silent service is waited for this long
     server, stop = _listener(reply)
     try:
         address = f"127.0.0.1:{server.getsockname()[1]}"
@@ -53,6 +55,7 @@ def test_a_service_that_is_not_ray_is_refused_within_seconds(tmp_path, capsys, r
         assert code == 2 and time.perf_counter() - t0 < 10
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and f"'{address}': something listens there but it is not a Ray cluster" in err
+        assert "(no gRPC answer within 1 s)" in err
         assert not (tmp_path / "o").exists() and not (tmp_path / "c").exists()
     finally:
         stop.set()

@@ -119,7 +119,7 @@ def test_cli_stage_prints_and_writes_table1_and_labels_the_oracle(lift_episode, 
 
     episode = lift_episode[0]
     record = Run(scenario=episode.scenario, out=tmp_path, method_spec=None, episode=episode)
-    result = kinematics.STAGE(record, Namespace(kinematics=choice, contacts="vision"))
+    result = kinematics.STAGE(record, Namespace(kinematics=choice, contacts="vision", no_pictures=False))
     complete(result, tmp_path)
     summary = dict(result.blocks)
     block = summary["kinematics"]
