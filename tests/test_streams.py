@@ -33,12 +33,28 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 NODE = shutil.which("node")
 
 
-def test_the_main_command_records_colour_keypoints_and_masks_when_asked(tmp_path, capsys):
-    out = tmp_path / "run"
-    assert main(["--task", "lift", "--duration", "1", "--streams", "depth,colour", "--quiet", "--no-gif",
-                 "--out", str(out)]) in (0, 1)  # the verdict of a 1 s lift may fail; the files are what is checked
-    printed = capsys.readouterr().out
-    assert "31 colour frames 640x480, exposure 16.7 ms" in printed
+@pytest.fixture(scope="module")
+def colour_run(tmp_path_factory):
+    """``fsv-bench --task lift --duration 1 --streams depth,colour --no-gif`` (the reference method,
+    which reads no colour): ``(output folder, the scenarios whose colour was started beside the
+    later stages, the printed lines)``."""
+    started = []
+    real = render_stage._start_colour
+    out = tmp_path_factory.mktemp("colour") / "run"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(render_stage, "_start_colour",
+                   lambda record, drawn: started.append(record.scenario) or real(record, drawn))
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            # the verdict of a 1 s lift may fail; the files are what is checked
+            assert _colour_run(out) in (0, 1)
+    assert not multiprocessing.active_children()  # no worker outlives the command
+    return out, started, buf.getvalue().splitlines()
+
+
+def test_the_main_command_records_colour_keypoints_and_masks_when_asked(colour_run):
+    out, _, printed = colour_run
+    assert any("31 colour frames 640x480, exposure 16.7 ms" in line for line in printed)
     ep = load_episode(out / "episode.npz")
     assert ep.colour.rgb.shape == (31, 480, 640, 3) and ep.colour.rgb.dtype == np.uint8
     assert ep.colour_labels.shape == (31, 480, 640)
@@ -63,17 +79,11 @@ def _colour_run(out, *argv) -> int:
                  "--out", str(out), *argv])
 
 
-def test_the_colour_rendered_beside_the_later_stages_has_the_serial_paths_bytes(tmp_path, monkeypatch, capsys):
+def test_the_colour_rendered_beside_the_later_stages_has_the_serial_paths_bytes(colour_run, tmp_path):
     """A depth-only method: the colour is rendered in a forked child beside the depth and the
     tracker, and the episode file written by a thread; every byte and digest is the serial path's."""
-    started = []
-    real = render_stage._start_colour
-    monkeypatch.setattr(render_stage, "_start_colour",
-                        lambda record, drawn: started.append(record.scenario) or real(record, drawn))
-    out = tmp_path / "run"
-    assert _colour_run(out) in (0, 1)
-    assert len(started) == 1 and not multiprocessing.active_children()  # taken, and no worker outlives the command
-    printed = capsys.readouterr().out.splitlines()
+    out, started, printed = colour_run
+    assert len(started) == 1  # taken
     depth_line = next(i for i, line in enumerate(printed) if line.startswith("render: 31 depth frames"))
     assert printed[depth_line + 1].startswith("render: 31 colour frames 640x480")  # in the serial path's place
     # the serial path: both streams rendered at once in this process, then written
