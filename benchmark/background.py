@@ -39,6 +39,7 @@ import traceback
 
 import numpy as np
 
+from benchmark import interrupt
 from benchmark.errors import BenchmarkError
 from fsv.errors import FsvError, one_line
 
@@ -49,7 +50,12 @@ exception is a bug and its traceback goes to stderr too."""
 
 def _from_interrupt(error: BaseException | None) -> bool:
     """Whether ``error`` is a KeyboardInterrupt or was raised while handling one (a compiled
-    module's import that Ctrl-C stopped fails with ImportError("initialization failed"))."""
+    module's import that Ctrl-C stopped fails with ImportError("initialization failed")), or
+    whether Ctrl-C came at all (:func:`benchmark.interrupt.interrupted`): a library whose compiled
+    code called back into Python when the KeyboardInterrupt was raised may replace it with an error
+    of its own that does not name it (matplotlib's renderer: ``ValueError: Invalid bounding box``)."""
+    if interrupt.interrupted():
+        return True
     seen = set()
     while error is not None and id(error) not in seen:
         if isinstance(error, KeyboardInterrupt):

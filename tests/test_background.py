@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 
+from benchmark import interrupt
 from benchmark.background import Background
 from benchmark.errors import BenchmarkError
 
@@ -124,6 +125,34 @@ def _raise_value_error():
     raise ValueError("planted")
 
 
+def _interrupt_lost_in_a_library():
+    """Ctrl-C (the command's handler, as the console script installs it) lands in a library's
+    compiled code, which replaces the KeyboardInterrupt with an error of its own, unchained."""
+    interrupt.install()
+    lost = False
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(10)
+    except KeyboardInterrupt:
+        lost = True
+    if lost:
+        raise ValueError("Invalid bounding box")  # what matplotlib's Agg renderer raised, once
+
+
+def test_a_child_whose_library_replaced_ctrl_cs_interrupt_exits_130_without_a_traceback(capfd):
+    """Seen in test_interrupt (the picture of Fig. 5 being drawn when the signal came): the child
+    printed matplotlib's traceback and the command's Ctrl-C was no longer one line."""
+    import multiprocessing
+
+    from benchmark.background import _child
+
+    p = multiprocessing.get_context("fork").Process(target=_child, args=(_interrupt_lost_in_a_library, (), {}))
+    p.start()
+    p.join(30)
+    assert p.exitcode == 130
+    assert "Traceback" not in capfd.readouterr().err
+
+
 def test_cancel_stops_a_child_whose_parent_handles_sigterm():
     """A parent with a SIGTERM handler of its own (Ray's driver installs one) forks children that
     would inherit it and sleep on through ``terminate``: the child restores the default first."""
@@ -215,6 +244,7 @@ def test_disabled_forks_at_once_and_returns_the_value():
 
 _PARENT = """
 import sys, time
+from benchmark import interrupt
 from benchmark.background import Background
 job = Background().fork("sleeper", time.sleep, 60)
 print(job.process.pid, flush=True)
