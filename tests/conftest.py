@@ -11,7 +11,6 @@ os.environ.setdefault("PYOPENGL_PLATFORM", "egl")
 
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from compile_once import MARKER_ENV, Compiling, wait_for  # noqa: E402
 from kernel_python import KernelPythons  # noqa: E402
 
 # Ray, when a test starts a local cluster, stays on the loopback interface (it otherwise swaps
@@ -203,30 +202,6 @@ def tracked_lifts():
     return out
 
 
-# --- numba's kernels compiled once, before the workers' first test (tests/compile_once.py) ---
-
-_COMPILING = {}
-"""``{"run": Compiling}`` on xdist's controller while the compiling command may run."""
-_WAITED = []
-"""On a worker: whether it waited for the compiling command (once, before its first test)."""
-
-
-def pytest_configure(config):
-    """On xdist's controller (``-n``): starts the command that compiles numba's kernels once, while
-    the workers start and collect; its marker's path goes to them in the environment."""
-    if getattr(config.option, "numprocesses", None) and not hasattr(config, "workerinput") \
-            and MARKER_ENV not in os.environ:
-        _COMPILING["run"] = Compiling()
-        os.environ[MARKER_ENV] = str(_COMPILING["run"].marker)
-
-
-@pytest.hookimpl(tryfirst=True)
-def pytest_runtest_setup(item):
-    """A worker's first test waits for the compiling command (at most 10 minutes)."""
-    if not _WAITED and hasattr(item.config, "workerinput") and os.environ.get(MARKER_ENV):
-        _WAITED.append(wait_for(os.environ[MARKER_ENV]))
-
-
 # --- what an xdist worker is handed; one interpreter per OpenBLAS kernel --------------------
 
 SHARED_ON_ONE_WORKER = {"kernel_python": "openblas-kernels", "ray_cluster": "ray"}
@@ -285,12 +260,8 @@ def pytest_runtest_teardown(item, nextitem):
 
 
 def pytest_sessionfinish(session):
-    """The Ray cluster, if a test left one running, ends with the session; so does the compiling
-    command on the controller, if it still runs."""
+    """The Ray cluster, if a test left one running, ends with the session."""
     stop_ray()
-    if (compiling := _COMPILING.pop("run", None)) is not None:
-        compiling.close()
-        os.environ.pop(MARKER_ENV, None)
 
 
 def stop_ray() -> None:
