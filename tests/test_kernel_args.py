@@ -9,17 +9,17 @@ import pytest
 from numba.core.registry import CPUDispatcher
 
 from benchmark.method.init import tracker_init
-from fsv.track.kernel_args import readonly, readonly_f64
+from fsv.track.kernel_args import readonly
 from fsv.track.tracker import track
 from fsv.types import DepthVideo
 
 
 def test_readonly_is_a_read_only_view_of_an_array_of_its_type_and_a_copy_of_any_other():
     x = np.arange(6.0).reshape(2, 3)
-    view = readonly_f64(x)
+    view = readonly(x)
     assert np.shares_memory(view, x) and not view.flags.writeable and x.flags.writeable  # x itself stays writable
-    assert readonly_f64(view) is view  # already one: handed on as it is
-    copied = readonly_f64(x.T)  # another order: a C-ordered copy
+    assert readonly(view) is view  # already one: handed on as it is
+    copied = readonly(x.T)  # another order: a C-ordered copy
     assert not np.shares_memory(copied, x) and copied.flags.c_contiguous and not copied.flags.writeable
     np.testing.assert_array_equal(copied, x.T)
     ints = readonly(np.array([1.0, 2.0]), np.int64)

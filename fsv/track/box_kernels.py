@@ -10,7 +10,7 @@ import math
 import numba
 import numpy as np
 
-from fsv.track.kernel_args import readonly_f64
+from fsv.track.kernel_args import readonly
 
 _FAR_M = 1.0  # background depth behind the box where no table is seen, [m] past the box
 
@@ -31,8 +31,8 @@ def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, ro
 
 
 def _f64(x) -> np.ndarray:
-    """An input array of the kernels (:func:`fsv.track.kernel_args.readonly_f64`: one specialisation each)."""
-    return readonly_f64(x)
+    """An input array of the kernels (:func:`fsv.track.kernel_args.readonly`: one specialisation each)."""
+    return readonly(x)
 
 
 def _box_rays(o, d, bg):

@@ -3,9 +3,9 @@
 numba compiles a kernel once for every combination of argument types it is called with, and a
 read-only array is another type than a writable one. A pose that reached the hand's fit read-only
 (as the method's first-frame initialisation does) and one the tracker computed made numba compile
-the whole Levenberg-Marquardt fit (:func:`fsv.track.hand.lm.solve`) twice: 8 s of the 31 s a first
-run spent compiling, measured on the default lift with an empty cache. Every array a kernel only
-reads goes in through :func:`readonly` (:func:`readonly_f64`), whatever its origin.
+the whole Levenberg-Marquardt fit (:func:`fsv.track.hand.lm.solve`) two or three times: a 1.5 s
+lift's command with an empty cache took 33.7 s, 28.1 s with each kernel compiled once. Every array
+a kernel only reads goes in through :func:`readonly`, whatever its origin.
 """
 
 from __future__ import annotations
@@ -22,7 +22,3 @@ def readonly(x, dtype=np.float64) -> np.ndarray:
         a.flags.writeable = False
     return a
 
-
-def readonly_f64(x) -> np.ndarray:
-    """:func:`readonly` as float64."""
-    return readonly(x, np.float64)

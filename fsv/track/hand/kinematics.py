@@ -11,7 +11,7 @@ from fsv.models import HandModel
 from fsv.rotation import cross, quat_to_rot, rot_from_skew, skew_stack
 from fsv.track.articulation import pose_chain
 from fsv.track.hand.state import HandState
-from fsv.track.kernel_args import readonly, readonly_f64
+from fsv.track.kernel_args import readonly
 
 
 class HandKinematics:
@@ -40,7 +40,7 @@ class HandKinematics:
         # Constants of :meth:`pose`: every hinge's cross-product matrix K and K @ K (Rodrigues'
         # formula, the same arrays as ``axis_angle_to_rot`` builds on every call).
         K = skew_stack(model.joint_axis)
-        self.hinge_K, self.hinge_KK = readonly_f64(K), readonly_f64(mm(K, K))
+        self.hinge_K, self.hinge_KK = readonly(K), readonly(mm(K, K))
         # The tree as flat arrays for the compiled chain (parents before children): segment b's
         # hinges are joint_ids[joint_start[b]:joint_start[b + 1]], in the order they compose. Read-only,
         # as every array the compiled fit takes (one specialisation: fsv.track.kernel_args).
@@ -49,9 +49,9 @@ class HandKinematics:
         self.parent = readonly(model.parent, np.int64)
         self.joint_start = readonly(np.concatenate([[0], np.cumsum([len(j) for j in self.joints_of])]), np.int64)
         self.joint_ids = readonly(np.concatenate(self.joints_of), np.int64)
-        self.offset_pos = readonly_f64(model.offset_pos)
-        self.offset_rot_c = readonly_f64(self.offset_rot)
-        self.joint_axis = readonly_f64(model.joint_axis)
+        self.offset_pos = readonly(model.offset_pos)
+        self.offset_rot_c = readonly(self.offset_rot)
+        self.joint_axis = readonly(model.joint_axis)
 
     def hinges(self, joints: np.ndarray) -> np.ndarray:
         """Rotation of every hinge, bit for bit ``axis_angle_to_rot(model.joint_axis, joints)``: (n,) -> (n, 3, 3)."""
@@ -64,7 +64,7 @@ class HandKinematics:
             ``(pos (B, 3), rot (B, 3, 3), axis (n, 3), pivot (n, 3))``: segment origins and
             orientations, and each hinge's world axis and pivot, [m].
         """
-        return pose_chain(readonly_f64(state.palm_pos), readonly_f64(state.palm_rot),
+        return pose_chain(readonly(state.palm_pos), readonly(state.palm_rot),
                           self.hinges(state.joints), self.parent, self.offset_pos, self.offset_rot_c,
                           self.joint_start, self.joint_ids, self.joint_axis)
 

@@ -59,7 +59,7 @@ from fsv.track.hand_system import (
     hand_normal_equations,
     rigidity_rows,
 )
-from fsv.track.kernel_args import readonly, readonly_f64
+from fsv.track.kernel_args import readonly
 from fsv.types import Calibration
 
 
@@ -113,18 +113,18 @@ class HandTracker:
         # Capsule samples for the no-interpenetration rows: ends and middle of every capsule.
         fromto = hand_model.geom_fromto
         s = np.array([0.0, 0.5, 1.0])
-        self.pen_local = readonly_f64(
+        self.pen_local = readonly(
             (fromto[:, None, :3] * (1 - s)[None, :, None] + fromto[:, None, 3:] * s[None, :, None]).reshape(-1, 3))
         self.pen_segment = readonly(np.repeat(hand_model.geom_segment, 3), np.int64)
-        self.pen_radius = readonly_f64(np.repeat(hand_model.geom_radius, 3))
+        self.pen_radius = readonly(np.repeat(hand_model.geom_radius, 3))
         # The model's arrays as the compiled normal equations take them (read-only, whatever the
         # model's origin: one compiled specialisation, fsv.track.kernel_args).
         self._geom_segment = readonly(hand_model.geom_segment, np.int64)
-        self._geom_fromto = readonly_f64(hand_model.geom_fromto)
-        self._geom_radius = readonly_f64(hand_model.geom_radius)
+        self._geom_fromto = readonly(hand_model.geom_fromto)
+        self._geom_radius = readonly(hand_model.geom_radius)
         self._tip_segment = readonly(hand_model.fingertip_segment, np.int64)
-        self._tip_offset = readonly_f64(hand_model.fingertip_offset)
-        self._tip_radius = readonly_f64(hand_model.fingertip_radius)
+        self._tip_offset = readonly(hand_model.fingertip_offset)
+        self._tip_radius = readonly(hand_model.fingertip_radius)
         kin = self.kin  # ... and the kinematics as the compiled fit takes them (fsv.track.hand.lm.system)
         self._kin_arrays = (kin.hinge_K, kin.hinge_KK, kin.parent, kin.offset_pos, kin.offset_rot_c, kin.joint_start,
                             kin.joint_ids, kin.joint_axis, kin.moves)
@@ -261,16 +261,16 @@ class HandTracker:
         None where a rotation update left SO(3) (the NumPy loop takes its singular-value branch)."""
         c = self.config
         data = (self._geom_segment, self._geom_fromto, self._geom_radius, self.rays.origin,
-                readonly_f64(rays), readonly_f64(z_obs), readonly_f64(free[0]), readonly_f64(free[1]), float(sigma),
+                readonly(rays), readonly(z_obs), readonly(free[0]), readonly(free[1]), float(sigma),
                 float(c.cauchy_k), float(c.assign_max_m), self.pen_local, self.pen_segment, self.pen_radius,
                 float(c.penetration_m), self.half, self.hidden, self._tip_segment, self._tip_offset, self._tip_radius,
                 self.flexion, float(c.closure_m), float(c.closure_range_m))
         status, moved, pos, rot, joints, explained, cost = lm.solve(
-            *(readonly_f64(v) for v in (state.palm_pos, state.palm_rot, state.joints,
+            *(readonly(v) for v in (state.palm_pos, state.palm_rot, state.joints,
                                         prior.palm_pos, prior.palm_rot, prior.joints)),
             (sigma / c.smooth_pos_m) ** 2, (sigma / c.smooth_rot_rad) ** 2, (sigma / c.smooth_joint_rad) ** 2,
             self._kin_arrays, data, self.rigid, self.anchor, self.anchor_axis, (sigma / c.rigidity_m) ** 2,
-            readonly_f64(box_pos), readonly_f64(box_rot), self.lo, self.hi,
+            readonly(box_pos), readonly(box_rot), self.lo, self.hi,
             int(c.iterations))
         if status == lm.SINGULAR:
             raise np.linalg.LinAlgError("singular matrix")
