@@ -52,7 +52,7 @@ REL_TOL = 1e-6
 ABS_TOL = 1e-9
 
 _UNCOMPARED = frozenset({"timing_s", "provenance", "rendered", "seconds", "train_seconds", "frames_per_s",
-                         "frames_per_s_after_first", "first_frame_s", "steps_per_s", "stage_ms_per_frame",
+                         "frames_per_s_after_first", "first_frame_s", "compile_s", "steps_per_s", "stage_ms_per_frame",
                          "overlay", "plot", "fig6", "command", "episode", "summary", "path", "digests"})
 """Keys whose values measure this run's speed or name where it ran or what it wrote: never compared
 (``digests`` are compared as a whole, :func:`_compare_run`)."""

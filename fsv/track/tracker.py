@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fsv._check import as_array
+from fsv.compile_clock import CompileClock
 from fsv.errors import InputError
 from fsv.linalg import mm, mv, rigid_inverse
 from fsv.models import HandModel, ObjectModel
@@ -93,8 +94,11 @@ class Tracking:
             along +z (:func:`fsv.track.table.table_frame`): the frame in which the force stages
             find the box on the table, gravity along -z.
         timing_s: Seconds spent in each stage: ``box``, ``hand``, ``contacts``.
-        first_frame_s: Seconds of the first frame's box and hand fits, part of ``box`` and ``hand``
-            (they include any compilation of the kernels), [s].
+        first_frame_s: Seconds of the first frame's box and hand fits, part of ``box`` and ``hand``,
+            without compiling, [s].
+        compile_s: Seconds of the frames' box and hand fits spent compiling numba kernels, part of
+            ``box`` and ``hand``: the first run after installing compiles them, later runs load them
+            from numba's cache and spend none (:class:`fsv.compile_clock.CompileClock`), [s].
     """
 
     box: Poses
@@ -106,6 +110,7 @@ class Tracking:
     contacts: Contacts
     timing_s: dict
     first_frame_s: float = 0.0
+    compile_s: float = 0.0
     table: TablePlane | None = None
     table_from_world: np.ndarray | None = None
 
@@ -134,6 +139,12 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
         raise InputError(f"init must be an fsv.track.tracker.TrackInit, got {type(init).__name__}")
     if init.joints.shape != (hand_model.num_joints,):
         raise InputError(f"init.joints must have the hand's {hand_model.num_joints} angles, got {init.joints.shape}")
+    with CompileClock() as compiling:
+        return _track(depth, calib, object_model, hand_model, init, config, rng, on_frame, compiling)
+
+
+def _track(depth, calib, object_model, hand_model, init, config, rng, on_frame, compiling: CompileClock) -> Tracking:
+    """:func:`track` on checked inputs, its compilation timed by ``compiling``."""
     cfg = config or TrackerConfig()
     rng = rng if rng is not None else np.random.default_rng(0)
     box_rng, hand_rng = rng.spawn(2)
@@ -160,9 +171,9 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
     box_pos, box_rot, inl = np.zeros((T, 3)), np.zeros((T, 3, 3)), np.zeros(T)
     qpos = np.zeros((T, 7 + hand_model.num_joints))
     tips, observed, explained = np.zeros((T, K, 3)), np.zeros((T, K), bool), np.zeros(T)
-    t_box = t_hand = t_first = 0.0
+    t_box = t_hand = t_first = t_compile = 0.0
     for i, frame in enumerate(itertools.chain(() if first is None else (first,), frames)):
-        t0 = time.perf_counter()
+        t0, compiled = time.perf_counter(), compiling.s
         fit = boxes.update(frame, occluder=hands.predicted_depth)
         box_pos[i], box_rot[i], inl[i] = fit.pos, fit.rot, fit.inlier_fraction
         t1 = time.perf_counter()
@@ -175,8 +186,9 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
         tips[i], observed[i], explained[i] = hf.fingertips, hf.observed, hf.explained
         t_box += t1 - t0
         t_hand += time.perf_counter() - t1
+        t_compile += compiling.s - compiled
         if i == 0:
-            t_first = time.perf_counter() - t0
+            t_first = time.perf_counter() - t0 - t_compile
         if on_frame is not None:
             on_frame(1)
     poses = Poses(t=depth.t, pos=box_pos, rot=box_rot)
@@ -196,7 +208,7 @@ def track(depth: DepthVideo, calib: Calibration, object_model: ObjectModel, hand
         to_table = None  # the calibration's world is the table's frame
     return Tracking(box=poses, hand_qpos=qpos, fingertips=tips, observed=observed, box_inliers=inl,
                     hand_explained=explained, contacts=contacts, timing_s=timing, first_frame_s=t_first,
-                    table=table, table_from_world=to_table)
+                    compile_s=t_compile, table=table, table_from_world=to_table)
 
 
 def _rigid_product(A: np.ndarray, B: np.ndarray) -> np.ndarray:
