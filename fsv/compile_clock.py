@@ -11,33 +11,18 @@ user sees from the second run on.
 
 from __future__ import annotations
 
-import time
-
 from numba.core import event
 
 
-class CompileClock(event.Listener):
-    """Sums the wall time of numba's outermost compilations (a kernel compiled while another is
-    compiled counts once) between ``__enter__`` and ``__exit__``, in any thread of the process.
+class CompileClock(event.TimingListener):
+    """numba's timer of its outermost compilations (a kernel compiled while another is compiled
+    counts once), listening to ``numba:compile`` between ``__enter__`` and ``__exit__``, in any
+    thread of the process, with the seconds so far readable at any time (:attr:`s`)."""
 
-    Attributes:
-        s: Seconds compiled so far, [s].
-    """
-
-    def __init__(self):
-        self.s = 0.0
-        self._depth = 0
-        self._t0 = 0.0
-
-    def on_start(self, ev) -> None:
-        if self._depth == 0:
-            self._t0 = time.perf_counter()
-        self._depth += 1
-
-    def on_end(self, ev) -> None:
-        self._depth -= 1
-        if self._depth == 0:
-            self.s += time.perf_counter() - self._t0
+    @property
+    def s(self) -> float:
+        """Seconds compiled so far, [s]."""
+        return self.duration if self.done else 0.0
 
     def __enter__(self) -> CompileClock:
         event.register("numba:compile", self)

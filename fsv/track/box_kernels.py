@@ -23,21 +23,16 @@ def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, ro
     """:func:`predict_box_depth` on the rays ``d`` (N, 3) from ``o`` (3,) of the pixels, whose table
     depths are ``bg`` (N,): a fit gathers them once for all its iterations (see :func:`_box_rays`)."""
     o, d, bg = _box_rays(o, d, bg)
-    depth, w, plane, J = _box_depth_kernel(o, d, bg, _f64(pos), _f64(rot), _f64(half), float(fx),
+    depth, w, plane, J = _box_depth_kernel(o, d, bg, readonly(pos), readonly(rot), readonly(half), float(fx),
                                            float(silhouette_px), bool(jacobian))
     if not jacobian:
         return depth, w, plane
     return depth, w, plane, J
 
 
-def _f64(x) -> np.ndarray:
-    """An input array of the kernels (:func:`fsv.track.kernel_args.readonly`: one specialisation each)."""
-    return readonly(x)
-
-
 def _box_rays(o, d, bg):
     """The compiled kernels' ray arguments: origin (3,), rays (N, 3) and table depths (N,), float64, C order."""
-    return _f64(o), _f64(d), _f64(bg)
+    return readonly(o), readonly(d), readonly(bg)
 
 
 # -- the compiled prediction -----------------------------------------------------------------

@@ -21,4 +21,3 @@ def readonly(x, dtype=np.float64) -> np.ndarray:
         a = a.view()
         a.flags.writeable = False
     return a
-

@@ -39,10 +39,10 @@ from fsv.track.box_kernels import (
     _box_depth_kernel,
     _box_normal_equations,
     _box_rays,
-    _f64,
     _flying_pixels,
 )
 from fsv.track.camera import CameraRays
+from fsv.track.kernel_args import readonly
 from fsv.types import Calibration, DepthVideo, Poses
 
 
@@ -223,7 +223,7 @@ class BoxTracker:
         rho = 0.5 * k**2 * np.log1p((r / k) ** 2)
         occluded = self._occluded(z_obs, zp, plane, sigma)
         rho = np.where(occluded, 0.5 * k**2 * np.log1p((self.config.occluder_k * sigma / k) ** 2), rho)
-        flying = _flying_pixels(_f64(z_obs), _f64(plane), _f64(self.rays.table_depth[index]),
+        flying = _flying_pixels(readonly(z_obs), readonly(plane), readonly(self.rays.table_depth[index]),
                                 float(self.config.flying_k * sigma))
         rho = np.where(flying & ~occluded, 0.0, rho)
         return float(np.sum(rho[valid]))
@@ -235,12 +235,12 @@ class BoxTracker:
         pos, rot = np.array(pos, dtype=float), np.array(rot, dtype=float)
         # The same every iteration: the region's rays, and the kernels' float64 arguments.
         rays = _box_rays(self.rays.origin, self.rays.ray[index], self.rays.table_depth[index])
-        zo, half = _f64(z_obs), _f64(self.half)
+        zo, half = readonly(z_obs), readonly(self.half)
         fx, sil = float(self.fx), float(c.silhouette_px)
         sigma, robust_k, occluder_k, flying_k = float(sigma), float(c.robust_k), float(c.occluder_k), float(c.flying_k)
         for _ in range(c.iterations):
             # J^T W J and J^T W r of the reweighted residuals, without materialising J (N, 6).
-            A, g = _box_normal_equations(*rays, zo, _f64(pos), _f64(rot), half, fx, sil, sigma, robust_k, occluder_k,
+            A, g = _box_normal_equations(*rays, zo, readonly(pos), readonly(rot), half, fx, sil, sigma, robust_k, occluder_k,
                                          flying_k)
             if prior is not None:
                 pp, Rp = prior
@@ -257,7 +257,7 @@ class BoxTracker:
             rot = project_to_so3(mm(exp_so3(step[3:]), rot))
             if norm(step[:3]) < 5e-5 and norm(step[3:]) < 5e-4:
                 break
-        zp, cover, plane, _ = _box_depth_kernel(*rays, _f64(pos), _f64(rot), half, fx, sil, False)
+        zp, cover, plane, _ = _box_depth_kernel(*rays, readonly(pos), readonly(rot), half, fx, sil, False)
         r = z_obs - zp
         on_box = valid & (cover > 0.5)
         seen = on_box & ~self._occluded(z_obs, zp, plane, sigma)
