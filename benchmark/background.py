@@ -65,19 +65,25 @@ def _from_interrupt(error: BaseException | None) -> bool:
     return False
 
 
+_BLOCKED_FOR_FORK = frozenset({signal.SIGTERM, signal.SIGINT})
+"""Signals blocked in the forking thread while it forks a job (:func:`_start_forked`)."""
+
+
 def _terminable() -> None:  # pragma: no cover - runs in the forked child
-    """SIGTERM's default action, then SIGTERM unblocked (:func:`_start_forked` blocked it for the
-    fork): a cancel() sent before this line is delivered here and ends the child, not the parent's
-    handler (Ray's, which returns) that the child inherited."""
+    """SIGTERM's default action, then SIGTERM and SIGINT unblocked (:func:`_start_forked` blocked
+    them for the fork): a cancel() sent before this line is delivered here and ends the child, not
+    the parent's handler (Ray's, which returns) that the child inherited; a Ctrl-C that came during
+    the fork raises its KeyboardInterrupt here, inside the child's ``try`` (exit 130, no traceback),
+    not in multiprocessing's start-up code, which would print one."""
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, _BLOCKED_FOR_FORK)
 
 
 def _start_forked(process) -> None:
-    """``process.start()`` (a fork) with SIGTERM blocked in the forking thread for the fork's
-    duration, so that the child starts with it blocked until :func:`_terminable`; the caller's
-    own SIGTERM, if one comes meanwhile, is delivered when the fork returns."""
-    old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    """``process.start()`` (a fork) with SIGTERM and SIGINT blocked in the forking thread for the
+    fork's duration, so that the child starts with them blocked until :func:`_terminable`; the
+    caller's own signal, if one comes meanwhile, is delivered when the fork returns."""
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _BLOCKED_FOR_FORK)
     try:
         process.start()
     finally:
@@ -85,8 +91,8 @@ def _start_forked(process) -> None:
 
 
 def _child(fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
-    _terminable()  # cancel() ends it, whatever handler the parent had (Ray's)
     try:
+        _terminable()  # cancel() ends it, whatever handler the parent had (Ray's)
         fn(*args, **kwargs)
     except BaseException as e:
         if _from_interrupt(e):  # Ctrl-C reaches the whole process group: the parent reports it
@@ -115,9 +121,9 @@ def _end_with_parent(parent: int) -> None:  # pragma: no cover - runs in the for
 
 def _child_returning(conn, parent, fn, args, kwargs) -> None:  # pragma: no cover - runs in the forked child
     """A forked job: sends ``("value", fn(...))`` or ``("error", one line)`` through ``conn``, then exits."""
-    _terminable()
-    _end_with_parent(parent)
     try:
+        _terminable()
+        _end_with_parent(parent)
         message = ("value", fn(*args, **kwargs))
         code = 0
     except BaseException as e:

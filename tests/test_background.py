@@ -1,5 +1,6 @@
 """benchmark.background: jobs beside the caller, their failures reported at the end."""
 
+import multiprocessing.util
 import os
 import signal
 import sys
@@ -151,6 +152,37 @@ def test_a_child_whose_library_replaced_ctrl_cs_interrupt_exits_130_without_a_tr
     p.join(30)
     assert p.exitcode == 130
     assert "Traceback" not in capfd.readouterr().err
+
+
+class _CtrlCAtTheFork:
+    """While alive, every child multiprocessing forks is sent SIGINT in its start-up code, before
+    the job's function: a Ctrl-C to the process group that lands while a picture's child starts."""
+
+    def __init__(self):
+        multiprocessing.util.register_after_fork(self, lambda _: os.kill(os.getpid(), signal.SIGINT))
+
+
+@pytest.mark.parametrize("start", ["process", "fork"])
+def test_ctrl_c_while_a_child_starts_ends_it_with_130_and_no_traceback(start, capfd):
+    """Seen in test_interrupt: "Process Fig. 4: Traceback ... KeyboardInterrupt" printed by
+    multiprocessing's start-up code, where the command's inherited handler raised it."""
+    previous = signal.getsignal(signal.SIGINT), sys.unraisablehook
+    interrupt.install()  # what the console script does; the child inherits it
+    try:
+        ctrl_c = _CtrlCAtTheFork()
+        bg = Background()
+        getattr(bg, start)("Fig. 4", time.sleep, 30)
+        del ctrl_c
+        job = bg._jobs[0][1]
+        process = getattr(job, "process", job)
+        process.join(20)
+        assert process.exitcode == 130  # was 1, after the traceback
+        bg.cancel()
+    finally:
+        signal.signal(signal.SIGINT, previous[0])
+        sys.unraisablehook = previous[1]
+    err = capfd.readouterr().err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
 
 
 def test_cancel_stops_a_child_whose_parent_handles_sigterm():
