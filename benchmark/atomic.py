@@ -207,8 +207,9 @@ def staging_folder(out: str | os.PathLike) -> pathlib.Path:
     out = pathlib.Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     _clean_up_after_dead_runs(out)
-    folder = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.{os.getpid()}.", dir=out.parent))
-    interrupt.register(folder)
+    with interrupt.deferred():  # registered before Ctrl-C can unwind the caller (interrupt.exit_now removes it)
+        folder = pathlib.Path(tempfile.mkdtemp(prefix=f".{out.name}.{os.getpid()}.", dir=out.parent))
+        interrupt.register(folder)
     _write_json(folder / STAGING_MARKER, {"folder": folder.name, "pid": os.getpid()})
     return folder
 

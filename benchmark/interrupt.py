@@ -8,10 +8,14 @@ raised: :func:`_handler` then leaves the exit to the watchdog), the watchdog kil
 children (a child still drawing a picture would write it into a removed folder, creating it again),
 removes the command's staging folders (:func:`register`) and ends the process with status 130. An output folder being swapped into place
 (:func:`critical`) is finished first, so the previous output is either kept or wholly replaced.
+A staging folder is made inside :func:`deferred`, so that it is registered before Ctrl-C can cut
+the command short, and :func:`exit_now` removes every staging folder still registered when the
+command ends after Ctrl-C.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pathlib
 import shutil
@@ -28,6 +32,8 @@ EXIT_INTERRUPTED = 130
 _staging: set = set()
 _lock = threading.RLock()
 _fired = threading.Event()
+_deferring = 0
+"""How many :func:`deferred` blocks the main thread is in."""
 
 
 def register(folder: str | os.PathLike) -> None:
@@ -58,13 +64,19 @@ def _end_children() -> None:
         child.join(timeout=GRACE_S)
 
 
+def _remove_staging() -> None:
+    """Removes every registered staging folder (the caller holds the lock)."""
+    for folder in list(_staging):
+        shutil.rmtree(folder, ignore_errors=True)
+    _staging.clear()
+
+
 def _force_exit() -> None:
     time.sleep(GRACE_S)
     if threading.main_thread().is_alive():
         with _lock:
             _end_children()
-            for folder in list(_staging):
-                shutil.rmtree(folder, ignore_errors=True)
+            _remove_staging()
             sys.stderr.write("fsv-bench: interrupted\n")
             sys.stderr.flush()
             os._exit(EXIT_INTERRUPTED)
@@ -93,13 +105,44 @@ def _handler(signum, frame):
     threading.Thread(target=_force_exit, name="interrupt-watchdog", daemon=True).start()
     if _compiling(frame):  # the watchdog ends the process within GRACE_S, staging folders removed
         return
+    if _deferring:  # raised where the block ends (deferred)
+        return
     raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def deferred():
+    """A block that Ctrl-C does not cut short: its KeyboardInterrupt is raised where the block ends
+    (and at its start, if Ctrl-C came before), so that a folder made and registered inside is
+    registered before the interrupt can unwind the command (then :func:`exit_now` removes it). The
+    watchdog still ends the process :data:`GRACE_S` after Ctrl-C if the block does not end.
+
+    Raises:
+        KeyboardInterrupt: Ctrl-C came before the block or during it.
+    """
+    global _deferring
+    if _fired.is_set():
+        raise KeyboardInterrupt
+    main = threading.current_thread() is threading.main_thread()
+    if main:
+        _deferring += 1
+    try:
+        yield
+    finally:
+        if main:
+            _deferring -= 1
+    if _fired.is_set():
+        raise KeyboardInterrupt
 
 
 def exit_now(code: int = EXIT_INTERRUPTED) -> None:
     """Ends the process with ``code`` at once (after flushing the console), skipping the
-    interpreter's teardown: for a command that was interrupted and has cleaned up."""
+    interpreter's teardown: for a command that was interrupted and has cleaned up. After Ctrl-C,
+    the staging folders still registered (one whose command was cut short before it could remove
+    it) are removed first."""
     with _lock:
+        if _fired.is_set():
+            _remove_staging()
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)

@@ -24,27 +24,38 @@ LIMIT_S = 2.0
 loaded two-core machine (measured 0.05-1.1 s)."""
 
 
-def _run_and_interrupt(out, delay_s: float) -> tuple:
+def _run_and_interrupt(out, delay_s: float | None) -> tuple:
+    """Runs a 2 s lift into ``out`` and sends SIGINT to its process group ``delay_s`` after the start
+    (None: never); returns its status, the time from the signal (or the start) to its exit [s] and
+    its stderr."""
     cmd = [sys.executable, "-m", "benchmark.commands.entry", "--task", "lift", "--duration", "2", "--quiet",
            "--no-gif", "--force", "--out", str(out)]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
                             env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
-    time.sleep(delay_s)
     sent = time.perf_counter()
-    try:
-        os.killpg(proc.pid, signal.SIGINT)
-    except ProcessLookupError:  # it had finished
-        pass
+    if delay_s is not None:
+        time.sleep(delay_s)
+        sent = time.perf_counter()
+        try:
+            os.killpg(proc.pid, signal.SIGINT)
+        except ProcessLookupError:  # it had finished
+            pass
     _, err = proc.communicate(timeout=60)
     return proc.returncode, time.perf_counter() - sent, err.decode()
 
 
 def test_ctrl_c_at_random_times_gives_130_and_keeps_the_previous_output(tmp_path):
+    """The signal comes at seeded fractions of the command's own time on this machine, one in each
+    fifth of its first 85 % (imports to pictures), measured by a whole run first (a fixed range of
+    delays let a fast machine finish before most of them: 2.4 s here, where the delays ran to 6 s)."""
+    code, whole_s, err = _run_and_interrupt(tmp_path / "whole", None)
+    assert code == 0, err
     out = tmp_path / "run"
     out.mkdir()
     write_marker(out)
     (out / "summary.json").write_text('{"previous": true}')
-    delays = np.random.default_rng(2026).uniform(0.2, 6.0, size=4)
+    fractions = 0.05 + 0.2 * (np.arange(4) + np.random.default_rng(2026).uniform(size=4))
+    delays = fractions * whole_s
     interrupted = 0
     for delay in delays:
         code, took, err = _run_and_interrupt(out, float(delay))
@@ -57,9 +68,9 @@ def test_ctrl_c_at_random_times_gives_130_and_keeps_the_previous_output(tmp_path
             assert summary == {"previous": True} or "verdict" in summary  # the old output, or an earlier run's whole one
         else:  # it finished before the signal: its whole output replaced the old one
             assert "verdict" in summary
-        leftovers = sorted(p.name for p in tmp_path.iterdir() if p.name != "run")
+        leftovers = sorted(p.name for p in tmp_path.iterdir() if p.name not in ("run", "whole"))
         assert not leftovers, leftovers
-    assert interrupted >= 2  # most draws land while it runs
+    assert interrupted >= 2, (whole_s, delays)  # every draw lands while it runs, unless a run is far quicker
 
 
 def _group_alive(pgid: int) -> bool:
@@ -153,6 +164,56 @@ def test_the_watchdog_kills_children_before_it_removes_the_staging_folders(tmp_p
     assert proc.wait(timeout=10) == 130
     time.sleep(2.5)  # past the moment the child would have written
     assert not stage.exists()  # measured before the fix: the child created it again with late.png
+
+
+_CUT_SHORT = """
+import os, signal, sys, tempfile, time
+from benchmark import atomic, interrupt
+interrupt.install()
+made = tempfile.mkdtemp
+def made_then_ctrl_c(*args, **kwargs):  # Ctrl-C lands just after the staging folder is made
+    folder = made(*args, **kwargs)
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(0.2)  # the handler runs here: the folder exists and nobody knows its name yet
+    return folder
+tempfile.mkdtemp = made_then_ctrl_c
+try:
+    atomic.staging_folder(sys.argv[1])
+    print("not interrupted", flush=True)
+except KeyboardInterrupt:
+    print("interrupted", flush=True)
+interrupt.exit_now(130)
+"""
+
+
+def test_ctrl_c_just_after_a_staging_folder_is_made_leaves_no_folder(tmp_path):
+    """Seen in test_ctrl_c_at_random_times (a signal 0.2 s into the command): the interrupt came
+    while the staging folder was being made, before the command knew it, and `.run.<pid>.<random>`
+    stayed beside the output after "interrupted; nothing was written". The folder is now registered
+    before the interrupt is raised, and the interrupted command's exit removes it."""
+    run = subprocess.run([sys.executable, "-c", _CUT_SHORT, str(tmp_path / "run")], capture_output=True, text=True,
+                         timeout=60, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert (run.returncode, run.stdout.strip()) == (130, "interrupted"), run.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_deferred_block_raises_ctrl_cs_interrupt_where_it_ends_or_before_it_starts(monkeypatch):
+    from benchmark import interrupt
+
+    entered = []
+    with interrupt.deferred():  # no Ctrl-C: nothing raised
+        entered.append(1)
+    fired = interrupt.threading.Event()
+    monkeypatch.setattr(interrupt, "_fired", fired)
+    with pytest.raises(KeyboardInterrupt):
+        with interrupt.deferred():
+            entered.append(2)
+            fired.set()  # what the handler does, and returns, while the main thread defers
+            entered.append(3)  # the block goes on to its end
+    with pytest.raises(KeyboardInterrupt):
+        with interrupt.deferred():
+            entered.append(4)  # not run: Ctrl-C came before the block
+    assert entered == [1, 2, 3] and interrupt._deferring == 0
 
 
 def test_an_interrupt_python_cannot_raise_is_left_to_the_watchdog_without_a_traceback():
