@@ -16,6 +16,7 @@ import multiprocessing
 import os
 import pickle
 import queue
+import signal
 import socket
 import threading
 import time
@@ -66,9 +67,13 @@ def report_progress(count: int = 1) -> None:
 
 def _worker(parent_pid: int, progress_queue) -> None:
     """Local worker initializer: one core's work, :func:`report_progress` to the parent's queue, and
-    the worker ends when its parent dies (even by SIGKILL, which no cleanup code sees)."""
+    the worker ends when its parent dies (even by SIGKILL, which no cleanup code sees). Ctrl-C,
+    which a terminal sends to the whole process group, is ignored here: the parent takes it and
+    ends its workers (a worker's own KeyboardInterrupt printed "Process SpawnProcess-1:" and its
+    traceback above the command's one line)."""
 
     global _REPORT
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     one_core_worker()
     _REPORT = progress_queue.put if progress_queue is not None else None
 

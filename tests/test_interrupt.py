@@ -105,6 +105,7 @@ def test_ctrl_c_ends_a_sub_command_with_130_and_no_worker_outlives_it(tmp_path, 
     _, err = proc.communicate(timeout=60)
     took = time.perf_counter() - sent
     assert proc.returncode == 130, (proc.returncode, err.decode()[-2000:])
+    assert "Traceback" not in err.decode() and "KeyboardInterrupt" not in err.decode(), err.decode()[-2000:]
     assert took < LIMIT_S + 1.0, took  # the pool's workers end too
     deadline = time.perf_counter() + 5.0
     while _group_alive(proc.pid) and time.perf_counter() < deadline:

@@ -25,12 +25,17 @@ def test_in_process_jobs_give_their_results_and_report_their_progress():
 
 
 JOBS = textwrap.dedent("""
-    import os, sys, time
+    import os, signal, sys, time
     from benchmark.parallel import report_progress, run_jobs
 
     def square(x):
         report_progress(x)
         return x * x
+
+    def ctrl_c(x):  # what a terminal's Ctrl-C sends to every process of the command's group
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)
+        return x
 
     def sleep(x):
         os.write(1, f"{os.getpid()}\\n".encode())  # one write: the two workers' lines never interleave
@@ -46,6 +51,8 @@ JOBS = textwrap.dedent("""
         if sys.argv[1] == "square":
             heard = []
             print(sorted(run_jobs(square, [1, 2, 3, 4], workers=2, on_progress=heard.append)), sorted(heard))
+        elif sys.argv[1] == "ctrl-c":
+            print(sorted(run_jobs(ctrl_c, [1, 2], workers=2)))
         elif sys.argv[1] == "fail":
             list(run_jobs(sleep_or_fail, [0, 1], workers=2))
         elif sys.argv[1] == "lambda":
@@ -61,6 +68,15 @@ def test_a_pool_gives_every_result_and_hears_the_workers_progress(tmp_path):
                          timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[(0, 1), (1, 4), (2, 9), (3, 16)] [1, 2, 3, 4]"
+
+
+def test_a_worker_leaves_ctrl_c_to_its_parent_and_says_nothing(tmp_path):
+    """The group's SIGINT reaches each worker too: it goes on (the parent, which gets it as well,
+    ends the pool), and no worker prints "Process SpawnProcess-1:" and a KeyboardInterrupt."""
+    (tmp_path / "jobs.py").write_text(JOBS)
+    out = subprocess.run([sys.executable, "jobs.py", "ctrl-c"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert (out.returncode, out.stdout.strip(), out.stderr) == (0, "[(0, 1), (1, 2)]", "")
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
