@@ -69,7 +69,7 @@ def _worker(parent_pid: int, progress_queue) -> None:
     """Local worker initializer: one core's work, :func:`report_progress` to the parent's queue, and
     the worker ends when its parent dies (even by SIGKILL, which no cleanup code sees). Ctrl-C,
     which a terminal sends to the whole process group, is ignored here: the parent takes it and
-    ends its workers (a worker's own KeyboardInterrupt printed "Process SpawnProcess-1:" and its
+    ends its workers (a worker's own KeyboardInterrupt would print "Process SpawnProcess-1:" and a
     traceback above the command's one line)."""
 
     global _REPORT
