@@ -46,6 +46,9 @@ from benchmark.errors import BenchmarkError
 from benchmark.fingerprint import results_fingerprint
 from benchmark.limits import MAX_WORKERS, integer
 
+INTERRUPTED = "each committed result is as it was or wholly replaced"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RECORD = "results/reproduce.json"
 REL_TOL = 1e-6

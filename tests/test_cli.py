@@ -238,7 +238,7 @@ def test_summary_json_is_strict_even_where_a_metric_has_nothing_to_score(tmp_pat
     assert summary["tracking"]["contact_err_mm_std"] is None
 
 
-@pytest.mark.parametrize("exc, code, needle", [(KeyboardInterrupt(), 130, "interrupted; complete files are kept"),
+@pytest.mark.parametrize("exc, code, needle", [(KeyboardInterrupt(), 130, "interrupted; the complete episodes are kept"),
                                                 ("benchmark", 1, "failed: the box fell")])
 def test_subcommands_exit_130_on_ctrl_c_and_1_on_failure(monkeypatch, capsys, exc, code, needle):
     import benchmark.paper.dataset.cli as dataset
@@ -252,6 +252,26 @@ def test_subcommands_exit_130_on_ctrl_c_and_1_on_failure(monkeypatch, capsys, ex
     monkeypatch.setattr(dataset, "run", run)
     assert main(["generate", "--out", "unused"]) == code
     assert needle in capsys.readouterr().err
+
+
+def _interrupted_run(args):
+    raise KeyboardInterrupt
+
+
+def test_every_sub_command_says_what_ctrl_c_left_and_train_does_not_promise_a_resume(tmp_path, monkeypatch, capsys):
+    """Every sub-command said "complete files are kept, run the same command to resume", which
+    `train` (one model file, trained from the start) and `compare` do not do."""
+    from benchmark.commands import cli, entry
+
+    lines = {name: entry.subcommand_module(name).INTERRUPTED for name in cli.ALL_SUBCOMMANDS}
+    assert all(isinstance(line, str) and line for line in lines.values())
+    assert "resume" not in " ".join(lines.values())
+    module = entry.subcommand_module("train")
+    monkeypatch.setattr(module, "run", _interrupted_run)
+    code = cli.run_subcommand(["train", "--data", str(tmp_path), "--out", str(tmp_path / "model.npz")], module)
+    assert (code, capsys.readouterr().err) == (
+        130, "fsv-bench train: interrupted; --out is as it was (the same command again trains from the start)\n")
+
 
 
 def test_the_console_script_ends_the_main_command_after_its_output_is_complete(tmp_path):

@@ -119,14 +119,14 @@ def subcommand_parser(name: str, module=None) -> tuple:
 
 def run_subcommand(argv: list, module=None) -> int:
     """Runs ``fsv-bench <subcommand> ...`` (with ``module``, the sub-command's module, or
-    :func:`subcommand_module`'s); bad input exits 2, Ctrl-C 130 (re-run to resume)."""
+    :func:`subcommand_module`'s); bad input exits 2, Ctrl-C 130 with the module's ``INTERRUPTED``
+    line (what the interruption left)."""
     module, p = subcommand_parser(argv[0], module)
     args = p.parse_args(argv[1:])
     try:
         module.run(args)
     except BaseException as e:
-        return exit_status(e, f"fsv-bench {argv[0]}", "complete files are kept, run the same command to resume",
-                           (ScenarioError, InputError, ValueError))
+        return exit_status(e, f"fsv-bench {argv[0]}", module.INTERRUPTED, (ScenarioError, InputError, ValueError))
     return 0
 
 

@@ -14,6 +14,9 @@ import tempfile
 from benchmark.commands.pictures.episodes import PICTURES, EpisodePictures, chosen
 from benchmark.suites import evaluate as suite_eval
 
+INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 
 def add_picture_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--pictures", choices=PICTURES, default=None,

@@ -26,6 +26,9 @@ from benchmark.exchange.camera_file import load_camera_input
 from benchmark.exchange.estimates_file import EstimatesFileError, check_identity, load_estimate, read_estimates
 from benchmark.fingerprint import world_fingerprint
 
+INTERRUPTED = "nothing was written"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("file", type=pathlib.Path, help="an estimates file (.npz), or a frames dataset's folder")

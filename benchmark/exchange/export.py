@@ -24,6 +24,9 @@ from benchmark.method.run import camera_input_and_knowledge
 from benchmark.world.scenario import episode_name
 from fsv.provenance import provenance
 
+INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench export`'s start-up

@@ -26,6 +26,9 @@ from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
 from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
 from benchmark.world.scenario import episode_name
 
+INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     from benchmark.suites.evaluate import (  # lazy: scipy.stats (0.4 s) off `fsv-bench score`'s start-up

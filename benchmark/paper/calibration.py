@@ -25,6 +25,9 @@ from benchmark.method.grip_file import write_calibration
 from benchmark.scores.samples import MAX_EXCESS_N
 from fsv.grip import GripCalibration, fit_grip
 
+INTERRUPTED = "--out is as it was"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 
 def grip_calibrations(df) -> dict[int, GripCalibration]:
     """Every user's grip line, fitted to a dataset table's samples of that user.

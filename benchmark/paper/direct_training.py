@@ -34,6 +34,9 @@ from fsv.learn.direct import on_table
 from fsv.learn.direct_inputs import MAX_WINDOW, input_names
 from fsv.types import Contacts, Kinematics
 
+INTERRUPTED = "--out is as it was (the same command again trains from the start)"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 _AX = "xyz"
 MAX_BATCH = 65_536
 MAX_WIDTH = 4096

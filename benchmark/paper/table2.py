@@ -63,6 +63,9 @@ from fsv.forces import FrameStatus, reconstruct_forces
 from fsv.learn import InternalForceModel, LearnConfig, relative_errors_pct, train
 from fsv.provenance import provenance
 
+INTERRUPTED = "--out is as it was"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 #: The paper's Table 2: (user, mass, grasp seen in partial training; partial avg, std; full avg, std) [%].
 PAPER = (
     (True, True, True, 10.7, 12.4, 9.71, 12.0),

@@ -31,6 +31,9 @@ from benchmark.paper.table2 import TABLE2_MEMBERS, add_max_excess_argument
 from fsv.errors import InputError
 from fsv.learn import AMOUNT_LOSSES, LearnConfig, cross_validate, train
 
+INTERRUPTED = "--out is as it was (the same command again trains from the start)"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", required=True, help="dataset folder made by `fsv-bench generate`")

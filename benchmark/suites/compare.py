@@ -26,6 +26,9 @@ from benchmark.scores.metrics import WORST
 from benchmark.scores.units import labelled
 from benchmark.suites.evaluate import strict
 
+INTERRUPTED = "--out is as it was"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 ALPHA = 0.05
 """The paired test's level: a method is better where p < ALPHA."""
 

@@ -26,6 +26,9 @@ from benchmark.suites.evaluate import GateFailure, baselines_block, check_cache_
 from benchmark.suites.options import add_suite_arguments, suite_of
 from fsv.method.baselines import BASELINE_STAGE, BASELINES
 
+INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 BASELINE_NAMES = tuple(BASELINES)
 OTHER_KNOWLEDGE = next(k for k in KNOWLEDGE if k != DEFAULT_KNOWLEDGE)
 

@@ -31,6 +31,9 @@ from benchmark.limits import MAX_EPISODES, MAX_INIT_SCALE, check_grid
 from benchmark.suites import Suite, get_suite
 from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES, MAX_FPS, MAX_NOISE_M, Scenario
 
+INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 AXES = {
     "noise": ("noise_m", float, "depth noise std [m]"),
     "mass": ("mass", int, "mass index (sim_assets/masses.yaml)"),

@@ -35,6 +35,9 @@ from benchmark.paper.dataset.shards import COLOUR_ENCODINGS
 from benchmark.paper.dataset.spec import CONTACTS, DESIGNS, KINEMATICS, ROWS, DatasetSpec
 from benchmark.parallel import check_ray_address
 
+INTERRUPTED = "the complete episodes are kept: the same command again makes only the missing ones"
+"""What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
+
 
 def parse_ints(text: str, option: str = "") -> tuple:
     """Parses "0,2,5-7" into (0, 2, 5, 6, 7); DatasetError naming ``option`` for anything but
