@@ -135,14 +135,26 @@ def deferred():
         raise KeyboardInterrupt
 
 
+def _release_multiprocessing() -> None:
+    """Runs multiprocessing's finalizers of priority 0 and above, as the interpreter's exit would:
+    its named semaphores are unlinked, its queues closed, a manager process shut down. ``os._exit``
+    skips them, and the resource tracker (a process of the command's group that outlives it) would
+    print "There appear to be 5 leaked semaphore objects" under the interrupted command's line.
+    ``_run_finalizers`` is multiprocessing's own exit step (``util._exit_function``)."""
+    mp_util = sys.modules.get("multiprocessing.util")
+    if mp_util is not None:
+        mp_util._run_finalizers(0)
+
+
 def exit_now(code: int = EXIT_INTERRUPTED) -> None:
     """Ends the process with ``code`` at once (after flushing the console), skipping the
     interpreter's teardown: for a command that was interrupted and has cleaned up. After Ctrl-C,
     the staging folders still registered (one whose command was cut short before it could remove
-    it) are removed first."""
+    it) are removed first, and multiprocessing's semaphores released (:func:`_release_multiprocessing`)."""
     with _lock:
         if _fired.is_set():
             _remove_staging()
+            _release_multiprocessing()
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)
