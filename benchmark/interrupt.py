@@ -15,6 +15,7 @@ command ends after Ctrl-C.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
 import pathlib
@@ -34,6 +35,8 @@ _lock = threading.RLock()
 _fired = threading.Event()
 _deferring = 0
 """How many :func:`deferred` blocks the main thread is in."""
+_finished: int | None = None
+"""The command's exit status once its work is complete (:func:`finished`), else None."""
 
 
 def register(folder: str | os.PathLike) -> None:
@@ -99,6 +102,8 @@ def _compiling(frame) -> bool:
 
 
 def _handler(signum, frame):
+    if _finished is not None:  # every file is written: Ctrl-C only ends the process, with the command's status
+        exit_now(_finished)
     if _fired.is_set():  # a second Ctrl-C: the watchdog already ends the process within GRACE_S
         return
     _fired.set()
@@ -146,6 +151,15 @@ def _release_multiprocessing() -> None:
         mp_util._run_finalizers(0)
 
 
+def finished(code: int) -> None:
+    """Says that the command's work is complete, with exit status ``code``: a Ctrl-C from now on (in
+    the interpreter's teardown, which joins threads and runs the libraries' finalisers for up to a
+    second) ends the process at once with ``code``, not with a KeyboardInterrupt raised there (the
+    process then died by SIGINT, status -2, without a line)."""
+    global _finished
+    _finished = int(code)
+
+
 def exit_now(code: int = EXIT_INTERRUPTED) -> None:
     """Ends the process with ``code`` at once (after flushing the console), skipping the
     interpreter's teardown: for a command that was interrupted and has cleaned up. After Ctrl-C,
@@ -169,11 +183,19 @@ def _unraisable(args) -> None:
     sys.__unraisablehook__(args)
 
 
+def _ignore_during_finalisation() -> None:
+    """The last exit handler (registered first): after it the interpreter frees its modules, and
+    it gives SIGINT back its default action unless it is ignored, so that a Ctrl-C then killed the
+    process by the signal (status -2, no line) after the command had written everything."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def install() -> None:
     """Installs the handler (main thread only; elsewhere, e.g. a test runner's thread, it does nothing)."""
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGINT, _handler)
         sys.unraisablehook = _unraisable
+        atexit.register(_ignore_during_finalisation)
 
 
 def interrupted() -> bool:

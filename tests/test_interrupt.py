@@ -236,6 +236,28 @@ def test_an_interrupted_command_leaves_no_semaphore_for_the_resource_tracker_to_
     assert run.returncode == 130 and run.stderr == "", run.stderr
 
 
+_CTRL_C_AFTER_THE_WORK = """
+import os, signal, sys, threading, time
+from benchmark.commands import entry
+sys.argv = ["fsv-bench", "reproduce"]  # a sub-command: it returns through the interpreter's teardown
+entry.run = lambda argv=None: 0  # its work done, every file written
+threading.Thread(target=time.sleep, args=(0.5,)).start()  # a thread the teardown waits for
+code = entry.main()
+os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C after the work, before the process has ended
+time.sleep(0.2)
+sys.exit(code)
+"""
+
+
+def test_ctrl_c_after_a_sub_commands_work_ends_it_with_its_own_status():
+    """Seen sweeping Ctrl-C over `reproduce --write` (7.3-7.9 s in, after every result was written):
+    the KeyboardInterrupt raised in the interpreter's teardown killed the process by SIGINT (status
+    -2) without a line."""
+    run = subprocess.run([sys.executable, "-c", _CTRL_C_AFTER_THE_WORK], capture_output=True, text=True, timeout=60,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert (run.returncode, run.stderr) == (0, "")
+
+
 def test_an_interrupt_python_cannot_raise_is_left_to_the_watchdog_without_a_traceback():
     """Ctrl-C landing in a hook Python runs around a fork (logging's lock release, seen once under a
     loaded machine) or in a finaliser cannot propagate: no "Exception ignored ... Traceback" on the

@@ -27,6 +27,7 @@ def main() -> int:
             raise
         print("fsv-bench: interrupted; nothing was written", file=sys.stderr)
         code = interrupt.EXIT_INTERRUPTED
+    interrupt.finished(code)  # a Ctrl-C from here on ends the process with this status
     if interrupt.interrupted():  # every file is complete or removed: end now, before the interpreter's
         interrupt.exit_now(code)  # teardown, where a library could turn the interrupt into another status
     if code == BAD_INPUT:  # refused before any work (no pool, cluster or file of ours open): end now too,
