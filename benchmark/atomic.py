@@ -90,6 +90,15 @@ class OutputFolderError(ValueError):
     """An output fsv-bench may not write (a file, unwritable, a link, or holding files fsv-bench did not write)."""
 
 
+OUT_AS_IT_WAS = "--out is as it was"
+"""What Ctrl-C leaves of a sub-command whose output is written whole (:func:`staged_folder`,
+:func:`atomic_path`), as its ``INTERRUPTED`` line says it."""
+
+OUT_AS_IT_WAS_EPISODES_CACHED = (f"{OUT_AS_IT_WAS}; the episodes rendered so far stay in the cache, where the same "
+                                 "command again finds them")
+"""The same, for a sub-command that renders a suite's episodes into the episode cache first."""
+
+
 def write_marker(folder: str | os.PathLike) -> pathlib.Path:
     """Writes :data:`OUTPUT_MARKER` (a new random token) into ``folder``, which fsv-bench made; returns its path."""
     marker = pathlib.Path(folder) / OUTPUT_MARKER

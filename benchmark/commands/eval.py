@@ -11,10 +11,11 @@ from __future__ import annotations
 import argparse
 import tempfile
 
+from benchmark.atomic import OUT_AS_IT_WAS_EPISODES_CACHED
 from benchmark.commands.pictures.episodes import PICTURES, EpisodePictures, chosen
 from benchmark.suites import evaluate as suite_eval
 
-INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+INTERRUPTED = OUT_AS_IT_WAS_EPISODES_CACHED
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 

@@ -16,7 +16,7 @@ import argparse
 import json
 import pathlib
 
-from benchmark.atomic import check_out, staged_folder
+from benchmark.atomic import OUT_AS_IT_WAS_EPISODES_CACHED, check_out, staged_folder
 from benchmark.exchange import camera_file, estimates_file
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE
 from benchmark.method.protocol import DEFAULT_PROTOCOL, check_people
@@ -24,7 +24,7 @@ from benchmark.method.run import camera_input_and_knowledge
 from benchmark.world.scenario import episode_name
 from fsv.provenance import provenance
 
-INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+INTERRUPTED = OUT_AS_IT_WAS_EPISODES_CACHED
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 

@@ -17,7 +17,7 @@ import pathlib
 import tempfile
 import time
 
-from benchmark.atomic import check_out
+from benchmark.atomic import OUT_AS_IT_WAS_EPISODES_CACHED, check_out
 from benchmark.commands.pictures.episodes import EpisodePictures, chosen
 from benchmark.exchange.estimates_file import check_identity, load_estimate, read_estimates
 from benchmark.exchange.export import FORMATS
@@ -26,7 +26,7 @@ from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, given
 from benchmark.method.protocol import DEFAULT_PROTOCOL, check_protocol
 from benchmark.world.scenario import episode_name
 
-INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+INTERRUPTED = OUT_AS_IT_WAS_EPISODES_CACHED
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 

@@ -19,13 +19,13 @@ from __future__ import annotations
 
 import argparse
 
-from benchmark.atomic import check_file_out
+from benchmark.atomic import OUT_AS_IT_WAS, check_file_out
 from benchmark.errors import DatasetError
 from benchmark.method.grip_file import write_calibration
 from benchmark.scores.samples import MAX_EXCESS_N
 from fsv.grip import GripCalibration, fit_grip
 
-INTERRUPTED = "--out is as it was"
+INTERRUPTED = OUT_AS_IT_WAS
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 

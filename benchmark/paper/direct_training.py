@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from benchmark.atomic import check_file_out
+from benchmark.atomic import OUT_AS_IT_WAS, check_file_out
 from benchmark.limits import MAX_EPOCHS, MAX_SEED, integer, number
 from benchmark.paper.dataset import finger_names_of, frames_of, load_dataset
 from benchmark.paper.dataset.cli import parse_ints
@@ -34,7 +34,7 @@ from fsv.learn.direct import on_table
 from fsv.learn.direct_inputs import MAX_WINDOW, input_names
 from fsv.types import Contacts, Kinematics
 
-INTERRUPTED = "--out is as it was (the same command again trains from the start)"
+INTERRUPTED = f"{OUT_AS_IT_WAS} (the same command again trains from the start)"
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 _AX = "xyz"

@@ -44,7 +44,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import pandas as pd
 
-from benchmark.atomic import check_out, save_figure, staged_folder, write_text
+from benchmark.atomic import OUT_AS_IT_WAS, check_out, save_figure, staged_folder, write_text
 from benchmark.errors import DatasetError
 from benchmark.limits import MAX_EPOCHS, MAX_MEMBERS, MAX_SEED, integer, number
 from benchmark.paper.dataset import (
@@ -63,7 +63,7 @@ from fsv.forces import FrameStatus, reconstruct_forces
 from fsv.learn import InternalForceModel, LearnConfig, relative_errors_pct, train
 from fsv.provenance import provenance
 
-INTERRUPTED = "--out is as it was"
+INTERRUPTED = OUT_AS_IT_WAS
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 #: The paper's Table 2: (user, mass, grasp seen in partial training; partial avg, std; full avg, std) [%].

@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 
-from benchmark.atomic import check_file_out
+from benchmark.atomic import OUT_AS_IT_WAS, check_file_out
 from benchmark.limits import MAX_EPOCHS, MAX_FOLDS, MAX_MEMBERS, MAX_SEED, integer
 from benchmark.method.grip_file import CalibrationError, read_calibration
 from benchmark.paper.dataset import finger_names_of, load_dataset, training_set
@@ -31,7 +31,7 @@ from benchmark.paper.table2 import TABLE2_MEMBERS, add_max_excess_argument
 from fsv.errors import InputError
 from fsv.learn import AMOUNT_LOSSES, LearnConfig, cross_validate, train
 
-INTERRUPTED = "--out is as it was (the same command again trains from the start)"
+INTERRUPTED = f"{OUT_AS_IT_WAS} (the same command again trains from the start)"
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 

@@ -20,13 +20,13 @@ import argparse
 import json
 import pathlib
 
-from benchmark.atomic import check_file_out, write_text
+from benchmark.atomic import OUT_AS_IT_WAS, check_file_out, write_text
 from benchmark.scores.aggregate import FEW_EPISODES, aggregate, paired_test
 from benchmark.scores.metrics import WORST
 from benchmark.scores.units import labelled
 from benchmark.suites.evaluate import strict
 
-INTERRUPTED = "--out is as it was"
+INTERRUPTED = OUT_AS_IT_WAS
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 ALPHA = 0.05

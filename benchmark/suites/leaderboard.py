@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import pathlib
 
-from benchmark.atomic import check_out, staged_folder
+from benchmark.atomic import OUT_AS_IT_WAS_EPISODES_CACHED, check_out, staged_folder
 from benchmark.method import MethodSpec
 from benchmark.method.knowledge import DEFAULT_KNOWLEDGE, KNOWLEDGE
 from benchmark.scores.leaderboard import leaderboard_markdown
@@ -26,7 +26,7 @@ from benchmark.suites.evaluate import GateFailure, baselines_block, check_cache_
 from benchmark.suites.options import add_suite_arguments, suite_of
 from fsv.method.baselines import BASELINE_STAGE, BASELINES
 
-INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+INTERRUPTED = OUT_AS_IT_WAS_EPISODES_CACHED
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 BASELINE_NAMES = tuple(BASELINES)

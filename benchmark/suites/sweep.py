@@ -25,13 +25,13 @@ import pathlib
 
 import numpy as np
 
-from benchmark.atomic import check_out, save_figure, staged_folder
+from benchmark.atomic import OUT_AS_IT_WAS_EPISODES_CACHED, check_out, save_figure, staged_folder
 from benchmark.errors import ScenarioError
 from benchmark.limits import MAX_EPISODES, MAX_INIT_SCALE, check_grid
 from benchmark.suites import Suite, get_suite
 from benchmark.world.scenario import GRIP_CONTROLS, HAND_SURFACES, MAX_FPS, MAX_NOISE_M, Scenario
 
-INTERRUPTED = "--out is as it was; the episodes rendered so far stay in the cache, where the same command again finds them"
+INTERRUPTED = OUT_AS_IT_WAS_EPISODES_CACHED
 """What Ctrl-C leaves, as the interrupted command says it (`fsv-bench <sub-command>: interrupted; ...`)."""
 
 AXES = {
