@@ -1,12 +1,15 @@
 """Episode files: a versioned npz + JSON format that round-trips exactly and refuses bad files."""
 
+import io
 import json
 import zipfile
+import zlib
 
 import numpy as np
 import pytest
 
-from benchmark.camera.episode_file import FORMAT, VERSION, load_episode, save_episode
+from benchmark.archive import FAST_DEFLATE_LEVEL
+from benchmark.camera.episode_file import FORMAT, VERSION, depth_arrays, load_episode, save_episode
 from benchmark.errors import EpisodeFileError
 from fsv import Calibration, DepthVideo
 
@@ -109,7 +112,6 @@ def test_write_is_atomic_and_leaves_no_temporaries(saved, tmp_path):
 
 def test_rendered_depth_of_the_default_sensor_round_trips_bit_exactly(rendered_lift_episode, tmp_path):
     """The default sensor quantises to 1 mm, so the file stores whole millimetres exactly."""
-    from benchmark.camera.episode_file import depth_arrays
 
     ep = rendered_lift_episode
     arrays = depth_arrays(ep)
@@ -121,6 +123,27 @@ def test_rendered_depth_of_the_default_sensor_round_trips_bit_exactly(rendered_l
     assert back.depth.fps == ep.depth.fps
     raw = ep.depth.depth_m.nbytes + ep.labels.nbytes
     assert (tmp_path / "lift.npz").stat().st_size < raw / 3  # compact: uint16 + deflate
+
+
+def test_the_depth_counts_are_deflated_at_the_fast_level(rendered_lift_episode, tmp_path):
+    """The largest entry is deflated at FAST_DEFLATE_LEVEL (a third of the default level's time for a
+    2 % larger file), the labels at the default level."""
+    path = save_episode(rendered_lift_episode, tmp_path / "lift.npz")
+    counts = depth_arrays(rendered_lift_episode)["depth_counts"]
+    with zipfile.ZipFile(path) as z:
+        stored, npy = z.getinfo("render/depth_counts.npy"), z.read("render/depth_counts.npy")
+        labels = z.getinfo("render/labels.npy")
+        label_npy = z.read("render/labels.npy")
+    assert np.array_equal(np.lib.format.read_array(io.BytesIO(npy)), counts)
+    fast, default = _deflated_size(npy, FAST_DEFLATE_LEVEL), _deflated_size(npy, 6)
+    assert default < 0.99 * fast  # the two levels are told apart by their sizes
+    assert stored.compress_size == fast
+    assert labels.compress_size == _deflated_size(label_npy, 6)
+
+
+def _deflated_size(data: bytes, level: int) -> int:
+    c = zlib.compressobj(level, zlib.DEFLATED, -15)  # raw deflate, as zip stores it
+    return len(c.compress(data) + c.flush())
 
 
 def test_depth_beyond_uint16_at_0_1_mm_falls_back_to_1_cm(saved, tmp_path):

@@ -1,7 +1,12 @@
-"""tests/kernel_python.py: scripts run as ``python -c`` would, in one kept interpreter per environment."""
+"""tests/kernel_python.py: scripts run as ``python -c`` would, in one kept interpreter per environment;
+and what tests/conftest.py hands an xdist worker, and how a worker ends."""
+
+import atexit
+import os
+import types
 
 import pytest
-from conftest import worker_unit
+from conftest import UNIT_SECONDS, pytest_unconfigure, unit_seconds, worker_unit
 from kernel_python import KernelPythons, ScriptFailed
 
 _SHOW = """
@@ -56,3 +61,35 @@ def test_a_worker_is_handed_a_file_or_the_tests_of_a_shared_fixture(request):
     assert request.node.nodeid.endswith("@test_kernel_python")
     kernel_tests = [i.nodeid for i in request.session.items if "kernel_python" in i.fixturenames]
     assert all(i.endswith("@openblas-kernels") for i in kernel_tests), kernel_tests
+
+
+def test_the_units_are_handed_out_longest_first(request):
+    """The session's tests come unit by unit (each unit's tests together), the units longest first
+    (conftest's ``UNIT_SECONDS``, from tests/unit_seconds.json), and pyproject tells xdist to keep that order."""
+    units = [worker_unit(item) for item in request.session.items]
+    starts = [u for i, u in enumerate(units) if i == 0 or units[i - 1] != u]
+    assert len(starts) == len(set(starts)), "a unit's tests are not together"
+    costs = [unit_seconds(u) for u in starts]
+    assert costs == sorted(costs, reverse=True)
+    if len(starts) > 20:  # the whole suite: the OpenBLAS kernels' unit (about 36 s) among the first three
+        assert {"openblas-kernels"} <= set(starts[:3]) and costs[0] > 5 * costs[len(costs) // 2]
+        assert set(UNIT_SECONDS) <= set(starts), "tests/unit_seconds.json names a unit that is gone"
+    assert request.config.getoption("loadscopereorder", default=False) is False
+
+
+@pytest.mark.parametrize("exitstatus, code", [(0, 0), (1, 1)])
+def test_an_xdist_worker_ends_at_unconfigure_without_the_interpreters_finalisation(tmp_path, exitstatus, code):
+    """conftest's ``pytest_unconfigure`` ends a worker with its session's status and runs no atexit
+    handler (the interpreter's finalisation is skipped); outside a worker it returns."""
+    worker = types.SimpleNamespace(workerinput={"workerid": "gw0"}, workeroutput={"exitstatus": exitstatus})
+    marker = tmp_path / "finalised"
+    pid = os.fork()
+    if pid == 0:  # the child: a worker at its end
+        try:
+            atexit.register(marker.write_text, "atexit ran")
+            pytest_unconfigure(types.SimpleNamespace())  # the controller (no workerinput): returns
+            pytest_unconfigure(worker)
+        finally:
+            os._exit(99)  # reached only if pytest_unconfigure returned
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == code and not marker.exists()

@@ -241,10 +241,10 @@ def save_episode(episode: Episode, path, identity: dict | None = None) -> pathli
         meta[name] = scalars
         for k, v in arrs.items():
             arrays[f"{name}/{k}"] = v
-    # a file with colour: its images stored (deflate would save 41 % of them for seconds of a core)
-    # and its other large entries deflated at the fast level (0.4 MB more for the depth's counts,
-    # beside 280 MB, for 0.8 s less); a depth-only file as it always was
-    fast = frozenset({"colour/labels", "render/depth_counts"}) if episode.colour is not None else frozenset()
+    # the colour images stored (deflate would save 41 % of them for seconds of a core); the depth's
+    # counts and the colour's labels deflated at the fast level: a 4 s depth episode's file is 2 %
+    # larger (7.1 against 7.0 MB) and written in 0.16 s of deflate instead of 0.47 s
+    fast = frozenset({"render/depth_counts"} | ({"colour/labels"} if episode.colour is not None else set()))
     return write_archive(path, FORMAT, VERSION, meta, arrays, fast=fast, stored=frozenset({"colour/rgb"}))
 
 
