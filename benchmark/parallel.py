@@ -12,12 +12,14 @@ ended before the error goes on. Results arrive as they are done, with the index 
 
 from __future__ import annotations
 
+import atexit
 import multiprocessing
 import os
 import pickle
 import queue
 import signal
 import socket
+import sys
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -76,6 +78,7 @@ def _worker(parent_pid: int, progress_queue) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     one_core_worker()
     _REPORT = progress_queue.put if progress_queue is not None else None
+    atexit.register(_end_without_teardown)
 
     def watch():
         while os.getppid() == parent_pid:
@@ -83,6 +86,16 @@ def _worker(parent_pid: int, progress_queue) -> None:
         os._exit(1)
 
     threading.Thread(target=watch, name="watch-parent", daemon=True).start()
+
+
+def _end_without_teardown() -> None:
+    """A local worker's last exit handler (run first): the worker has handed every result back and
+    multiprocessing's own exit step has run (``BaseProcess._bootstrap``), so it ends here, before the
+    interpreter's teardown, for which the pool's shutdown would wait (measured: 0.74 s of an
+    ``evaluate(workers=2)``'s 3.3 s; finalisers of NumPy, numba, MuJoCo, SciPy and pandas)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
 
 
 def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | None = None,

@@ -47,6 +47,20 @@ JOBS = textwrap.dedent("""
             raise ValueError("job 0 failed")
         sleep(x)
 
+    class Said:  # writes its file when the interpreter's teardown frees it
+        def __init__(self, name):
+            self.name = name
+
+        def __del__(self, _open=os.open, _close=os.close, flags=os.O_CREAT | os.O_WRONLY):
+            _close(_open(self.name, flags))  # os's functions, bound now: the builtins may be gone by then
+
+    KEPT = []
+
+    def keep(x):
+        KEPT.append(Said(f"teardown-{os.getpid()}"))
+        time.sleep(0.2)
+        return x
+
     if __name__ == "__main__":
         if sys.argv[1] == "square":
             heard = []
@@ -55,6 +69,9 @@ JOBS = textwrap.dedent("""
             print(sorted(run_jobs(ctrl_c, [1, 2], workers=2)))
         elif sys.argv[1] == "fail":
             list(run_jobs(sleep_or_fail, [0, 1], workers=2))
+        elif sys.argv[1] == "teardown":
+            KEPT.append(Said("teardown-parent"))
+            print(sorted(run_jobs(keep, [1, 2], workers=2)))
         elif sys.argv[1] == "lambda":
             list(run_jobs(lambda x: x, [0, 1], workers=2))
         else:
@@ -77,6 +94,16 @@ def test_a_worker_leaves_ctrl_c_to_its_parent_and_says_nothing(tmp_path):
     out = subprocess.run([sys.executable, "jobs.py", "ctrl-c"], cwd=tmp_path, capture_output=True, text=True,
                          timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     assert (out.returncode, out.stdout.strip(), out.stderr) == (0, "[(0, 1), (1, 2)]", "")
+
+
+def test_a_worker_ends_without_the_interpreters_teardown(tmp_path):
+    """A worker ends after handing its results back, before the teardown that frees its modules'
+    objects (the pool's shutdown waited 0.74 s for it); the parent, the control, is torn down."""
+    (tmp_path / "jobs.py").write_text(JOBS)
+    out = subprocess.run([sys.executable, "jobs.py", "teardown"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert (out.returncode, out.stdout.strip(), out.stderr) == (0, "[(0, 1), (1, 2)]", "")
+    assert sorted(p.name for p in tmp_path.glob("teardown-*")) == ["teardown-parent"]
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
