@@ -14,6 +14,7 @@ import time
 
 import numpy as np
 import pytest
+from processes import running
 
 from benchmark.atomic import OUTPUT_MARKER, write_marker
 
@@ -143,12 +144,13 @@ def child():  # a background picture, slow to notice Ctrl-C: it writes into the 
     time.sleep(2.0)
     stage.mkdir(parents=True, exist_ok=True)
     (stage / "late.png").write_text("x")
-multiprocessing.get_context("fork").Process(target=child, daemon=True).start()
+late = multiprocessing.get_context("fork").Process(target=child, daemon=True)
+late.start()
 ready = False
 while True:
     try:  # "ready" is printed inside the try: a Ctrl-C sent on reading it cannot land outside it
         if not ready:
-            print("ready", flush=True)
+            print("ready", late.pid, flush=True)
             ready = True
         time.sleep(10)
     except KeyboardInterrupt:  # a library that swallows it: the watchdog must end the process
@@ -160,11 +162,14 @@ def test_the_watchdog_kills_children_before_it_removes_the_staging_folders(tmp_p
     stage = tmp_path / ".run.staging"
     proc = subprocess.Popen([sys.executable, "-c", _SWALLOWER, str(stage)], stdout=subprocess.PIPE,
                             env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
-    assert proc.stdout.readline().strip() == b"ready"
+    said, child = proc.stdout.readline().split()
+    assert said == b"ready"
     proc.send_signal(signal.SIGINT)
     assert proc.wait(timeout=10) == 130
-    time.sleep(2.5)  # past the moment the child would have written
-    assert not stage.exists()  # measured before the fix: the child created it again with late.png
+    deadline = time.monotonic() + 10
+    while running(int(child)) and time.monotonic() < deadline:  # killed at once, or ended after writing at 2 s
+        time.sleep(0.05)
+    assert not running(int(child)) and not stage.exists()  # measured before the fix: the child made it again
 
 
 _CUT_SHORT = """

@@ -8,6 +8,7 @@ import textwrap
 import time
 
 import pytest
+from processes import running
 
 from benchmark.parallel import report_progress, run_jobs
 
@@ -120,16 +121,8 @@ def test_no_worker_outlives_its_parent_killed_by_sigkill(tmp_path):
     alive = workers
     while alive and time.monotonic() < deadline:
         time.sleep(0.2)
-        alive = [p for p in workers if os.path.exists(f"/proc/{p}") and "Z" not in _state(p)]
+        alive = [p for p in workers if running(p)]
     assert not alive, f"workers {alive} outlived their parent"
-
-
-def _state(pid: int) -> str:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return "gone"
 
 
 def _fail_or_sleep(x):
@@ -195,6 +188,6 @@ def test_a_command_whose_job_fails_ends_in_seconds_and_leaves_no_worker(tmp_path
     sleepers = [int(line) for line in out.split()]
     assert len(sleepers) == (1 if mode == "fail" else 0)
     deadline = time.monotonic() + 5
-    while any(os.path.exists(f"/proc/{p}") and "Z" not in _state(p) for p in sleepers) and time.monotonic() < deadline:
+    while any(running(p) for p in sleepers) and time.monotonic() < deadline:
         time.sleep(0.2)
-    assert not [p for p in sleepers if os.path.exists(f"/proc/{p}") and "Z" not in _state(p)], "a worker outlived the command"
+    assert not [p for p in sleepers if running(p)], "a worker outlived the command"
