@@ -406,6 +406,12 @@ def write_folder(out: str | os.PathLike, files: dict) -> pathlib.Path:
     return pathlib.Path(out)
 
 
+def user_cache() -> pathlib.Path:
+    """fsv-bench's folder under the user's cache: ``$XDG_CACHE_HOME/fsv-bench``, else ``~/.cache/fsv-bench``."""
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return pathlib.Path(base) / "fsv-bench"
+
+
 def write_bytes(path: str | os.PathLike, data: bytes) -> pathlib.Path:
     """Writes ``data`` to ``path`` atomically and returns the path."""
     with atomic_path(path) as tmp:

@@ -18,8 +18,10 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import json
 import pathlib
 
+from benchmark.atomic import user_cache, write_text
 from benchmark.source import LazyImportGraph, closure, modules, normalised_code
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -64,18 +66,68 @@ def code_of(root: pathlib.Path, entry_points) -> list:
 def world_fingerprint(root: pathlib.Path = ROOT) -> str:
     """Fingerprint of the world: the code :data:`WORLD_ENTRY_POINTS` run and ``sim_assets/``'s data.
 
-    This installation's (``root`` left as it is) is computed once per process: it keys every cached
-    episode and file an evaluation touches, and its code does not change while it runs.
+    This installation's (``root`` left as it is) is computed once per process, and remembered across
+    processes (:func:`remembered_world`): it keys every cached episode and file an evaluation
+    touches, and its code does not change while it runs.
     """
     if pathlib.Path(root) == ROOT:
         return _this_world()
-    root = pathlib.Path(root)
+    return _world(pathlib.Path(root))
+
+
+def _world(root: pathlib.Path) -> str:
     return content_fingerprint(code_of(root, WORLD_ENTRY_POINTS), _data_files(root, DATA_FOLDERS["world"]))
 
 
 @functools.lru_cache(maxsize=1)
 def _this_world() -> str:
-    return content_fingerprint(code_of(ROOT, WORLD_ENTRY_POINTS), _data_files(ROOT, DATA_FOLDERS["world"]))
+    return remembered_world(ROOT, user_cache() / MEMO_NAME)
+
+
+MEMO_NAME = "world-fingerprints.json"
+"""The file, in fsv-bench's folder of the user's cache, that remembers world fingerprints."""
+
+MEMO_ENTRIES = 16
+"""How many (sources, fingerprint) pairs the memo keeps, the most recently made last."""
+
+
+def sources_key(root: pathlib.Path) -> str:
+    """sha256 over the path and bytes of every module of the packages and every world data file under
+    ``root``: whatever could change :func:`world_fingerprint` changes it (6 ms, against 0.4 s for the
+    fingerprint, which parses the modules the world imports)."""
+    root = pathlib.Path(root)
+    h = hashlib.sha256()
+    for p in sorted(modules(root).values()) + _data_files(root, DATA_FOLDERS["world"]):
+        data = p.read_bytes()
+        h.update(f"{p.relative_to(root).as_posix()}\0{len(data)}\0".encode())
+        h.update(data)
+    return h.hexdigest()
+
+
+def remembered_world(root: pathlib.Path, memo: pathlib.Path) -> str:
+    """:func:`world_fingerprint` of ``root``, read from the JSON file ``memo`` under its
+    :func:`sources_key`, or computed and added there (the :data:`MEMO_ENTRIES` most recent kept).
+    Every process that keys a cached episode needs it (a pool's workers, each command): the first
+    computes it, the others read it. A memo that cannot be read is made again; one that cannot be
+    written (a read-only cache) is left as it is."""
+    key = sources_key(root)
+    try:
+        known = json.loads(memo.read_text())
+        if not isinstance(known, dict):
+            known = {}
+    except (OSError, ValueError):
+        known = {}
+    value = known.get(key)
+    if isinstance(value, str) and len(value) == 64:
+        return value
+    value = _world(pathlib.Path(root))
+    known.pop(key, None)
+    known[key] = value
+    try:
+        write_text(memo, json.dumps(dict(list(known.items())[-MEMO_ENTRIES:]), indent=1) + "\n")
+    except OSError:
+        pass
+    return value
 
 
 def results_fingerprint(root: pathlib.Path = ROOT) -> str:

@@ -20,6 +20,7 @@ from benchmark.atomic import (
     staged_folder,
     staging_folder,
     swap_folder,
+    user_cache,
     write_marker,
     write_text,
 )
@@ -288,3 +289,13 @@ def test_after_ctrl_c_no_write_makes_a_removed_folder_again(tmp_path, monkeypatc
     with atomic_path(gone / "episode.npz") as tmp:  # without Ctrl-C the folder is made as before
         tmp.write_bytes(b"on time")
     assert (gone / "episode.npz").read_bytes() == b"on time"
+
+
+def test_the_users_cache_is_xdg_cache_home_or_the_home_folders_dot_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert user_cache() == tmp_path / "xdg" / "fsv-bench"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert user_cache() == tmp_path / "home" / ".cache" / "fsv-bench"
+    monkeypatch.setenv("XDG_CACHE_HOME", "")  # empty: as if unset
+    assert user_cache() == tmp_path / "home" / ".cache" / "fsv-bench"

@@ -1,13 +1,21 @@
 """Fingerprints of the code behind a result: code that runs counts; comments, docstrings and paths do not."""
 
+import json
 import pathlib
 
+import pytest
+
+from benchmark import fingerprint
 from benchmark.fingerprint import (
+    MEMO_ENTRIES,
+    MEMO_NAME,
     RESULTS_ENTRY_POINTS,
     ROOT,
     WORLD_ENTRY_POINTS,
     code_of,
+    remembered_world,
     results_fingerprint,
+    sources_key,
     world_fingerprint,
 )
 
@@ -93,3 +101,60 @@ def test_the_world_fingerprint_reads_only_the_modules_the_world_imports(tmp_path
     for entry_points in (WORLD_ENTRY_POINTS, RESULTS_ENTRY_POINTS):
         lazy, expected = LazyImportGraph(ROOT), closure(whole, entry_points)
         assert closure(lazy, entry_points) == expected == sorted(lazy.parsed) and len(lazy.parsed) < len(whole)
+
+
+def _tree_in(folder: pathlib.Path) -> pathlib.Path:
+    folder.mkdir()
+    return _tree(folder)
+
+
+def test_a_remembered_world_is_read_back_without_parsing_and_made_again_when_a_byte_changes(tmp_path, monkeypatch):
+    tree, memo = _tree_in(tmp_path / "t"), tmp_path / "memo.json"
+    first = remembered_world(tree, memo)
+    assert first == world_fingerprint(tree) and json.loads(memo.read_text()) == {sources_key(tree): first}
+
+    def no_parsing(root):
+        raise AssertionError("parsed again")
+
+    monkeypatch.setattr(fingerprint, "_world", no_parsing)
+    assert remembered_world(tree, memo) == first  # read back: nothing parsed
+    monkeypatch.undo()
+    helper = tree / "benchmark/world/helper.py"
+    helper.write_text("# a comment\n" + helper.read_text())  # another key, the same fingerprint
+    assert remembered_world(tree, memo) == first and len(json.loads(memo.read_text())) == 2
+    helper.write_text(helper.read_text().replace("x + 1", "x + 2"))
+    changed = remembered_world(tree, memo)
+    assert changed != first and changed == world_fingerprint(tree)
+    assert list(json.loads(memo.read_text()).values())[-1] == changed
+
+
+@pytest.mark.parametrize("content", ["not json", "[1, 2]", '{"KEY": "short"}'])
+def test_a_damaged_memo_is_made_again(tmp_path, content):
+    tree, memo = _tree_in(tmp_path / "t"), tmp_path / "memo.json"
+    memo.write_text(content.replace("KEY", sources_key(tree)))
+    assert remembered_world(tree, memo) == world_fingerprint(tree)
+    assert json.loads(memo.read_text()) == {sources_key(tree): world_fingerprint(tree)}
+
+
+def test_the_memo_keeps_the_most_recent_entries_and_one_that_cannot_be_written_is_left_alone(tmp_path):
+    tree, memo = _tree_in(tmp_path / "t"), tmp_path / "memo.json"
+    memo.write_text(json.dumps({f"{i:064x}": f"{i:064x}" for i in range(MEMO_ENTRIES + 4)}))
+    value = remembered_world(tree, memo)
+    known = json.loads(memo.read_text())
+    assert len(known) == MEMO_ENTRIES and list(known.items())[-1] == (sources_key(tree), value)
+    assert f"{MEMO_ENTRIES + 3:064x}" in known and f"{0:064x}" not in known  # the oldest went
+    blocked = tmp_path / "a-file"  # a memo that cannot be written (as root, no mode refuses it)
+    blocked.write_text("x")
+    assert remembered_world(tree, blocked / "memo.json") == value  # computed; nothing written, no error
+    assert blocked.read_text() == "x"
+
+
+def test_this_installations_world_is_remembered_in_the_users_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    fingerprint._this_world.cache_clear()
+    try:
+        value = world_fingerprint()
+    finally:
+        fingerprint._this_world.cache_clear()
+    assert json.loads((tmp_path / "fsv-bench" / MEMO_NAME).read_text()) == {sources_key(ROOT): value}
+    assert value == world_fingerprint(ROOT / ".") == fingerprint._world(ROOT)

@@ -38,6 +38,7 @@ from benchmark.atomic import (
     is_owned,
     remove_stale_temporaries,
     staged_folder,
+    user_cache,
 )
 from benchmark.errors import BenchmarkError, EpisodeFileError
 from benchmark.fingerprint import world_fingerprint
@@ -63,8 +64,7 @@ class GateFailure(BenchmarkError):
 
 
 def default_cache() -> pathlib.Path:
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return pathlib.Path(base) / "fsv-bench" / "episodes"
+    return user_cache() / "episodes"
 
 
 def episode_cache(cache: str | os.PathLike | None = None) -> pathlib.Path:
