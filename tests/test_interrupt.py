@@ -48,9 +48,14 @@ def _run_and_interrupt(out, delay_s: float | None) -> tuple:
 def test_ctrl_c_at_random_times_gives_130_and_keeps_the_previous_output(tmp_path):
     """The signal comes at seeded fractions of the command's own time on this machine, one in each
     fifth of its first 85 % (imports to pictures), measured by a whole run first (a fixed range of
-    delays let a fast machine finish before most of them: 2.4 s here, where the delays ran to 6 s)."""
+    delays let a fast machine finish before most of them: 2.4 s here, where the delays ran to 6 s).
+    A whole run that compiled the tracker (numba's cache empty, as in a clean clone's first run:
+    22 s against 2.5 s) is run again for the time."""
     code, whole_s, err = _run_and_interrupt(tmp_path / "whole", None)
     assert code == 0, err
+    if json.loads((tmp_path / "whole" / "summary.json").read_text())["tracking"]["compile_s"] > 0.5:
+        code, whole_s, err = _run_and_interrupt(tmp_path / "whole", None)
+        assert code == 0, err
     out = tmp_path / "run"
     out.mkdir()
     write_marker(out)
