@@ -16,6 +16,8 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from kernel_python import KernelPythons  # noqa: E402
 
+from benchmark.atomic import write_text  # noqa: E402
+
 # Ray, when a test starts a local cluster, stays on the loopback interface (it otherwise swaps
 # 127.0.0.1 for the machine's outward address); Ray reads this when it is imported.
 os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
@@ -211,11 +213,43 @@ SHARED_ON_ONE_WORKER = {"kernel_python": "openblas-kernels", "ray_cluster": "ray
 """Fixtures that start costly processes, and the xdist group of the tests that use them."""
 
 
-UNIT_SECONDS = json.loads((pathlib.Path(__file__).parent / "unit_seconds.json").read_text())
+UNIT_SECONDS_FILE = pathlib.Path(__file__).parent / "unit_seconds.json"
+
+UNIT_SECONDS = json.loads(UNIT_SECONDS_FILE.read_text())
 """Wall seconds of each unit that takes 1 s or more (tests/unit_seconds.json: a whole ``-n auto`` run on
-the 2-core Xeon, load about 2, 2026-11-29, per-test times summed by unit):
-:func:`pytest_collection_modifyitems` hands out the longest first. Only their order matters; a unit
-not listed counts :data:`UNLISTED_SECONDS`."""
+the 2-core Xeon, load about 2, 2026-11-29, per-test times summed by unit; ``pytest -n auto
+--write-unit-seconds`` writes it again from a run's reports): :func:`pytest_collection_modifyitems`
+hands out the longest first. Only their order matters; a unit not listed counts :data:`UNLISTED_SECONDS`."""
+
+_SEEN_SECONDS: dict = {}
+"""Each unit's summed test durations in this run (setup, call, teardown), as the reports arrive."""
+
+
+def pytest_addoption(parser):
+    parser.addoption("--write-unit-seconds", action="store_true",
+                     help="write tests/unit_seconds.json from this run's test durations, summed by xdist unit "
+                          "(run the whole suite, with -n auto)")
+
+
+def pytest_runtest_logreport(report):
+    """Adds a report's duration to its unit's: with xdist the controller hears every worker's
+    reports, whose ids end in ``@<unit>``."""
+    unit = report_unit(report.nodeid)
+    if unit is not None:
+        _SEEN_SECONDS[unit] = _SEEN_SECONDS.get(unit, 0.0) + report.duration
+
+
+def report_unit(nodeid: str) -> str | None:
+    """A test id's unit, its ``@<unit>`` suffix (xdist's group; a parameter may hold "@" too), or None
+    for an id without one (a run without xdist)."""
+    test = nodeid.rpartition("::")[2]
+    return test.rpartition("@")[2] if "@" in test else None
+
+
+def unit_seconds_json(seconds: dict) -> str:
+    """The content of tests/unit_seconds.json: each unit of 1 s or more, longest first, to 0.1 s."""
+    kept = sorted(((u, round(s, 1)) for u, s in seconds.items() if s >= 1.0), key=lambda us: (-us[1], us[0]))
+    return json.dumps(dict(kept), indent=1) + "\n"
 
 UNLISTED_SECONDS = 0.5
 """What a unit not in :data:`UNIT_SECONDS` is taken to cost (each measured under 1 s)."""
@@ -287,8 +321,22 @@ def pytest_runtest_teardown(item, nextitem):
 
 
 def pytest_sessionfinish(session):
-    """The Ray cluster, if a test left one running, ends with the session."""
+    """The Ray cluster, if a test left one running, ends with the session; with
+    ``--write-unit-seconds``, the run's units' seconds are written (by the controller, which heard
+    every report; not after a run that failed or was cut short)."""
     stop_ray()
+    config = session.config
+    if not config.getoption("write_unit_seconds") or hasattr(config, "workerinput"):
+        return
+    missing = sorted(set(UNIT_SECONDS) - set(_SEEN_SECONDS))
+    if session.testsfailed or session.shouldstop or missing or not _SEEN_SECONDS:
+        why = (f"{session.testsfailed} tests failed" if session.testsfailed else "the run stopped early"
+               if session.shouldstop else "no test ran under xdist (-n auto)" if not _SEEN_SECONDS
+               else f"units of the file did not run: {', '.join(missing[:5])}")
+        config.pluginmanager.get_plugin("terminalreporter").write_line(
+            f"{UNIT_SECONDS_FILE.name} not written: {why} (it needs the whole suite, green, with -n auto)")
+        return
+    write_text(UNIT_SECONDS_FILE, unit_seconds_json(_SEEN_SECONDS))
 
 
 @pytest.hookimpl(trylast=True)

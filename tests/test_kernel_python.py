@@ -2,11 +2,12 @@
 and what tests/conftest.py hands an xdist worker, and how a worker ends."""
 
 import atexit
+import json
 import os
 import types
 
 import pytest
-from conftest import UNIT_SECONDS, pytest_unconfigure, unit_seconds, worker_unit
+from conftest import UNIT_SECONDS, pytest_unconfigure, report_unit, unit_seconds, unit_seconds_json, worker_unit
 from kernel_python import KernelPythons, ScriptFailed
 
 _SHOW = """
@@ -93,3 +94,19 @@ def test_an_xdist_worker_ends_at_unconfigure_without_the_interpreters_finalisati
             os._exit(99)  # reached only if pytest_unconfigure returned
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == code and not marker.exists()
+
+
+@pytest.mark.parametrize("nodeid, unit", [
+    ("tests/test_a.py::test_x@test_a", "test_a"),
+    ("tests/test_b.py::test_y[Haswell]@openblas-kernels", "openblas-kernels"),
+    ("tests/test_b.py::test_y[a@b]@ray", "ray"),  # a parameter with "@": the last one is xdist's
+    ("tests/test_a.py::test_x", None),  # no xdist group (a run without -n): no unit
+])
+def test_a_reports_unit_is_its_xdist_group(nodeid, unit):
+    assert report_unit(nodeid) == unit
+
+
+def test_the_unit_seconds_file_holds_the_units_of_a_second_or_more_longest_first():
+    text = unit_seconds_json({"test_b": 2.04, "ray": 11.36, "test_c": 0.99, "test_a": 2.04, "openblas-kernels": 36.0})
+    assert list(json.loads(text).items()) == [("openblas-kernels", 36.0), ("ray", 11.4), ("test_a", 2.0), ("test_b", 2.0)]
+    assert text.endswith("}\n") and text == unit_seconds_json(json.loads(text) | {"test_c": 0.5})
