@@ -1,7 +1,6 @@
 """Shared pytest fixtures."""
 
 import json
-import multiprocessing.util
 import os
 import pathlib
 import sys
@@ -17,6 +16,7 @@ import pytest  # noqa: E402
 from kernel_python import KernelPythons  # noqa: E402
 
 from benchmark.atomic import write_text  # noqa: E402
+from benchmark.interrupt import _release_multiprocessing  # noqa: E402
 
 # Ray, when a test starts a local cluster, stays on the loopback interface (it otherwise swaps
 # 127.0.0.1 for the machine's outward address); Ray reads this when it is imported.
@@ -328,15 +328,26 @@ def pytest_sessionfinish(session):
     config = session.config
     if not config.getoption("write_unit_seconds") or hasattr(config, "workerinput"):
         return
+    why = _why_not_whole(session)
+    if why is None:
+        write_text(UNIT_SECONDS_FILE, unit_seconds_json(_SEEN_SECONDS))
+    else:
+        config.pluginmanager.get_plugin("terminalreporter").write_line(  # after the progress line
+            f"\n{UNIT_SECONDS_FILE.name} not written: {why} (it needs the whole suite, green, with -n auto)")
+
+
+def _why_not_whole(session) -> str | None:
+    """Why this run's seconds cannot replace tests/unit_seconds.json, or None when they can."""
     missing = sorted(set(UNIT_SECONDS) - set(_SEEN_SECONDS))
-    if session.testsfailed or session.shouldstop or missing or not _SEEN_SECONDS:
-        why = (f"{session.testsfailed} tests failed" if session.testsfailed else "the run stopped early"
-               if session.shouldstop else "no test ran under xdist (-n auto)" if not _SEEN_SECONDS
-               else f"units of the file did not run: {', '.join(missing[:5])}")
-        config.pluginmanager.get_plugin("terminalreporter").write_line(
-            f"{UNIT_SECONDS_FILE.name} not written: {why} (it needs the whole suite, green, with -n auto)")
-        return
-    write_text(UNIT_SECONDS_FILE, unit_seconds_json(_SEEN_SECONDS))
+    if session.testsfailed:
+        return f"{session.testsfailed} tests failed"
+    if session.shouldstop:
+        return "the run stopped early"
+    if not _SEEN_SECONDS:
+        return "no test ran under xdist (-n auto)"
+    if missing:
+        return f"units of the file did not run: {', '.join(missing[:5])}"
+    return None
 
 
 @pytest.hookimpl(trylast=True)
@@ -344,10 +355,11 @@ def pytest_unconfigure(config):
     """An xdist worker ends here, without the interpreter's finalisation: its results reached the
     controller at the session's end ("workerfinished"), and the controller waits for the process to
     exit (measured: 1.5-4 s for a worker of the whole suite, 0.3 s of them for unloading torch alone).
-    Multiprocessing's exit step still runs (no semaphore left to its resource tracker)."""
+    Multiprocessing's exit step still runs (no semaphore left to its resource tracker), as in an
+    interrupted command's end."""
     if not hasattr(config, "workerinput"):
         return
-    multiprocessing.util._run_finalizers(0)
+    _release_multiprocessing()
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(0 if config.workeroutput.get("exitstatus", 0) == 0 else 1)
