@@ -6,7 +6,6 @@ dependency only; the method never imports it.
 
 from __future__ import annotations
 
-import cvxpy as cp
 import numpy as np
 
 from fsv import Contacts, Kinematics, ObjectModel
@@ -114,6 +113,8 @@ def oracle(kind, required, contacts: Contacts, t: int, model: ObjectModel, targe
         ``(nominal (K, 3), internal (K, 3), corner forces (len(corners), 3))``; the corner forces
         are the totals (nominal + internal).
     """
+    import cvxpy as cp  # lazy: cvxpy (0.25 s) off every xdist worker's collection of the modules that import this one
+
     K = len(contacts.finger_names)
     mu, mut = model.friction, model.table_friction
     cons, cost = [], 0
