@@ -1,6 +1,6 @@
 """Work over episodes in this process, a local process pool, or a Ray cluster, with the same results.
 
-    for i, result in run_jobs(fn, jobs, workers=2): ...          # local pool (spawned processes)
+    for i, result in run_jobs(fn, jobs, workers=2): ...          # local pool (worker processes)
     for i, result in run_jobs(fn, jobs, ray_address="host:port"): # Ray tasks
 
 ``fn`` must be a module-level function (it is pickled to the workers; one that cannot be is
@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import atexit
 import multiprocessing
+import multiprocessing.connection
+import multiprocessing.forkserver
 import os
 import pickle
 import queue
@@ -21,7 +23,6 @@ import signal
 import socket
 import sys
 import threading
-import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable, Iterator
 
@@ -67,22 +68,24 @@ def report_progress(count: int = 1) -> None:
         _REPORT(count)
 
 
-def _worker(parent_pid: int, progress_queue) -> None:
+def _worker(progress_queue) -> None:
     """Local worker initializer: one core's work, :func:`report_progress` to the parent's queue, and
-    the worker ends when its parent dies (even by SIGKILL, which no cleanup code sees). Ctrl-C,
-    which a terminal sends to the whole process group, is ignored here: the parent takes it and
-    ends its workers (a worker's own KeyboardInterrupt would print "Process SpawnProcess-1:" and a
-    traceback above the command's one line)."""
+    the worker ends when its parent dies (even by SIGKILL, which no cleanup code sees): it waits on
+    multiprocessing's sentinel of the parent, a pipe whose other end the parent holds, so that a
+    worker forked by the fork server (whose process parent is the server) ends with the pool's
+    owner too. Ctrl-C, which a terminal sends to the whole process group, is ignored here: the
+    parent takes it and ends its workers (a worker's own KeyboardInterrupt would print
+    "Process SpawnProcess-1:" and a traceback above the command's one line)."""
 
     global _REPORT
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     one_core_worker()
     _REPORT = progress_queue.put if progress_queue is not None else None
     atexit.register(_end_without_teardown)
+    parent = multiprocessing.parent_process()
 
     def watch():
-        while os.getppid() == parent_pid:
-            time.sleep(1.0)
+        parent.join()
         os._exit(1)
 
     threading.Thread(target=watch, name="watch-parent", daemon=True).start()
@@ -106,8 +109,9 @@ def run_jobs(fn: Callable, jobs: list, *, workers: int = 1, ray_address: str | N
         fn: A module-level function of one job.
         jobs: The jobs.
         workers: Local worker processes (1: in this process); ignored with ``ray_address``. Local
-            workers are spawned (no forked torch or OpenGL state), use one core each and end with
-            this process.
+            workers start fresh (:func:`pool_context`: forked from a fork server that has only
+            imported modules, or spawned; no forked torch or OpenGL state), use one core each and
+            end with this process.
         ray_address: A Ray cluster's address ("auto", "host:port" or "ray://host:port").
         on_progress: Called in this process with the counts the jobs report
             (:func:`report_progress`); not on Ray.
@@ -158,9 +162,48 @@ def _stop(pool, processes: list) -> None:
         manager.join(timeout=5.0)
 
 
+SERVER_SETUP = "benchmark.one_core"
+"""The module the fork server imports first (:func:`pool_context`): it sets :data:`ONE_CORE_ENV` in
+the server's environment before any numerical library loads there."""
+
+_server_env: dict | None = None
+"""This process's environment when it started the fork server (None: it has not)."""
+
+
+def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
+    """How a local pool starts its workers: forked by this process's fork server where it can be,
+    else spawned.
+
+    A spawned worker starts an interpreter and imports NumPy, SciPy, MuJoCo, numba and the job's
+    module again (about 1 s of CPU a worker, measured); the fork server (Linux) imports them once,
+    with :data:`ONE_CORE_ENV` (:data:`SERVER_SETUP`), and forks each worker from itself. It is
+    started by this process's first pool, with ``fn``'s module preloaded, and serves its later pools
+    while the environment is the one it started with. A changed environment (a worker must see this
+    process's), another platform (macOS's frameworks are not safe to fork) or a fork server that
+    another library started (its preloads and environment are not known) gives spawned workers. A
+    forked worker is the same program in a fresh state as a spawned one: the results do not depend
+    on which (``tests/test_parallel.py``).
+    """
+    global _server_env
+    spawn = multiprocessing.get_context("spawn")
+    if not sys.platform.startswith("linux") or "forkserver" not in multiprocessing.get_all_start_methods():
+        return spawn
+    server = multiprocessing.forkserver._forkserver
+    if _server_env is None:
+        if server._forkserver_pid is not None:
+            return spawn
+        preload = [SERVER_SETUP, __name__] + ([fn.__module__] if fn.__module__ not in ("__main__", __name__) else [])
+        server.set_forkserver_preload(preload)
+        server.ensure_running()
+        _server_env = dict(os.environ)
+    elif dict(os.environ) != _server_env:
+        return spawn
+    return multiprocessing.get_context("forkserver")
+
+
 def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple]:
     check_picklable(fn, jobs)
-    ctx = multiprocessing.get_context("spawn")
+    ctx = pool_context(fn)
     manager = ctx.Manager() if on_progress is not None else None
     heard = manager.Queue() if manager is not None else None
 
@@ -171,7 +214,7 @@ def _pool(fn: Callable, jobs: list, workers: int, on_progress) -> Iterator[tuple
             except queue.Empty:
                 return
 
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker, initargs=(os.getpid(), heard))
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_worker, initargs=(heard,))
     try:
         futures = {pool.submit(fn, job): i for i, job in enumerate(jobs)}
         pending = set(futures)

@@ -1,5 +1,6 @@
 """benchmark.parallel: jobs in this process or a local pool, their progress, and workers that end with their parent."""
 
+import json
 import os
 import signal
 import subprocess
@@ -26,7 +27,7 @@ def test_in_process_jobs_give_their_results_and_report_their_progress():
 
 
 JOBS = textwrap.dedent("""
-    import os, signal, sys, time
+    import json, os, signal, sys, time
     from benchmark.parallel import report_progress, run_jobs
 
     def square(x):
@@ -55,6 +56,10 @@ JOBS = textwrap.dedent("""
         def __del__(self, _open=os.open, _close=os.close, flags=os.O_CREAT | os.O_WRONLY):
             _close(_open(self.name, flags))  # os's functions, bound now: the builtins may be gone by then
 
+    def where(x):  # how the worker was started, and what it was given
+        return (os.getppid(), os.environ.get("OPENBLAS_NUM_THREADS"), os.environ.get("NPY_ENABLE_CPU_FEATURES"),
+                os.environ.get("FSV_TEST_CHANGED"))
+
     KEPT = []
 
     def keep(x):
@@ -75,7 +80,15 @@ JOBS = textwrap.dedent("""
             print(sorted(run_jobs(keep, [1, 2], workers=2)))
         elif sys.argv[1] == "lambda":
             list(run_jobs(lambda x: x, [0, 1], workers=2))
+        elif sys.argv[1] == "where":
+            pools = [sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))) for _ in range(2)]
+            os.environ["FSV_TEST_CHANGED"] = "1"
+            pools.append(sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))))
+            print(json.dumps({"parent": os.getpid(), "pools": pools}))
         else:
+            if sys.argv[1] == "sleep-spawned":  # another library started the fork server: the pool spawns
+                import multiprocessing.forkserver
+                multiprocessing.forkserver.ensure_running()
             list(run_jobs(sleep, [0, 1], workers=2))
 """)
 
@@ -107,10 +120,28 @@ def test_a_worker_ends_without_the_interpreters_teardown(tmp_path):
     assert sorted(p.name for p in tmp_path.glob("teardown-*")) == ["teardown-parent"]
 
 
-@pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
-def test_no_worker_outlives_its_parent_killed_by_sigkill(tmp_path):
+@pytest.mark.skipif(sys.platform != "linux", reason="forks its workers from a fork server on Linux only")
+def test_a_pool_forks_its_workers_from_one_server_with_one_core_each_while_the_environment_stands(tmp_path):
+    """Two pools' workers are forked by one fork server (their parent, not the pool's owner), with one
+    core's environment and NumPy's baseline; after the owner changes its environment, the next
+    pool's workers are spawned, its children, and see the change."""
     (tmp_path / "jobs.py").write_text(JOBS)
-    parent = subprocess.Popen([sys.executable, "jobs.py", "sleep"], cwd=tmp_path, stdout=subprocess.PIPE, text=True,
+    out = subprocess.run([sys.executable, "jobs.py", "where"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert out.returncode == 0, out.stderr
+    said = json.loads(out.stdout)
+    first, second, changed = said["pools"]
+    assert len(first) == 1 and first == second, said  # one server, the parent of every worker of both pools
+    server, threads, simd, seen = first[0]
+    assert server != said["parent"] and (threads, simd, seen) == ("1", " ", None), said
+    assert changed == [[said["parent"], "1", " ", "1"]], said
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
+@pytest.mark.parametrize("mode", ["sleep", "sleep-spawned"], ids=["forked", "spawned"])
+def test_no_worker_outlives_its_parent_killed_by_sigkill(tmp_path, mode):
+    (tmp_path / "jobs.py").write_text(JOBS)
+    parent = subprocess.Popen([sys.executable, "jobs.py", mode], cwd=tmp_path, stdout=subprocess.PIPE, text=True,
                               env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     try:
         workers = [int(parent.stdout.readline()) for _ in range(2)]
@@ -133,9 +164,13 @@ def _fail_or_sleep(x):
 
 
 def _live_workers() -> list:
-    """This process's spawned worker processes still running (not zombies), read from /proc (the
-    resource tracker that multiprocessing keeps for the process's lifetime is not one)."""
+    """This process's worker processes still running (not zombies), read from /proc: its spawned
+    children and the children of its fork server (the resource tracker and the fork server, which
+    multiprocessing keeps for the process's lifetime, are not workers)."""
+    import multiprocessing.forkserver
+
     me, alive = os.getpid(), []
+    server = multiprocessing.forkserver._forkserver._forkserver_pid
     for entry in os.listdir("/proc"):
         if entry.isdigit():
             try:
@@ -145,7 +180,9 @@ def _live_workers() -> list:
                     command = fh.read()
             except OSError:
                 continue
-            if int(fields[1]) == me and fields[0] != "Z" and b"spawn_main" in command:
+            if fields[0] == "Z":
+                continue
+            if (int(fields[1]) == me and b"spawn_main" in command) or (server and int(fields[1]) == server):
                 alive.append(int(entry))
     return alive
 
