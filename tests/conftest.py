@@ -3,6 +3,7 @@
 import json
 import os
 import pathlib
+import shutil
 import sys
 
 import benchmark  # noqa: F401  (NumPy at its baseline instructions: set before NumPy is imported)
@@ -82,6 +83,28 @@ def analytic_truth_factory():
 
 
 # --- world: short simulated episodes, simulated once per session ----------------------
+
+
+@pytest.fixture(scope="session")
+def tiny_episode_folder(tmp_path_factory):
+    """A cache folder holding the tiny suite's episode, made once per test process (it is read, never
+    written: :func:`tiny_cache` hands out copies)."""
+    from tiny_suite import TINY
+
+    from benchmark.suites.evaluate import cached_episode
+
+    folder = tmp_path_factory.mktemp("tiny-cache")
+    cached_episode(TINY, TINY.scenarios[0], folder)
+    return folder
+
+
+@pytest.fixture
+def tiny_cache(tiny_episode_folder, tmp_path):
+    """A cache that holds the tiny suite's episode, this test's own copy (``tmp_path / "tiny-cache"``):
+    some twenty tests evaluate, export, sweep or score the tiny suite, and each simulated, rendered and
+    saved the same episode again (0.35 s of CPU a test). A test that checks what a cold cache does
+    keeps an empty one of its own."""
+    return shutil.copytree(tiny_episode_folder, tmp_path / "tiny-cache")
 
 
 @pytest.fixture(scope="session")

@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.commands import atlas
 from benchmark.suites import SUITES
@@ -47,12 +47,12 @@ def test_each_cause_comes_from_its_evidence(lab, exact, expected):
         assert needle in text, (text, needle)
 
 
-def test_lost_contacts_are_counted_where_the_truth_has_two_digits_or_more(monkeypatch, tmp_path):
+def test_lost_contacts_are_counted_where_the_truth_has_two_digits_or_more(monkeypatch, tiny_cache):
     """A tracker that finds no contact at all: every frame where the truth has two or more digits on
     the box is a lost-contact frame, and no digit is invented."""
     import benchmark.commands.atlas as module
 
-    episode, _ = cached_episode(TINY, TINY.scenarios[0], tmp_path)
+    episode, _ = cached_episode(TINY, TINY.scenarios[0], tiny_cache)
     real = module.run_method
 
     def without_contacts(spec, ep, inputs=None):
@@ -66,12 +66,12 @@ def test_lost_contacts_are_counted_where_the_truth_has_two_digits_or_more(monkey
     assert two > 10 and found["no_contact_frames"] == two and found["phantom_finger_frames"] == 0
 
 
-def test_a_lost_table_is_counted_where_the_table_carries_the_box(monkeypatch, tmp_path):
+def test_a_lost_table_is_counted_where_the_table_carries_the_box(monkeypatch, tiny_cache):
     """Nominal forces without any table force: every frame where the table pushes with more than half
     the box's weight (the box standing on it before the lift) has lost the table."""
     import benchmark.commands.atlas as module
 
-    episode, _ = cached_episode(TINY, TINY.scenarios[0], tmp_path)
+    episode, _ = cached_episode(TINY, TINY.scenarios[0], tiny_cache)
     real = module.run_method
 
     def without_table(spec, ep, inputs=None):
@@ -86,9 +86,9 @@ def test_a_lost_table_is_counted_where_the_table_carries_the_box(monkeypatch, tm
     assert atlas.diagnose(episode, "exact")["table_lost_frames"] == standing
 
 
-def test_the_command_writes_the_atlas_of_a_suite(monkeypatch, tmp_path, capsys):
+def test_the_command_writes_the_atlas_of_a_suite(monkeypatch, tmp_path, tiny_cache, capsys):
     monkeypatch.setitem(SUITES, "tiny", TINY)
-    assert atlas.main(["--suite", "tiny", "--out", str(tmp_path / "atlas"), "--cache", str(tmp_path / "cache"),
+    assert atlas.main(["--suite", "tiny", "--out", str(tmp_path / "atlas"), "--cache", str(tiny_cache),
                        "--quiet"]) == 0
     doc = json.loads((tmp_path / "atlas" / "atlas.json").read_text())
     (episode,) = doc["episodes"]
@@ -117,7 +117,7 @@ def test_run_as_a_script_its_episodes_go_to_worker_processes(tmp_path):
 
     code = ("import runpy, sys\n"
             "from benchmark.suites import SUITES\n"
-            "from test_evaluate import TINY\n"
+            "from tiny_suite import TINY\n"
             "SUITES['tiny'] = TINY\n"
             f"sys.argv = ['atlas', '--suite', 'tiny', '--workers', '2', '--quiet', '--out', {str(tmp_path / 'a')!r}, "
             f"'--cache', {str(tmp_path / 'c')!r}]\n"

@@ -4,11 +4,12 @@ variant, scored as the method run end to end would be; the table's rows, tones a
 import importlib.util
 import json
 import pathlib
+import shutil
 import sys
 
 import numpy as np
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.camera.appearance import appearance_of, skin_of
 from benchmark.camera.colour import render_colour
@@ -24,10 +25,11 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory):
-    """The command on the tiny suite (one 1.5 s lift): its folder, document and cache."""
+def run(tmp_path_factory, tiny_episode_folder):
+    """The command on the tiny suite (one 1.5 s lift): its folder, document and cache (which held the
+    episode's depth: the command rendered its colour variants)."""
     base = tmp_path_factory.mktemp("colour_ablation")
-    out, cache = base / "out", base / "cache"
+    out, cache = base / "out", shutil.copytree(tiny_episode_folder, base / "cache")
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(SUITES, "tiny", TINY)
         assert ca.main(["--suite", "tiny", "--out", str(out), "--cache", str(cache), "--quiet"]) == 0

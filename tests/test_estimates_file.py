@@ -11,7 +11,7 @@ import zipfile
 import h5py
 import numpy as np
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.commands.cli import main
 from benchmark.exchange import load_estimate
@@ -285,7 +285,7 @@ def test_check_and_score_on_a_hostile_file_use_at_most_twice_a_valid_files_memor
     check = ["-m", "benchmark.commands.entry", "check"]
     base, hostile = peak_kib(*check, str(valid), env=env), peak_kib(*check, str(gib_file), env=env)
     assert hostile <= 2 * base, (base, hostile)
-    score = ("import sys; from benchmark.suites import SUITES; from test_evaluate import TINY; "
+    score = ("import sys; from benchmark.suites import SUITES; from tiny_suite import TINY; "
              "SUITES['tiny'] = TINY; from benchmark.commands.cli import main; sys.exit(main(sys.argv[1:]))")
     env["PYTHONPATH"] = f"{ROOT}{os.pathsep}{ROOT / 'tests'}"
     (tmp_path / "est").mkdir()

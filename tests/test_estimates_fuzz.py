@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.exchange import EstimatesFileError, load_estimate
 from benchmark.exchange.estimates_file import ARRAYS, FORMAT, META_KEYS
@@ -21,8 +21,8 @@ CASES = 150
 
 
 @pytest.fixture(scope="module")
-def episode(tmp_path_factory):
-    return cached_episode(TINY, TINY.scenarios[0], tmp_path_factory.mktemp("cache"))[0]
+def episode(tiny_episode_folder):
+    return cached_episode(TINY, TINY.scenarios[0], tiny_episode_folder)[0]
 
 
 def truth_arrays(episode) -> dict:

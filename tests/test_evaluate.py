@@ -4,16 +4,13 @@ import dataclasses
 import json
 
 import pytest
+from tiny_suite import TINY
 
 from benchmark.commands.cli import main
 from benchmark.paper.dataset.cli import parse_ints
 from benchmark.suites import SUITES, Gate, Suite
 from benchmark.world.assets import validate
 from benchmark.world.scenario import Scenario
-
-TINY = Suite(name="tiny", version=1, scenarios=(Scenario(task="lift", seed=21, duration_s=1.5),),
-             gates=(Gate("box_pos_err_mm", "<=", 8.0), Gate("learned_rel_err_pct", "<=", 60.0)),
-             description="one short lift, for the tests")
 
 
 @pytest.fixture
@@ -67,12 +64,12 @@ def test_eval_writes_scores_report_junit_and_the_second_run_renders_nothing(tiny
     assert "(0 rendered" in capsys.readouterr().out
 
 
-def test_a_failing_gate_exits_1_names_it_and_fails_its_junit_case(tiny, tmp_path, capsys):
+def test_a_failing_gate_exits_1_names_it_and_fails_its_junit_case(tiny, tiny_cache, tmp_path, capsys):
     gates = tmp_path / "gates.json"
     gates.write_text(json.dumps([{"metric": "box_pos_err_mm", "op": "<=", "limit": 0.001},
                                  {"metric": "contact_recall", "op": ">=", "limit": 0.5}]))
     out = tmp_path / "out"
-    code = main(["eval", "--suite", "tiny", "--out", str(out), "--gates", str(gates), "--cache", str(tmp_path / "c"), "--quiet"])
+    code = main(["eval", "--suite", "tiny", "--out", str(out), "--gates", str(gates), "--cache", str(tiny_cache), "--quiet"])
     assert code == 1
     err = capsys.readouterr().err
     assert "1 gate(s) failed: median box_pos_err_mm <= 0.001" in err
@@ -158,9 +155,9 @@ def test_a_replaced_differentiator_changes_the_kinematics_scores_and_is_labelled
     assert a["acc_err_rms"] != b["acc_err_rms"] and 0 < b["acc_err_rms"] < 5  # measured 0.53 (reference 0.29)
 
 
-def test_a_broken_external_tracker_exits_1_naming_the_failed_gates(tiny, tmp_path, capsys):
+def test_a_broken_external_tracker_exits_1_naming_the_failed_gates(tiny, tiny_cache, tmp_path, capsys):
     out = tmp_path / "out"
-    code = main(["eval", "--suite", "tiny", "--out", str(out), "--cache", str(tmp_path / "cache"), "--quiet",
+    code = main(["eval", "--suite", "tiny", "--out", str(out), "--cache", str(tiny_cache), "--quiet",
                  "--tracker", "external_stages:FrozenTracker"])
     captured = capsys.readouterr()
     assert code == 1
@@ -269,10 +266,10 @@ def test_the_grip_calibration_recording_uses_seeds_no_suite_and_no_training_grid
     assert sorted(read_calibration()) == sorted({0, 1, 2, 3, 4} | set(range(1000, 1040)) | people)
 
 
-def test_a_local_ray_cluster_gives_the_scores_of_the_local_run(tiny, ray_cluster, tmp_path):
+def test_a_local_ray_cluster_gives_the_scores_of_the_local_run(tiny, ray_cluster, tiny_cache):
     from benchmark.suites.evaluate import evaluate
 
-    cache = tmp_path / "cache"
+    cache = tiny_cache
     local = evaluate(TINY, cache=cache, progress=False)
     on_ray = evaluate(TINY, cache=cache, progress=False, ray_address=ray_cluster)
     drop = ("seconds", "rendered")

@@ -5,7 +5,7 @@ import zipfile
 
 import numpy as np
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.commands.cli import main
 from benchmark.exchange import load_camera_input
@@ -19,12 +19,12 @@ def tiny(monkeypatch):
 
 
 @pytest.mark.parametrize("knowledge, protocol", [("exact", "calibrated"), ("lab", "blind")])
-def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys, knowledge, protocol):
+def test_export_then_score_equals_the_in_process_scores(tiny, tiny_cache, tmp_path, capsys, knowledge, protocol):
     from benchmark.method import MethodSpec, method_label
     from benchmark.suites.evaluate import evaluate
     from examples.estimates_from_files import write_estimates
 
-    cache, inputs, estimates = tmp_path / "cache", tmp_path / "inputs", tmp_path / "estimates"
+    cache, inputs, estimates = tiny_cache, tmp_path / "inputs", tmp_path / "estimates"
     spec = MethodSpec(differentiator="central", knowledge=knowledge, protocol=protocol)
     in_process = evaluate(TINY, spec=spec, cache=cache, progress=False)
     assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(cache), "--quiet",
@@ -56,12 +56,12 @@ def test_export_then_score_equals_the_in_process_scores(tiny, tmp_path, capsys, 
         assert "made from camera inputs with --knowledge lab, scored with --knowledge exact" in capsys.readouterr().err
 
 
-def test_camera_file_round_trips_the_inputs(tiny, tmp_path):
+def test_camera_file_round_trips_the_inputs(tiny, tiny_cache, tmp_path):
     from benchmark.exchange import save_camera_input
     from benchmark.method import camera_input
     from benchmark.suites.evaluate import cached_episode
 
-    ep, _ = cached_episode(TINY, TINY.scenarios[0], tmp_path / "cache")
+    ep, _ = cached_episode(TINY, TINY.scenarios[0], tiny_cache)
     a = camera_input(ep, protocol="calibrated")
     path = save_camera_input(a, tmp_path / "x.npz", episode="x", suite=TINY, rng_seed=[1, 2])
     b, meta = load_camera_input(path)
@@ -199,7 +199,7 @@ def test_a_cached_episode_copied_under_another_name_is_not_used(tmp_path, capsys
     assert episode_identity(suite, a)["scenario"]["seed"] == 31
 
 
-def test_check_says_whether_an_estimates_file_will_be_accepted(tiny, tmp_path, capsys):
+def test_check_says_whether_an_estimates_file_will_be_accepted(tiny, tiny_cache, tmp_path, capsys):
     meta = {"format": "fsv-bench-estimates", "version": 1, "episode": "lift-u0-g0-m0-s21", "finger_names": ["thumb", "index"]}
     _write(tmp_path / "ok.npz", _valid_arrays(), meta)
     assert main(["check", str(tmp_path / "ok.npz")]) == 0
@@ -209,19 +209,19 @@ def test_check_says_whether_an_estimates_file_will_be_accepted(tiny, tmp_path, c
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "bad.npz: box/rot at frame 0 is not a rotation" in err
     # against the episode's camera inputs: its frames and fingers differ from this file's
-    assert main(["export", "--suite", "tiny", "--out", str(tmp_path / "in"), "--cache", str(tmp_path / "c"), "--quiet"]) == 0
+    assert main(["export", "--suite", "tiny", "--out", str(tmp_path / "in"), "--cache", str(tiny_cache), "--quiet"]) == 0
     capsys.readouterr()
     assert main(["check", str(tmp_path / "ok.npz"), "--inputs", str(tmp_path / "in" / "lift-u0-g0-m0-s21.npz")]) == 2
     assert "finger_names ['thumb', 'index'] do not match the episode's" in capsys.readouterr().err
 
 
-def test_hdf5_files_round_trip_to_the_same_scores_as_npz(tiny, tmp_path, capsys):
+def test_hdf5_files_round_trip_to_the_same_scores_as_npz(tiny, tiny_cache, tmp_path, capsys):
     import h5py
 
     from benchmark.method import MethodSpec, method_label
     from examples.estimates_from_files import write_estimates
 
-    cache, spec = tmp_path / "cache", MethodSpec(differentiator="central")
+    cache, spec = tiny_cache, MethodSpec(differentiator="central")
     scores = {}
     for fmt in ("npz", "hdf5"):
         inputs, est = tmp_path / f"in-{fmt}", tmp_path / f"est-{fmt}"

@@ -7,7 +7,7 @@ import subprocess
 
 import numpy as np
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.commands.cli import main
 from benchmark.suites import SUITES
@@ -17,12 +17,12 @@ NODE = shutil.which("node")
 
 
 @pytest.mark.skipif(NODE is None, reason="Node.js is not installed")
-def test_a_nodejs_method_reads_the_camera_inputs_and_its_estimates_are_scored(tmp_path, monkeypatch, capsys):
+def test_a_nodejs_method_reads_the_camera_inputs_and_its_estimates_are_scored(tmp_path, tiny_cache, monkeypatch, capsys):
     from benchmark.exchange import load_camera_input
 
     monkeypatch.setitem(SUITES, "tiny", TINY)
     inputs, estimates = tmp_path / "in", tmp_path / "est"
-    assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(tmp_path / "c"), "--quiet"]) == 0
+    assert main(["export", "--suite", "tiny", "--out", str(inputs), "--cache", str(tiny_cache), "--quiet"]) == 0
     run = subprocess.run([NODE, str(ROOT / "examples/js/static_method.mjs"), str(inputs), str(estimates)],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
@@ -33,7 +33,7 @@ def test_a_nodejs_method_reads_the_camera_inputs_and_its_estimates_are_scored(tm
     capsys.readouterr()
     assert main(["check", str(estimates / f"{name}.npz"), "--inputs", str(inputs / f"{name}.npz")]) == 0
     assert main(["score", "--suite", "tiny", "--estimates", str(estimates), "--out", str(tmp_path / "s"),
-                 "--cache", str(tmp_path / "c"), "--quiet", "--pictures", "worst"]) == 1  # a still box fails the gates
+                 "--cache", str(tiny_cache), "--quiet", "--pictures", "worst"]) == 1  # a still box fails the gates
     assert [p.name for p in (tmp_path / "s" / "pictures").iterdir()] == [f"{name}-overlay.png"]  # no forces: no Fig. 5
     scores = json.loads((tmp_path / "s" / "scores.json").read_text())
     assert scores["method"] == "static box (Node.js example)" and scores["episodes"][0]["box_pos_err_mm"] > 10

@@ -3,7 +3,7 @@
 import json
 
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.commands.cli import main
 from benchmark.suites import SUITES

@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.atomic import OUTPUT_MARKER, write_marker
 from benchmark.camera.episode_file import load_episode, save_episode
@@ -200,8 +200,9 @@ def test_a_depth_only_run_renders_no_colour(depth_only_run):
 
 
 @pytest.fixture(scope="module")
-def colour_inputs(tmp_path_factory):
+def colour_inputs(tmp_path_factory, tiny_episode_folder):
     tmp = tmp_path_factory.mktemp("colour")
+    shutil.copytree(tiny_episode_folder, tmp / "c")  # the depth episode: its colour is rendered onto it
     with pytest.MonkeyPatch.context() as mp:
         mp.setitem(SUITES, "tiny", TINY)
         assert main(["export", "--suite", "tiny", "--streams", "depth,colour", "--out", str(tmp / "in"),

@@ -3,7 +3,7 @@
 import json
 
 import pytest
-from test_evaluate import TINY
+from tiny_suite import TINY
 
 from benchmark.commands.cli import main
 from benchmark.suites import SUITES
@@ -15,10 +15,10 @@ def tiny(monkeypatch):
     return TINY
 
 
-def test_a_sweep_of_the_initialisation_error_moves_the_tracking_error(tiny, tmp_path):
+def test_a_sweep_of_the_initialisation_error_moves_the_tracking_error(tiny, tiny_cache, tmp_path):
     out = tmp_path / "sweep"
     assert main(["sweep", "--suite", "tiny", "--axis", "init", "--values", "0,3", "--out", str(out),
-                 "--cache", str(tmp_path / "c"), "--quiet", "--internal", "none", "--knowledge", "exact"]) == 0
+                 "--cache", str(tiny_cache), "--quiet", "--internal", "none", "--knowledge", "exact"]) == 0
     doc = json.loads((out / "sweep.json").read_text())
     assert doc["values"] == [0.0, 3.0] and (out / "sweep.png").stat().st_size > 10_000
     exact, far = (a["box_pos_err_mm"]["median"]["value"] for a in doc["aggregate"])
@@ -27,10 +27,10 @@ def test_a_sweep_of_the_initialisation_error_moves_the_tracking_error(tiny, tmp_
     assert "| 3.0 |" in (out / "sweep.md").read_text()
 
 
-def test_a_sweep_of_the_knowledge_tells_the_method_exact_then_measured_values(tiny, tmp_path):
+def test_a_sweep_of_the_knowledge_tells_the_method_exact_then_measured_values(tiny, tiny_cache, tmp_path):
     out = tmp_path / "sweep"
     assert main(["sweep", "--suite", "tiny", "--axis", "knowledge", "--values", "exact,lab-camera,lab-camera:3",
-                 "--out", str(out), "--cache", str(tmp_path / "c"), "--quiet", "--internal", "none"]) == 0
+                 "--out", str(out), "--cache", str(tiny_cache), "--quiet", "--internal", "none"]) == 0
     doc = json.loads((out / "sweep.json").read_text())
     assert doc["values"] == ["exact", "lab-camera", "lab-camera:3"]
     told = [eps[0]["knowledge"] for eps in doc["episodes"]]
