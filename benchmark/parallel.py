@@ -178,17 +178,25 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
     module again (about 1 s of CPU a worker, measured); the fork server (Linux) imports them once,
     with :data:`ONE_CORE_ENV` (:data:`SERVER_SETUP`), and forks each worker from itself. It is
     started by this process's first pool, with ``fn``'s module preloaded, and serves its later pools
-    while the environment is the one it started with. A changed environment (a worker must see this
-    process's), another platform (macOS's frameworks are not safe to fork) or a fork server that
-    another library started (its preloads and environment are not known) gives spawned workers. A
-    forked worker is the same program in a fresh state as a spawned one: the results do not depend
-    on which (``tests/test_parallel.py``).
+    while the process's environment is the one it started with (a worker must see this process's:
+    the libraries the server loaded read some of it when they loaded). After a change, the next pool
+    stops the server and starts another with the environment of now, unless a process of this one's
+    is running (one forked from it holds the server's "alive" pipe, and the server would not end
+    before it): that pool's workers are spawned. Another platform (macOS's frameworks are not safe
+    to fork) or a fork server that another library started (its preloads and environment are not
+    known) gives spawned workers too. A forked worker is the same program in a fresh state as a
+    spawned one: the results do not depend on which (``tests/test_parallel.py``).
     """
     global _server_env
     spawn = multiprocessing.get_context("spawn")
     if not sys.platform.startswith("linux") or "forkserver" not in multiprocessing.get_all_start_methods():
         return spawn
     server = multiprocessing.forkserver._forkserver
+    if _server_env is not None and dict(os.environ) != _server_env:
+        if multiprocessing.active_children():
+            return spawn
+        server._stop()  # multiprocessing's own stop: the server ends once no process holds its pipe
+        _server_env = None
     if _server_env is None:
         if server._forkserver_pid is not None:
             return spawn
@@ -196,8 +204,6 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
         server.set_forkserver_preload(preload)
         server.ensure_running()
         _server_env = dict(os.environ)
-    elif dict(os.environ) != _server_env:
-        return spawn
     return multiprocessing.get_context("forkserver")
 
 

@@ -84,6 +84,12 @@ JOBS = textwrap.dedent("""
             pools = [sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))) for _ in range(2)]
             os.environ["FSV_TEST_CHANGED"] = "1"
             pools.append(sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))))
+            import multiprocessing
+            busy = multiprocessing.get_context("fork").Process(target=time.sleep, args=(30,), daemon=True)
+            busy.start()  # a process of this one's runs (a background job): the server cannot be replaced now
+            os.environ["FSV_TEST_CHANGED"] = "2"
+            pools.append(sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))))
+            busy.kill()
             print(json.dumps({"parent": os.getpid(), "pools": pools}))
         else:
             if sys.argv[1] == "sleep-spawned":  # another library started the fork server: the pool spawns
@@ -124,17 +130,21 @@ def test_a_worker_ends_without_the_interpreters_teardown(tmp_path):
 def test_a_pool_forks_its_workers_from_one_server_with_one_core_each_while_the_environment_stands(tmp_path):
     """Two pools' workers are forked by one fork server (their parent, not the pool's owner), with one
     core's environment and NumPy's baseline; after the owner changes its environment, the next
-    pool's workers are spawned, its children, and see the change."""
+    pool's workers come from another server, which sees the change; while a process of the owner's
+    runs (a forked background job), the server is not replaced: the workers are spawned, the
+    owner's children, and see the change too."""
     (tmp_path / "jobs.py").write_text(JOBS)
     out = subprocess.run([sys.executable, "jobs.py", "where"], cwd=tmp_path, capture_output=True, text=True,
                          timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     assert out.returncode == 0, out.stderr
     said = json.loads(out.stdout)
-    first, second, changed = said["pools"]
+    first, second, changed, busy = said["pools"]
     assert len(first) == 1 and first == second, said  # one server, the parent of every worker of both pools
     server, threads, simd, seen = first[0]
     assert server != said["parent"] and (threads, simd, seen) == ("1", " ", None), said
-    assert changed == [[said["parent"], "1", " ", "1"]], said
+    (other, *rest), = changed
+    assert other not in (server, said["parent"]) and rest == ["1", " ", "1"], said
+    assert busy == [[said["parent"], "1", " ", "2"]], said
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="reads /proc")
