@@ -162,9 +162,10 @@ def _stop(pool, processes: list) -> None:
         manager.join(timeout=5.0)
 
 
-SERVER_SETUP = "benchmark.one_core"
+SERVER_SETUP = "benchmark.pool_server"
 """The module the fork server imports first (:func:`pool_context`): it sets :data:`ONE_CORE_ENV` in
-the server's environment before any numerical library loads there."""
+the server's environment before any numerical library loads there, and makes numba's CPU target
+ready once for every worker."""
 
 _server_env: dict | None = None
 """This process's environment when it started the fork server (None: it has not)."""
