@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import atexit
 import multiprocessing
-import multiprocessing.connection
 import multiprocessing.forkserver
 import os
 import pickle
@@ -201,7 +200,7 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
     if _server_env is None:
         if server._forkserver_pid is not None:
             return spawn
-        preload = [SERVER_SETUP, __name__] + ([fn.__module__] if fn.__module__ not in ("__main__", __name__) else [])
+        preload = [SERVER_SETUP] + ([fn.__module__] if fn.__module__ not in ("__main__", __name__) else [])
         server.set_forkserver_preload(preload)
         server.ensure_running()
         _server_env = dict(os.environ)
