@@ -30,6 +30,9 @@ import sys
 import tempfile
 import time
 
+from fsv.errors import InputError
+from fsv.types import check_streams
+
 HERE = pathlib.Path(__file__).resolve().parents[2]
 COMMAND = ("--task", "lift", "--noise", "0.01", "--quiet", "--no-gif", "--force")
 PROBE = """
@@ -68,12 +71,32 @@ def run_once(tree: pathlib.Path, streams: str, out: pathlib.Path) -> tuple:
     return took, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), main[-1] if main else float("nan")
 
 
+def bad_input(args: argparse.Namespace) -> str | None:
+    """What is wrong with the arguments, in one line naming the value and what is accepted, or None."""
+    if args.runs < 1:
+        return f"--runs {args.runs}: accepted: 1 or more"
+    for tree in args.trees:
+        if not (tree / "benchmark" / "commands" / "entry.py").is_file():
+            return (f"--trees {str(tree)!r}: not a source tree of fsv-bench (no benchmark/commands/entry.py there); "
+                    "accepted: folders such as a checkout of another commit (`git worktree add DIR COMMIT`)")
+    for streams in args.streams:
+        try:
+            check_streams(streams)
+        except InputError as e:
+            return f"--streams {streams!r}: {e}"
+    return None
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m benchmark.perf.command", description=__doc__.strip().splitlines()[0])
     p.add_argument("--runs", type=int, default=5, help="counted runs per variant (default 5)")
     p.add_argument("--streams", nargs="+", default=["depth", "depth,colour"], help="values of --streams")
     p.add_argument("--trees", nargs="+", type=pathlib.Path, default=[HERE], help="source trees (default: this one)")
     args = p.parse_args(argv)
+    bad = bad_input(args)
+    if bad is not None:
+        print(f"python -m benchmark.perf.command: {bad}", file=sys.stderr)
+        return 2
     variants = [(tree.resolve(), s) for tree in args.trees for s in args.streams]
     times = {v: [] for v in variants}
     cpus = {v: [] for v in variants}
