@@ -101,7 +101,7 @@ def tiny_episode_folder(tmp_path_factory):
 @pytest.fixture
 def tiny_cache(tiny_episode_folder, tmp_path):
     """A cache that holds the tiny suite's episode, this test's own copy (``tmp_path / "tiny-cache"``):
-    some twenty tests evaluate, export, sweep or score the tiny suite, and each simulated, rendered and
+    seventeen tests and fixtures evaluate, export, sweep or score the tiny suite, and each simulated, rendered and
     saved the same episode again (0.35 s of CPU a test). A test that checks what a cold cache does
     keeps an empty one of its own."""
     return shutil.copytree(tiny_episode_folder, tmp_path / "tiny-cache")
