@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 import pytest
-from processes import running
+from processes import group_running, running
 
 from benchmark.atomic import OUTPUT_MARKER, write_marker
 
@@ -79,22 +79,31 @@ def test_ctrl_c_at_random_times_gives_130_and_keeps_the_previous_output(tmp_path
     assert interrupted >= 2, (whole_s, delays)  # every draw lands while it runs, unless a run is far quicker
 
 
-def _group_alive(pgid: int) -> bool:
-    try:
-        os.killpg(pgid, 0)
-    except ProcessLookupError:
-        return False
-    return True
+def _pool_workers(pid: int) -> list:
+    """The ids of command ``pid``'s local pool workers: its fork server's children, or the workers it
+    spawned."""
+    workers = []
+    for child in _children(pid):
+        try:
+            cmdline = pathlib.Path(f"/proc/{child}/cmdline").read_bytes()
+        except OSError:
+            continue
+        if b"multiprocessing.forkserver" in cmdline:
+            workers += _children(child)
+        elif b"multiprocessing.spawn" in cmdline:
+            workers.append(child)
+    return workers
 
 
-@pytest.mark.parametrize("argv, delay_s", [
-    (["eval", "--suite", "smoke", "--workers", "2", "--quiet", "--no-baselines"], 4.0),  # rendering and tracking in 2 workers
-    (["generate", "--tasks", "lift", "--users", "0", "--grasps", "0,1", "--masses", "0", "--seeds", "0",
-      "--workers", "2", "--no-progress"], 4.0),
+@pytest.mark.parametrize("argv", [
+    ["eval", "--suite", "smoke", "--workers", "2", "--quiet", "--no-baselines"],  # rendering and tracking in 2 workers
+    ["generate", "--tasks", "lift", "--users", "0", "--grasps", "0,1", "--masses", "0", "--seeds", "0",
+     "--workers", "2", "--no-progress"],
 ])
-def test_ctrl_c_ends_a_sub_command_with_130_and_no_worker_outlives_it(tmp_path, argv, delay_s):
-    """A sub-command with two worker processes: status 130 within the limit, the output folder as it
-    was, no temporary folder left, and no process of its group alive a moment later."""
+def test_ctrl_c_ends_a_sub_command_with_130_and_no_worker_outlives_it(tmp_path, argv):
+    """A sub-command with two worker processes, interrupted half a second after both have started
+    (each then works on its first episode for seconds): status 130 within the limit, the output
+    folder as it was, no temporary folder left, and no process of its group alive a moment later."""
     out = tmp_path / "out"
     if argv[0] == "eval":  # a previous output of eval's, to be kept
         out.mkdir()
@@ -105,7 +114,11 @@ def test_ctrl_c_ends_a_sub_command_with_130_and_no_worker_outlives_it(tmp_path, 
         cmd += ["--cache", str(tmp_path / "cache")]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
                             env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
-    time.sleep(delay_s)
+    deadline = time.perf_counter() + 60
+    while len(_pool_workers(proc.pid)) < 2 and proc.poll() is None and time.perf_counter() < deadline:
+        time.sleep(0.05)
+    assert len(_pool_workers(proc.pid)) == 2, "the pool's two workers never ran"
+    time.sleep(0.5)  # inside their first episodes
     sent = time.perf_counter()
     os.killpg(proc.pid, signal.SIGINT)
     _, err = proc.communicate(timeout=60)
@@ -114,9 +127,9 @@ def test_ctrl_c_ends_a_sub_command_with_130_and_no_worker_outlives_it(tmp_path, 
     assert "Traceback" not in err.decode() and "KeyboardInterrupt" not in err.decode(), err.decode()[-2000:]
     assert took < LIMIT_S + 1.0, took  # the pool's workers end too
     deadline = time.perf_counter() + 5.0
-    while _group_alive(proc.pid) and time.perf_counter() < deadline:
+    while group_running(proc.pid) and time.perf_counter() < deadline:
         time.sleep(0.1)
-    assert not _group_alive(proc.pid), "a worker outlived the command"
+    assert not group_running(proc.pid), "a worker outlived the command"
     if argv[0] == "eval":
         assert sorted(p.name for p in out.iterdir()) == [OUTPUT_MARKER, "note.txt"]
         leftovers = sorted(p.name for p in tmp_path.iterdir() if p.name not in ("out", "cache"))
@@ -326,8 +339,8 @@ def test_ctrl_c_while_a_stream_renders_beside_the_command_ends_the_worker_too(tm
     assert took < LIMIT_S, took
     assert "interrupted" in err.decode() and "Traceback" not in err.decode(), err.decode()
     deadline = time.perf_counter() + 5.0
-    while _group_alive(proc.pid) and time.perf_counter() < deadline:
+    while group_running(proc.pid) and time.perf_counter() < deadline:
         time.sleep(0.1)
-    assert not _group_alive(proc.pid), "a worker outlived the command"
+    assert not group_running(proc.pid), "a worker outlived the command"
     assert json.loads((out / "summary.json").read_text()) == {"previous": True}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
