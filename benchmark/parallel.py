@@ -167,7 +167,18 @@ the server's environment before any numerical library loads there, and makes num
 ready once for every worker."""
 
 _server_env: dict | None = None
-"""This process's environment when it started the fork server (None: it has not)."""
+"""This process's environment when it started the fork server, less :data:`MOMENTARY_ENV` (None: it
+has not)."""
+
+MOMENTARY_ENV = frozenset({"PYTEST_CURRENT_TEST"})
+"""Variables that name the moment, not a setting, left out when the environment is compared: pytest
+sets ``PYTEST_CURRENT_TEST`` to the running test at each of its phases (for pytest's own use; no
+library reads it), so every pool of a test session's would otherwise start another server."""
+
+
+def _settings_env() -> dict:
+    """This process's environment less :data:`MOMENTARY_ENV`."""
+    return {k: v for k, v in os.environ.items() if k not in MOMENTARY_ENV}
 
 
 def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
@@ -178,8 +189,9 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
     module again (about 1 s of CPU a worker, measured); the fork server (Linux) imports them once,
     with :data:`ONE_CORE_ENV` (:data:`SERVER_SETUP`), and forks each worker from itself. It is
     started by this process's first pool, with ``fn``'s module preloaded, and serves its later pools
-    while the process's environment is the one it started with (a worker must see this process's:
-    the libraries the server loaded read some of it when they loaded). After a change, the next pool
+    while the process's environment is the one it started with, :data:`MOMENTARY_ENV` aside (a
+    worker must see this process's: the libraries the server loaded read some of it when they
+    loaded). After a change, the next pool
     stops the server and starts another with the environment of now, unless a process of this one's
     is running (one forked from it holds the server's "alive" pipe, and the server would not end
     before it): that pool's workers are spawned. Another platform (macOS's frameworks are not safe
@@ -192,7 +204,7 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
     if not sys.platform.startswith("linux") or "forkserver" not in multiprocessing.get_all_start_methods():
         return spawn
     server = multiprocessing.forkserver._forkserver
-    if _server_env is not None and dict(os.environ) != _server_env:
+    if _server_env is not None and _settings_env() != _server_env:
         if multiprocessing.active_children():
             return spawn
         server._stop()  # multiprocessing's own stop: the server ends once no process holds its pipe
@@ -203,7 +215,7 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
         preload = [SERVER_SETUP] + ([fn.__module__] if fn.__module__ not in ("__main__", __name__) else [])
         server.set_forkserver_preload(preload)
         server.ensure_running()
-        _server_env = dict(os.environ)
+        _server_env = _settings_env()
     return multiprocessing.get_context("forkserver")
 
 

@@ -81,7 +81,9 @@ JOBS = textwrap.dedent("""
         elif sys.argv[1] == "lambda":
             list(run_jobs(lambda x: x, [0, 1], workers=2))
         elif sys.argv[1] == "where":
-            pools = [sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))) for _ in range(2)]
+            pools = [sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2)))]
+            os.environ["PYTEST_CURRENT_TEST"] = "tests/test_x.py::test_y (call)"  # the moment, not a setting
+            pools.append(sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))))
             os.environ["FSV_TEST_CHANGED"] = "1"
             pools.append(sorted(set(r for _, r in run_jobs(where, [0, 1, 2, 3], workers=2))))
             import multiprocessing
@@ -129,7 +131,8 @@ def test_a_worker_ends_without_the_interpreters_teardown(tmp_path):
 @pytest.mark.skipif(sys.platform != "linux", reason="forks its workers from a fork server on Linux only")
 def test_a_pool_forks_its_workers_from_one_server_with_one_core_each_while_the_environment_stands(tmp_path):
     """Two pools' workers are forked by one fork server (their parent, not the pool's owner), with one
-    core's environment and NumPy's baseline; after the owner changes its environment, the next
+    core's environment and NumPy's baseline, though pytest's ``PYTEST_CURRENT_TEST`` changed between
+    them; after the owner changes its environment, the next
     pool's workers come from another server, which sees the change; while a process of the owner's
     runs (a forked background job), the server is not replaced: the workers are spawned, the
     owner's children, and see the change too."""
