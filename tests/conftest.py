@@ -1,5 +1,6 @@
 """Shared pytest fixtures."""
 
+import gc
 import json
 import os
 import pathlib
@@ -294,6 +295,14 @@ def pytest_collection_modifyitems(config, items):
         item.add_marker(pytest.mark.xdist_group(unit))
         units.setdefault(unit, []).append(item)
     items[:] = [item for unit in sorted(units, key=lambda u: -unit_seconds(u)) for item in units[unit]]
+
+
+def pytest_collection_finish(session):
+    """What the test process has made so far (the imported libraries and test modules: most of its
+    objects, alive to its end) is left out of the garbage collector's full collections from here on
+    (``gc.freeze``): each scanned all of them again, about 0.25 s, 16-19 times a worker in a run of
+    the suite (4.2 s of a worker's CPU, measured with ``gc.callbacks``)."""
+    gc.freeze()
 
 
 def unit_seconds(unit: str) -> float:
