@@ -41,6 +41,7 @@ def test_eval_writes_scores_report_junit_and_the_second_run_renders_nothing(tiny
     agg = first["aggregate"]["box_pos_err_mm"]["median"]
     assert agg["n"] == 1 and agg["ci_low"] == agg["value"] == agg["ci_high"] == ep["box_pos_err_mm"]
     assert "provenance" in first and (out / "report.md").read_text().startswith("# tiny (version 1)")
+    assert not (out / "pictures").exists()  # without --pictures, none (tests/test_pictures_episodes.py: with it)
     junit = (out / "junit.xml").read_text()
     assert junit.count("<testcase") == 2 and "<failure" not in junit
     report = (out / "report.md").read_text()

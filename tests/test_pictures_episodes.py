@@ -19,7 +19,8 @@ def test_the_worst_episodes_are_those_worst_on_some_gates_metric():
 
 
 def test_eval_writes_the_pictures_of_the_worst_or_of_all_episodes(tmp_path, monkeypatch, capsys):
-    # the baselines, scored beside the method, are left out: no picture is drawn of them
+    # the baselines, scored beside the method, are left out: no picture is drawn of them (without
+    # --pictures none is drawn: tests/test_evaluate.py)
     pair = Suite(name="pair", version=1, scenarios=tuple(Scenario(task="lift", seed=s, duration_s=1.5) for s in (41, 42)),
                  gates=(Gate("box_pos_err_mm", "<=", 5.0),), description="two short lifts")
     monkeypatch.setitem(SUITES, "pair", pair)
@@ -35,6 +36,3 @@ def test_eval_writes_the_pictures_of_the_worst_or_of_all_episodes(tmp_path, monk
     worst = max(rows, key=lambda r: r["box_pos_err_mm"])["episode"]
     assert sorted(p.name for p in (tmp_path / "worst" / "pictures").iterdir()) == [f"{worst}-forces.png",
                                                                                    f"{worst}-overlay.png"]
-    assert main(["eval", "--suite", "pair", "--out", str(tmp_path / "none"), "--cache", cache, "--quiet",
-                 "--no-baselines"]) == 0
-    assert not (tmp_path / "none" / "pictures").exists()
