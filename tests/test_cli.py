@@ -112,22 +112,21 @@ def test_bad_input_is_one_line_status_2_and_writes_nothing(tmp_path, capsys, arg
     assert not out.exists()
 
 
-def test_render_stage_writes_the_depth_preview_and_its_summary_block(tmp_path, capsys):
+def test_render_stage_writes_the_depth_preview_and_its_summary_block(pictured_lift):
     from PIL import Image
 
     from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT
 
-    out = tmp_path / "run"
-    assert main(["--duration", "1", "--noise", "0.005", "--quiet", "--no-gif", "--out", str(out)]) in (0, 1)  # verdict
-    assert "render: 31 depth frames 320x240 at 30 Hz, noise 0.005 m" in capsys.readouterr().out
+    out, lines, _ = pictured_lift
+    assert "render: 46 depth frames 320x240 at 30 Hz, noise 0.01 m" in "\n".join(lines)  # 1.5 s at 30 Hz
     block = json.loads((out / "summary.json").read_text())["render"]
-    assert block["frames"] == 31 and block["preview"] == ["depth_preview.png"]
+    assert block["frames"] == 46 and block["preview"] == ["depth_preview.png"]
     assert 0.5 < block["valid_fraction"] < 1 and block["box_pixels_median"] > 1000
     with Image.open(out / "depth_preview.png") as png:
         assert png.size == (6 * 320 + 5 * 4, 240 + COLOUR_BAR_HEIGHT)  # frames above a colour bar in metres
-    assert not (out / "depth.gif").exists()
+    assert not (out / "depth.gif").exists()  # --no-gif
     ep = load_episode(out / "episode.npz")
-    assert ep.depth.depth_m.shape == (31, 240, 320) and ep.labels.shape == (31, 240, 320)
+    assert ep.depth.depth_m.shape == (46, 240, 320) and ep.labels.shape == (46, 240, 320)
 
 
 def _with_render_stage(monkeypatch, exc):
