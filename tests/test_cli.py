@@ -13,7 +13,7 @@ from benchmark.commands.entry import run
 
 @pytest.fixture(scope="module")
 def pictured_lift(tmp_path_factory):
-    """``fsv-bench --task lift --noise 0.01 --duration 1.5 --seed 2 --no-gif``, with its pictures:
+    """``fsv-bench --task lift --noise 0.005 --duration 1.5 --seed 2 --no-gif``, with its pictures:
     ``(folder, printed lines, exit status)``."""
     import contextlib
     import io
@@ -25,7 +25,7 @@ def pictured_lift(tmp_path_factory):
     return out, printed.getvalue().splitlines(), code
 
 
-PICTURED_LIFT = ["--task", "lift", "--noise", "0.01", "--duration", "1.5", "--seed", "2", "--quiet", "--no-gif"]
+PICTURED_LIFT = ["--task", "lift", "--noise", "0.005", "--duration", "1.5", "--seed", "2", "--quiet", "--no-gif"]
 
 
 def test_run_writes_episode_and_summary(pictured_lift):
@@ -56,7 +56,7 @@ def test_run_writes_episode_and_summary(pictured_lift):
     assert "(limit <= 8 mm)" in gate_lines[0]
     person, grasp = summary["scenario"].pop("person"), summary["scenario"].pop("grasp_spec")
     assert summary["scenario"] == {"task": "lift", "user": 0, "grasp": 0, "mass": 0, "sensor": "ds325",
-                                   "hand_surface": "skin", "grip_control": "per-digit", "noise_m": 0.01, "seed": 2, "frames": 46, "fps": 30.0}
+                                   "hand_surface": "skin", "grip_control": "per-digit", "noise_m": 0.005, "seed": 2, "frames": 46, "fps": 30.0}
     assert person["name"] == "u0-average" and not person["drawn"] and person["anatomy"]["hand_length_m"] == 0.19
     assert grasp["name"] == "g0-four-centred" and grasp["family"] == "width-four"
     assert summary["world"]["ne_force_residual_n"] < 0.01
@@ -118,7 +118,7 @@ def test_render_stage_writes_the_depth_preview_and_its_summary_block(pictured_li
     from benchmark.commands.pictures.depth_preview import COLOUR_BAR_HEIGHT
 
     out, lines, _ = pictured_lift
-    assert "render: 46 depth frames 320x240 at 30 Hz, noise 0.01 m" in "\n".join(lines)  # 1.5 s at 30 Hz
+    assert "render: 46 depth frames 320x240 at 30 Hz, noise 0.005 m" in "\n".join(lines)  # 1.5 s at 30 Hz, --noise
     block = json.loads((out / "summary.json").read_text())["render"]
     assert block["frames"] == 46 and block["preview"] == ["depth_preview.png"]
     assert 0.5 < block["valid_fraction"] < 1 and block["box_pixels_median"] > 1000
