@@ -128,12 +128,10 @@ def test_a_trained_model_adds_the_learned_forces(lift):
 
 _METHOD_RUN = """
 import sys, numpy as np
-from benchmark.camera.render import render
-from benchmark.world.scenario import Scenario
-from benchmark.world.simulate import simulate
+from benchmark.camera.episode_file import load_episode
 from benchmark.method.init import tracker_init
 from fsv import run_pipeline
-ep = render(simulate(Scenario(task="lift", seed=1, duration_s=1.5)))
+ep = load_episode(sys.argv[2])
 est = run_pipeline(ep.depth, ep.calib, ep.object_model, ep.hand_model, tracker_init(ep.truth, ep.scenario, ep.hand_model),
                    gravity=ep.truth.gravity, rng=ep.scenario.rng("tracker"))
 np.savez(sys.argv[1], qpos=est.tracking.hand_qpos, box=est.tracking.box.pos, rot=est.tracking.box.rot,
@@ -143,15 +141,23 @@ np.savez(sys.argv[1], qpos=est.tracking.hand_qpos, box=est.tracking.box.pos, rot
 
 
 def test_the_method_gives_the_same_answer_under_every_openblas_kernel(tmp_path, kernel_python):
-    """Tracking, contacts and kinematics are bit-identical under the Haswell, Sandybridge, Nehalem,
-    Prescott and (where the CPU runs it) SkylakeX kernels; the cone solver (Clarabel calls BLAS through SciPy) may move the forces in the
-    last digits (measured: 1e-10 N under Prescott, identical under the others)."""
-    runs = {}
+    """On one episode (a 1.5 s lift, made here once: the world's own bits under each kernel are
+    tests/test_render.py's), tracking, contacts and kinematics are bit-identical under the Haswell,
+    Sandybridge, Nehalem, Prescott and (where the CPU runs it) SkylakeX kernels; the cone solver
+    (Clarabel calls BLAS through SciPy) may move the forces in the last digits (measured: 1e-10 N
+    under Prescott, identical under the others)."""
     from openblas_kernels import runnable_kernels
 
+    from benchmark.camera.episode_file import save_episode
+    from benchmark.camera.render import render
+    from benchmark.world.scenario import Scenario
+    from benchmark.world.simulate import simulate
+
+    episode = save_episode(render(simulate(Scenario(task="lift", seed=1, duration_s=1.5))), tmp_path / "episode.npz")
+    runs = {}
     for kernel in ("Haswell", "Sandybridge", "Nehalem", "Prescott", *(["SkylakeX"] if "SkylakeX" in runnable_kernels() else [])):
         path = tmp_path / f"{kernel}.npz"
-        kernel_python(_METHOD_RUN, str(path), env={"OPENBLAS_CORETYPE": kernel})
+        kernel_python(_METHOD_RUN, str(path), str(episode), env={"OPENBLAS_CORETYPE": kernel})
         runs[kernel] = dict(np.load(path))
     ref = runs.pop("Haswell")
     assert ref["active"].sum() > 50
