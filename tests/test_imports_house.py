@@ -12,6 +12,7 @@ repeated inside a function. Read from the syntax trees and the comments, never b
 from __future__ import annotations
 
 import ast
+import functools
 import io
 import pathlib
 import re
@@ -38,7 +39,8 @@ def _singles(node) -> list:
     return [ast.unparse(ast.ImportFrom(module=node.module, names=[a], level=node.level)) for a in node.names]
 
 
-def function_imports(root: pathlib.Path) -> list:
+@functools.lru_cache(maxsize=4)  # the house's trees, parsed once for the tests that read them
+def function_imports(root: pathlib.Path) -> tuple:
     """``(path relative to root, line, statement, has a "# lazy:" reason, re-imports the top's)`` of every
     import statement inside a function of the modules under ``root``'s :data:`FOLDERS`."""
     rows = []
@@ -58,7 +60,7 @@ def function_imports(root: pathlib.Path) -> list:
                     visit(child, inside or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)))
 
             visit(tree, False)
-    return rows
+    return tuple(rows)
 
 
 def offenders(root: pathlib.Path) -> list:
