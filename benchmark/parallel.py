@@ -25,6 +25,7 @@ import threading
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Callable, Iterator
 
+from benchmark import collector
 from benchmark.errors import BenchmarkError, DatasetError
 from benchmark.simd import NUMPY_BASELINE_ENV
 
@@ -79,6 +80,7 @@ def _worker(progress_queue) -> None:
     global _REPORT
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     one_core_worker()
+    collector.tune()  # a spawned worker's (a forked one has its server's)
     _REPORT = progress_queue.put if progress_queue is not None else None
     atexit.register(_end_without_teardown)
     parent = multiprocessing.parent_process()

@@ -10,12 +10,13 @@ from __future__ import annotations
 import os
 import sys
 
-from benchmark import interrupt
+from benchmark import collector, interrupt
 
 
 def main() -> int:
     """Runs ``fsv-bench`` with the process's arguments; returns the exit status."""
     interrupt.install()
+    collector.tune()  # the process is the command's own (not a caller's that runs it in-process)
     try:
         code = run()
         sys.stdout.flush()  # here, where a closed pipe is caught, rather than at the interpreter's exit
