@@ -22,7 +22,8 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 _SERVE = r"""
-import contextlib, io, json, os, sys, traceback
+import contextlib, gc, io, json, os, sys, traceback
+gc.set_threshold(50_000, 20, 20)  # as in the test processes (tests/conftest.py) and the command's
 replies = os.fdopen(os.dup(1), "w")
 os.dup2(2, 1)  # what C code writes to fd 1 goes to stderr, not into the replies
 for line in sys.stdin:
