@@ -17,6 +17,7 @@ import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 from kernel_python import KernelPythons  # noqa: E402
 
+from benchmark import collector  # noqa: E402
 from benchmark.atomic import write_text  # noqa: E402
 from benchmark.interrupt import _release_multiprocessing  # noqa: E402
 
@@ -300,12 +301,12 @@ def pytest_collection_modifyitems(config, items):
 def pytest_collection_finish(session):
     """What the test process has made so far (the imported libraries and test modules: most of its
     objects, alive to its end) is left out of the garbage collector's full collections from here on
-    (``gc.freeze``), and the collector runs on 50 000 new objects instead of 700 (``gc.set_threshold``;
-    the tests' cyclic garbage waits a little longer). Each full collection scanned every object
-    again, about 0.25 s, 16-19 times a worker in a run of the suite: the collector took 4.6-4.8 s of
-    a worker's CPU, 1.4-2.0 s now (measured with ``gc.callbacks``)."""
+    (``gc.freeze``), and the collector runs at the command's thresholds (:mod:`benchmark.collector`:
+    on 50 000 new objects instead of 700). Each full collection scanned every object again, about
+    0.25 s, 16-19 times a worker in a run of the suite: the collector took 4.6-4.8 s of a worker's
+    CPU, 1.4-2.0 s now (measured with ``gc.callbacks``)."""
     gc.freeze()
-    gc.set_threshold(50_000, 20, 20)
+    collector.tune()
 
 
 def unit_seconds(unit: str) -> float:

@@ -22,8 +22,9 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 _SERVE = r"""
-import contextlib, gc, io, json, os, sys, traceback
-gc.set_threshold(50_000, 20, 20)  # as in the test processes (tests/conftest.py) and the command's
+import contextlib, io, json, os, sys, traceback
+from benchmark import collector
+collector.tune()  # the command's collector, as in the test processes (tests/conftest.py)
 replies = os.fdopen(os.dup(1), "w")
 os.dup2(2, 1)  # what C code writes to fd 1 goes to stderr, not into the replies
 for line in sys.stdin:
