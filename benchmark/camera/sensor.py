@@ -52,8 +52,9 @@ Noise, quantisation, jitter and dropout draw from one ``np.random.Generator`` (t
 lateral jitter is on, two more (row, then column offsets); if ``dropout`` > 0, one uniform per
 pixel; if ``flying_frac`` > 0, one more. The same scenario gives bit-identical frames.
 
-Everything but the random draws runs in compiled passes over the pixels (numba; float32
-arithmetic in a fixed order, no fast-math)."""
+Everything runs in compiled passes over the pixels (numba; float32 arithmetic in a fixed order, no
+fast-math); the normals are NumPy's own draws, bit for bit, compiled
+(:func:`benchmark.camera.normal_draws.standard_normal_f32`), the uniforms NumPy's."""
 
 from __future__ import annotations
 
@@ -61,6 +62,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from benchmark.camera.normal_draws import standard_normal_f32
 from benchmark.camera.sensor_kernels import (
     _image,
     _incidence_cos_kernel,
@@ -271,10 +273,10 @@ class SensorModel:
         z = _image(depth_m, "measure")
         ws = _workspace(z.shape)
         out = np.empty(z.shape, dtype=np.float32)
-        rng.standard_normal(dtype=np.float32, out=out)
+        standard_normal_f32(rng, out)
         fx, fy, cx, cy = _intrinsics(K)
         if self.lateral != "none":
-            rng.standard_normal(dtype=np.float32, out=ws.offsets)
+            standard_normal_f32(rng, ws.offsets)
             _pad(z, ws.w, ws.zz)
             _incidence_cos_kernel(z, ws.w, fx, fy, cx, cy, ws.c2)
             _lateral_kernel(z, ws.offsets[0], ws.offsets[1], ws.c2, LATERAL_MODELS.index(self.lateral),
