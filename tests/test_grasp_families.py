@@ -63,14 +63,17 @@ def test_the_named_grasps_keep_their_spots_and_family():
         assert spec["family"] == fam and spec["name"].startswith(f"g{g}-")
 
 
-
 def test_a_drawn_grasp_holds_the_heaviest_box_in_every_trial_and_a_plan_into_the_box_does_not():
+    """The search's trials of the plan it chose passed, every one with the palm clear (the
+    feasibility test above searched this unstored pair in this process: the choice and its trials
+    are cached, not simulated again); the same plan sunk into the box fails them."""
     from dataclasses import replace
 
-    from benchmark.world.grasp_plan import TRIALS, holds
+    from benchmark.world.grasp_plan import TRIALS, _drawn, holds
 
-    plan = plan_grasp(Scenario(user=123, grasp=9))
-    assert len(TRIALS) >= 2 and holds(123, 9, plan)
+    _, plan, trials = _drawn(123, 9)
+    assert plan is plan_grasp(Scenario(user=123, grasp=9))
+    assert len(TRIALS) >= 2 and trials.holds
     # the same grasp with the palm 3 cm lower, nearer the box's top: the palm hits it while closing
     sunk = replace(plan, palm_pos=plan.palm_pos + np.array([0.0, 0.0, -0.03]))
     assert not holds(123, 9, sunk)
@@ -109,7 +112,8 @@ def test_every_suites_and_the_training_sets_drawn_grasps_are_stored():
     for u, g in STORED_DRAWN[::9]:  # a current fingerprint: the stored choice and plan are used as they are
         entry = stored[f"drawn/{u}/{g}"]
         assert _PlanProblem(u, entry["spec"]).fingerprint == entry["fingerprint"]
-    spec, plan = _drawn(500, 500)
+    spec, plan, trials = _drawn(500, 500)
+    assert trials is None  # stored: not searched
     assert spec == stored["drawn/500/500"]["spec"]
     np.testing.assert_array_equal(plan.q_grasp, np.array(stored["drawn/500/500"]["x"])[3:])
 

@@ -429,15 +429,17 @@ def holds(user: int, grasp: int, plan: GraspPlan) -> bool:
 
 @functools.lru_cache(maxsize=64)
 def _drawn(user: int, grasp: int) -> tuple:
-    """Drawn grasp ``grasp`` for ``user``: the stored choice (:data:`STORED_DRAWN`) while its inputs'
-    fingerprint matches, else candidates from the grasp's generator until one is feasible
-    (:func:`feasible`) and holds the box in simulation (:func:`holds`)."""
+    """Drawn grasp ``grasp`` for ``user``: ``(spec, plan, trials)``, the stored choice
+    (:data:`STORED_DRAWN`) while its inputs' fingerprint matches (``trials`` None), else candidates
+    from the grasp's generator until one is feasible (:func:`feasible`) and holds the box in
+    simulation (:func:`holds`; ``trials`` the :class:`TrialResult` of the one chosen)."""
     entry = stored_plans().get(f"drawn/{int(user)}/{int(grasp)}")
     if entry is not None:
         problem = _PlanProblem(user, entry["spec"])
         if entry["fingerprint"] == problem.fingerprint:
-            return entry["spec"], problem.plan(np.array(entry["x"], dtype=float))
-    return _search(user, grasp)[:2]
+            return entry["spec"], problem.plan(np.array(entry["x"], dtype=float)), None
+    spec, plan, _, _, trials = _search(user, grasp)
+    return spec, plan, trials
 
 
 def _search(user: int, grasp: int) -> tuple:
