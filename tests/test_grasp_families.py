@@ -6,7 +6,7 @@ from openblas_kernels import KERNEL_FLAGS, runnable_kernels
 
 from benchmark.world.assets import build_world
 from benchmark.world.grasp_families import FAMILIES, FINGER_GAP_M, PAD_HEIGHT_M, ROW_CENTRE_M, draw_candidate
-from benchmark.world.grasp_plan import MAX_TIP_ERROR_M, MIN_CLEARANCE_M, feasible, grasp_spec, plan_grasp
+from benchmark.world.grasp_plan import MAX_TIP_ERROR_M, MIN_CLEARANCE_M, _drawn, feasible, grasp_spec, plan_grasp
 from benchmark.world.scenario import Scenario
 
 WORLD = build_world(Scenario(user=0))
@@ -42,7 +42,8 @@ def test_candidates_put_every_pad_on_its_face_a_pad_breadth_apart():
 
 def test_a_drawn_grasp_is_feasible_for_its_person_and_the_same_every_time():
     """Unstored pairs, one of each family (width-five, tripod, width-four), whose grasps are searched
-    here: each one's first candidate holds in the six trials."""
+    here (each one's first candidate holds in the six trials: 6 simulated trials a pair): each is
+    the search's choice that held, not its fallback."""
     families = set()
     for user, grasp in ((0, 4), (17, 5), (123, 9)):
         sc = Scenario(user=user, grasp=grasp)
@@ -53,6 +54,7 @@ def test_a_drawn_grasp_is_feasible_for_its_person_and_the_same_every_time():
         np.testing.assert_array_equal(plan.q_grasp, np.round(plan.q_grasp, 9))
         active = [f for f, a in zip(WORLD.hand.finger_names, plan.active) if a]
         assert set(active) == set(spec["spots"])
+        assert _drawn(user, grasp)[2].holds  # the trials the search ran for its choice: no fallback
         families.add(spec["family"])
     assert families == set(FAMILIES)
 
@@ -69,7 +71,7 @@ def test_a_drawn_grasp_holds_the_heaviest_box_in_every_trial_and_a_plan_into_the
     are cached, not simulated again); the same plan sunk into the box fails them."""
     from dataclasses import replace
 
-    from benchmark.world.grasp_plan import TRIALS, _drawn, holds
+    from benchmark.world.grasp_plan import TRIALS, holds
 
     _, plan, trials = _drawn(123, 9)
     assert plan is plan_grasp(Scenario(user=123, grasp=9))
@@ -92,7 +94,7 @@ def test_every_suites_and_the_training_sets_drawn_grasps_are_stored():
     pairs are stored, and their inputs current."""
     from benchmark.reproduce import CURVE_PEOPLE, DATASETS
     from benchmark.suites import SUITES
-    from benchmark.world.grasp_plan import STORED_DRAWN, _drawn, _PlanProblem, stored_plans
+    from benchmark.world.grasp_plan import STORED_DRAWN, _PlanProblem, stored_plans
 
     named = len(__import__("benchmark.world.assets", fromlist=["grasps"]).grasps())
     needed = {(sc.user, sc.grasp) for s in SUITES.values() for sc in s.scenarios if sc.grasp >= named}

@@ -185,9 +185,9 @@ def test_an_unstored_person_grasp_and_view_under_lab_knowledge_give_one_digest_p
     pose once went through BLAS's norm), told as a lab knows them: the truth, depth, tracking,
     kinematics and forces have one digest under every OpenBLAS kernel this CPU runs (Sandybridge,
     Haswell, SkylakeX), whose own BLAS norms differ (the control). Grasp 4327's first drawn candidate
-    holds in the six trials (grasp 4322's, the first one used here, failed: 12 simulated trials a
-    kernel against 6); on the tree before the fix (e1677ed's parent) both give other tracking,
-    kinematics and forces under SkylakeX than under Haswell."""
+    holds in the six trials (6 simulated trials a kernel); on the tree before the fix this test
+    guards (e1677ed's parent), the run gives other tracking, kinematics and forces under SkylakeX than
+    under Haswell."""
     import json
 
     from openblas_kernels import KERNEL_FLAGS, runnable_kernels

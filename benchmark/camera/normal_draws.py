@@ -13,9 +13,11 @@ pixel every frame (230 400 a 320 x 240 frame: 1.8 ms -> 0.5 ms). Numba's own
 exponential in single precision, where NumPy's C computes it in double, so a draw near the wedge's
 edge could differ.
 
-The ziggurat's tables are numba's copy of NumPy's (``numba.np.random._constants``);
-tests/test_normal_draws.py checks the bits and the generator's state against NumPy's over tens of
-millions of draws, through the wedge and the tail.
+The ziggurat's tables are numba's copy of NumPy's (``numba.np.random._constants``), the word and
+float draws numba's bindings of the bit generator (``numba.np.random.generator_core``; both part of
+numba's ``Generator`` support since 0.56). tests/test_normal_draws.py checks the bits and the
+generator's state against NumPy's over a million draws a seed, through the wedge and the tail, on
+seeds where a single-precision wedge test would differ.
 
 Like any use of a generator outside its own methods, this does not take the bit generator's lock:
 a generator must not be drawn from by two threads at once.
