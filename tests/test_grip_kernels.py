@@ -164,3 +164,39 @@ def test_the_response_and_the_running_maximum_are_the_numpy_loops_bits():
         peak[shift:] = np.maximum(peak[shift:], load[:300 - shift])
     assert running_max(load, 12).tobytes() == peak.tobytes()
     assert running_max(load, 12)[100, 0] == load[88:113, 0].max()
+
+
+def _shifted_max(x, half):
+    """The running maximum over the shifts 1..half, each first from after, then from before, each
+    step keeping the running value where it is NaN or not below the other (NaN wins, and of two equal
+    values the running one: -0.0 stays against +0.0, where np.maximum would give +0.0)."""
+    peak = x.copy()
+
+    def keep(a, b):
+        return np.where(np.isnan(a) | (a >= b), a, b)
+
+    for shift in range(1, min(half, len(x) - 1) + 1):
+        peak[:-shift] = keep(peak[:-shift], x[shift:])
+        peak[shift:] = keep(peak[shift:], x[:len(x) - shift])
+    return peak
+
+
+@pytest.mark.parametrize("N, half", [(1, 3), (2, 1), (7, 3), (7, 9), (300, 1), (300, 12), (2500, 125)])
+def test_the_running_maximum_is_the_shifted_loops_bits_with_ties_nans_and_signed_zeros(N, half):
+    """Columns of plain values, of many ties (values on a coarse grid), with -0.0 beside +0.0, with a
+    NaN, and with both: each column's bits are the shifted loop's (the queue takes the plain and the
+    tied columns; which zero or NaN a window keeps depends on the order, which the loop keeps)."""
+    rng = np.random.default_rng(N + half)
+    plain = np.abs(rng.normal(size=N)) * 3.0
+    ties = np.round(rng.uniform(0, 3, size=N))
+    zeros = np.array([-0.0, 0.0, 0.0, 1.0])[rng.integers(0, 4, size=N)]
+    nan = plain.copy()
+    nan[N // 2] = np.nan
+    both = zeros.copy()
+    both[N // 3] = np.nan
+    x = np.stack([plain, ties, zeros, nan, both, -plain], axis=1)
+    assert N < 7 or np.signbit(zeros[zeros == 0]).any()
+    got = running_max(x, half)
+    assert got.tobytes() == _shifted_max(x, half).tobytes()
+    i = N // 2
+    assert got[i, 0] == plain[max(0, i - half):i + half + 1].max() and np.isnan(got[i, 3])

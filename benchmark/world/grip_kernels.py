@@ -111,7 +111,14 @@ def first_order_response(target: np.ndarray, filtered: np.ndarray, start: int, k
 
 
 def running_max(x: np.ndarray, half: int) -> np.ndarray:
-    """The largest of ``x`` within ``half`` rows before or after each row, (N, K) -> (N, K)."""
+    """The largest of ``x`` within ``half`` rows before or after each row, (N, K) -> (N, K), as the
+    shifts 1..``half`` find it (each first from after, then from before; a NaN wins, and of two
+    equal values the one found first).
+
+    A column without NaN and without -0.0 takes a monotonic queue, one pass over its rows (there the
+    largest value of a window is one number, whichever order finds it: 21 times faster on a
+    simulation's loads, half = 125); a column with either takes the shifts themselves, as their order
+    then decides which NaN or which zero is kept."""
     return _running_max(np.ascontiguousarray(x, dtype=np.float64), int(half))
 
 
@@ -128,16 +135,37 @@ def _first_order(target, filtered, start, keep):  # pragma: no cover - compiled
 
 @_jit
 def _running_max(x, half):  # pragma: no cover - compiled
-    # the order of np.maximum over the shifts 1..half, each first from after, then from before
     N, K = x.shape
-    peak = x.copy()
-    for shift in range(1, half + 1):
-        for i in range(N - shift):
-            for k in range(K):
-                peak[i, k] = _maximum(peak[i, k], x[i + shift, k])
-        for i in range(shift, N):
-            for k in range(K):
-                peak[i, k] = _maximum(peak[i, k], x[i - shift, k])
+    peak = np.empty_like(x)
+    queue = np.empty(N, np.int64)  # rows whose values fall from the front to the back
+    for k in range(K):
+        plain = True
+        for i in range(N):
+            v = x[i, k]
+            if v != v or (v == 0.0 and math.copysign(1.0, v) < 0.0):
+                plain = False
+                break
+        if not plain:  # the order of np.maximum over the shifts, each first from after, then from before
+            for i in range(N):
+                peak[i, k] = x[i, k]
+            for shift in range(1, half + 1):
+                for i in range(N - shift):
+                    peak[i, k] = _maximum(peak[i, k], x[i + shift, k])
+                for i in range(shift, N):
+                    peak[i, k] = _maximum(peak[i, k], x[i - shift, k])
+            continue
+        head, tail = 0, 0
+        for j in range(N + half):  # row j enters the window of row j - half
+            if j < N:
+                while tail > head and x[queue[tail - 1], k] <= x[j, k]:
+                    tail -= 1
+                queue[tail] = j
+                tail += 1
+            i = j - half
+            if i >= 0:
+                while queue[head] < i - half:
+                    head += 1
+                peak[i, k] = x[queue[head], k]
     return peak
 
 
