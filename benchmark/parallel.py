@@ -195,9 +195,9 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
     worker must see this process's: the libraries the server loaded read some of it when they
     loaded). After a change, the next pool stops the server and starts another with the environment
     of now, unless a process of this one's is running (one forked from it holds the server's "alive"
-    pipe, and the server would not end before it): that pool's workers are spawned. Another platform (macOS's frameworks are not safe
-    to fork) or a fork server that another library started (its preloads and environment are not
-    known) gives spawned workers too. A forked worker is the same program in a fresh state as a
+    pipe, and the server would not end before it): that pool's workers are spawned. Another platform
+    (macOS's frameworks are not safe to fork) or a fork server that another library started (its
+    preloads and environment are not known) gives spawned workers too. A forked worker is the same program in a fresh state as a
     spawned one: the results do not depend on which (``tests/test_parallel.py``).
     """
     global _server_env

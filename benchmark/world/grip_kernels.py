@@ -51,7 +51,8 @@ def hold_passes(f: np.ndarray, c: np.ndarray, slope: np.ndarray, held_load: np.n
 
 @_jit
 def _maximum(a, b):  # pragma: no cover - compiled
-    # np.maximum of two scalars: NaN if either is NaN, else the larger
+    # np.maximum of two scalars: NaN if either is NaN, else the larger; of two equal values the first
+    # (-0.0 against +0.0 too, where np.maximum gives +0.0)
     if a != a or a >= b:
         return a
     return b
@@ -145,7 +146,7 @@ def _running_max(x, half):  # pragma: no cover - compiled
             if v != v or (v == 0.0 and math.copysign(1.0, v) < 0.0):
                 plain = False
                 break
-        if not plain:  # the order of np.maximum over the shifts, each first from after, then from before
+        if not plain:  # _maximum over the shifts in their order, each first from after, then from before
             for i in range(N):
                 peak[i, k] = x[i, k]
             for shift in range(1, half + 1):
