@@ -18,10 +18,9 @@ dozen unknowns); for them the cost is the call overhead, comparable to BLAS.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+from fsv.jit import kernel
 
 
 def mm(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -107,7 +106,7 @@ def tmv(J: np.ndarray, r: np.ndarray) -> np.ndarray:
     return np.einsum("np,n->p", J, r)
 
 
-@_jit
+@kernel
 def _gram(J, w):  # pragma: no cover - compiled
     N, P = J.shape
     out = np.zeros((P, P))
@@ -153,7 +152,7 @@ def inv(A: np.ndarray) -> np.ndarray:
     return solve(A, np.eye(A.shape[0]))
 
 
-@_jit
+@kernel
 def _lu_solve(A, B):  # pragma: no cover - compiled
     n = A.shape[0]
     m = B.shape[1]

@@ -17,17 +17,15 @@ fast-math is used.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+from fsv.jit import kernel
 
 _MASK32 = 0xFFFFFFFF
 _INV_2_32 = 1.0 / 4294967296.0
 
 
-@_jit_inline
+@kernel(inline="always")
 def _pixel_range(lo, hi, n):
     """The pixel indices [a, b) of the pixel centres in [lo, hi], clamped to [0, n)."""
     a = int(np.ceil(lo)) if lo > 0.0 else 0
@@ -39,7 +37,7 @@ def _pixel_range(lo, hi, n):
     return a, b
 
 
-@_jit_inline
+@kernel(inline="always")
 def _extend(x, y, z, fx, fy, cx, cy, box):
     pu = fx * x / z + cx
     pv = fy * y / z + cy
@@ -53,7 +51,7 @@ def _extend(x, y, z, fx, fy, cx, cy, box):
         box[3] = pv
 
 
-@_jit_inline
+@kernel(inline="always")
 def _clipped_box(p, znear, fx, fy, cx, cy, box):
     box[0] = np.inf
     box[1] = -np.inf
@@ -74,7 +72,7 @@ def _clipped_box(p, znear, fx, fy, cx, cy, box):
     return any_in
 
 
-@_jit
+@kernel
 def draw_triangles(verts, faces, face_label, id_offset, fx, fy, cx, cy, znear, zfar, zbuf, lbuf, nbuf, ibuf):
     """``raster_kernels.draw_triangles`` (same depth, same labels) that also writes normals and ids.
 
@@ -134,7 +132,7 @@ def draw_triangles(verts, faces, face_label, id_offset, fx, fy, cx, cy, znear, z
                     ibuf[v, u] = fid
 
 
-@_jit_inline
+@kernel(inline="always")
 def _sphere_hit(ox, oy, oz, dx, dy, dz, dd, cx_, cy_, cz_, rr):
     qx, qy, qz = ox - cx_, oy - cy_, oz - cz_
     p = dx * qx + dy * qy + dz * qz
@@ -144,7 +142,7 @@ def _sphere_hit(ox, oy, oz, dx, dy, dz, dd, cx_, cy_, cz_, rr):
     return (-p - np.sqrt(h)) / dd
 
 
-@_jit
+@kernel
 def draw_capsules(ends, radius, cap_label, id_offset, fx, fy, cx, cy, znear, zfar, zbuf, lbuf, nbuf, ibuf):
     """``raster_kernels.draw_capsules`` (same depth, same labels) that also writes normals and ids.
 
@@ -236,7 +234,7 @@ def draw_capsules(ends, radius, cap_label, id_offset, fx, fy, cx, cy, znear, zfa
 # --- textures -----------------------------------------------------------------------------------
 
 
-@_jit_inline
+@kernel(inline="always")
 def hash2(i, j, seed):
     """An integer hash of the lattice point (i, j) and a seed, in [0, 2^32) (int64 arithmetic,
     exact: |i|, |j| < 2^31 and 0 <= seed < 2^24)."""
@@ -245,7 +243,7 @@ def hash2(i, j, seed):
     return h ^ (h >> 16)
 
 
-@_jit_inline
+@kernel(inline="always")
 def value_noise(x, y, seed):
     """Value noise at (x, y) (lattice units): the hashed values of the four lattice corners,
     bilinearly interpolated with the smoothstep weight 3t^2 - 2t^3; in [0, 1)."""
@@ -264,7 +262,7 @@ def value_noise(x, y, seed):
     return a + sy * (b - a)
 
 
-@_jit_inline
+@kernel(inline="always")
 def box_ink(face, a, b, half_a, half_b, par):
     """Whether the point (a, b) [m] of box face ``face`` (face coordinates centred on the face,
     half sizes half_a, half_b) is inked: a hashed cell of ``par[face, 0]`` metres inked with
@@ -279,7 +277,7 @@ def box_ink(face, a, b, half_a, half_b, par):
     return c >= par[face, 3] and c <= par[face, 4]
 
 
-@_jit
+@kernel
 def shade(zbuf, lbuf, nbuf, ibuf, n_static, static_rad, fx, fy, cx, cy, light_dir, light_rgb, ambient, background,
           skin, box_R, box_t, box_half, box_base, box_ink_rgb, box_par, box_print, table_R, table_t, table_base,
           table_grain, table_par, table_texture, acc):
@@ -382,7 +380,7 @@ def shade(zbuf, lbuf, nbuf, ibuf, n_static, static_rad, fx, fy, cx, cy, light_di
             acc[v, u, 2] += np.float32(alb[2] * e2)
 
 
-@_jit
+@kernel
 def mean_radiance(acc, samples, out):
     """``out = acc / samples`` (float32; the exposure's mean radiance)."""
     H, W, C = acc.shape
@@ -393,7 +391,7 @@ def mean_radiance(acc, samples, out):
                 out[v, u, c] = acc[v, u, c] / s
 
 
-@_jit
+@kernel
 def max_shift_px(p0, p1, fx, fy, cx, cy, znear):
     """Largest image displacement [px] of the points p0 -> p1 (camera frame, (N, 3)) in front of
     the near plane at both ends."""
@@ -412,7 +410,7 @@ def max_shift_px(p0, p1, fx, fy, cx, cy, znear):
 # --- sensor --------------------------------------------------------------------------------------
 
 
-@_jit
+@kernel
 def expose(radiance, raw, noisy, electrons_per_unit, full_well, read_var, gains, normal_table, srgb_table, out):
     """The sensor's per-pixel pass: signal, noise, white balance, sRGB encoding.
 
@@ -455,7 +453,7 @@ def expose(radiance, raw, noisy, electrons_per_unit, full_well, read_var, gains,
                 out[v, u, c] = srgb_table[int(x * M1 + 0.5)]
 
 
-@_jit
+@kernel
 def register(rgb, Kc, R_wc, t_wc, depth, Kd, R_wd, t_wd, out):
     """Colour of each depth pixel: its back-projected point's nearest colour pixel (0 where the
     depth is 0 or the point falls outside the colour image or behind the colour camera).

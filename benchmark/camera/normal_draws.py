@@ -27,13 +27,13 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from numba.np.random._constants import fi_float, ki_float, wi_float, ziggurat_nor_inv_r_f, ziggurat_nor_r_f
 from numba.np.random.distributions import np_log1pf
 from numba.np.random.generator_core import next_float, next_uint32
 
 from benchmark.errors import BenchmarkError
+from fsv.jit import kernel
 
 _WI = np.asarray(wi_float, dtype=np.float32)
 _KI = np.asarray(ki_float, dtype=np.uint32)
@@ -62,14 +62,14 @@ def standard_normal_f32(rng: np.random.Generator, out: np.ndarray) -> np.ndarray
     return out
 
 
-@numba.njit(cache=True, error_model="numpy")
+@kernel(nogil=False)
 def _fill(rng, flat):  # pragma: no cover - compiled
     bitgen = rng.bit_generator
     for i in range(flat.size):
         flat[i] = _draw(bitgen)
 
 
-@numba.njit(cache=True, error_model="numpy")
+@kernel(nogil=False)
 def _draw(bitgen):  # pragma: no cover - compiled
     # random_standard_normal_f of NumPy's distributions.c, line for line
     while True:

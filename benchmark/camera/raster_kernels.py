@@ -15,14 +15,12 @@ depth test, so a pixel two surfaces reach at exactly the same depth keeps the fi
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+from fsv.jit import kernel
 
 
-@_jit
+@kernel
 def camera_from_bodies(R_cw, t_cw, xpos, xmat, rot, trans):
     """Each body's pose in the camera frame, ``rot[b] = R_cw @ xmat[b]`` and ``trans[b] = R_cw @
     xpos[b] + t_cw``, in a fixed order (no BLAS).
@@ -39,7 +37,7 @@ def camera_from_bodies(R_cw, t_cw, xpos, xmat, rot, trans):
             trans[b, r] = R_cw[r, 0] * xpos[b, 0] + R_cw[r, 1] * xpos[b, 1] + R_cw[r, 2] * xpos[b, 2] + t_cw[r]
 
 
-@_jit
+@kernel
 def transform_points(points, body, rot, trans, out):
     """``out[i] = rot[body[i]] @ points[i] + trans[body[i]]``, in a fixed order (no BLAS).
 
@@ -55,7 +53,7 @@ def transform_points(points, body, rot, trans, out):
             out[i, r] = rot[b, r, 0] * points[i, 0] + rot[b, r, 1] * points[i, 1] + rot[b, r, 2] * points[i, 2] + trans[b, r]
 
 
-@_jit_inline
+@kernel(inline="always")
 def _pixel_range(lo, hi, n):
     """The pixel indices [a, b) of the pixel centres in [lo, hi], clamped to [0, n)."""
     a = int(np.ceil(lo)) if lo > 0.0 else 0
@@ -67,7 +65,7 @@ def _pixel_range(lo, hi, n):
     return a, b
 
 
-@_jit_inline
+@kernel(inline="always")
 def _extend(x, y, z, fx, fy, cx, cy, box):
     """Extends the pixel bounding box ``box`` (umin, umax, vmin, vmax) by the projection of (x, y, z), z > 0."""
     pu = fx * x / z + cx
@@ -82,7 +80,7 @@ def _extend(x, y, z, fx, fy, cx, cy, box):
         box[3] = pv
 
 
-@_jit_inline
+@kernel(inline="always")
 def _clipped_box(p, znear, fx, fy, cx, cy, box):
     """The pixel bounding box of the polygon ``p`` (M, 3) clipped to z >= znear (the near plane);
     False when nothing of it lies in front."""
@@ -105,7 +103,7 @@ def _clipped_box(p, znear, fx, fy, cx, cy, box):
     return any_in
 
 
-@_jit
+@kernel
 def draw_triangles(verts, faces, face_label, fx, fy, cx, cy, znear, zfar, zbuf, lbuf):
     """Draws triangles (front faces only) into the depth and label buffers.
 
@@ -161,7 +159,7 @@ def draw_triangles(verts, faces, face_label, fx, fy, cx, cy, znear, zfar, zbuf, 
                     lbuf[v, u] = label
 
 
-@_jit_inline
+@kernel(inline="always")
 def _sphere_hit(ox, oy, oz, dx, dy, dz, dd, cx_, cy_, cz_, rr):
     """Ray parameter of the first hit of o + s d on the sphere (c, r), or inf."""
     qx, qy, qz = ox - cx_, oy - cy_, oz - cz_
@@ -172,7 +170,7 @@ def _sphere_hit(ox, oy, oz, dx, dy, dz, dd, cx_, cy_, cz_, rr):
     return (-p - np.sqrt(h)) / dd
 
 
-@_jit
+@kernel
 def draw_capsules(ends, radius, cap_label, fx, fy, cx, cy, znear, zfar, zbuf, lbuf):
     """Ray-casts capsules and spheres (a capsule whose ends coincide) into the buffers.
 
@@ -243,7 +241,7 @@ def draw_capsules(ends, radius, cap_label, fx, fy, cx, cy, znear, zfar, zbuf, lb
                     lbuf[v, u] = label
 
 
-@_jit
+@kernel
 def finish(zbuf, lbuf, depth, labels):
     """The float32 depth (0 where nothing is drawn) and the labels of the buffers."""
     H, W = zbuf.shape

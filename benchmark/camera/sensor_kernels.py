@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import threading
 
-import numba
 import numpy as np
 
 from benchmark.errors import BenchmarkError
+from fsv.jit import kernel
 
 
 def _image(depth_m, what: str) -> np.ndarray:
@@ -34,8 +34,6 @@ _HALF_FAR_W = np.float32(0.5) * _FAR_W
 _ONE = np.float32(1)
 _ZERO = np.float32(0)
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
 
 
 class _Workspace:
@@ -71,7 +69,7 @@ def _workspace(shape: tuple[int, int]) -> _Workspace:
     return spaces[shape]
 
 
-@_jit
+@kernel
 def _pad(z, w, zz):
     """Fills the padded inverse depth `w` (1 / depth; _FAR_W where nothing is seen and outside
     the image) and the padded edge-test depth `zz` (nothing: _FAR_Z, far from any depth and equal
@@ -94,7 +92,7 @@ def _pad(z, w, zz):
             zzr[j + 1] = (_FAR_Z if d <= _ZERO else _ZERO) + d
 
 
-@_jit_inline
+@kernel(inline="always")
 def _slope(w_before, w, w_after):
     """One-sided difference of the inverse depth towards the neighbour whose inverse depth is
     closer, and whether a neighbour that shows something exists in this direction."""
@@ -104,7 +102,7 @@ def _slope(w_before, w, w_after):
     return (after if a_after <= a_before else before), min(a_after, a_before) < _HALF_FAR_W
 
 
-@_jit_inline
+@kernel(inline="always")
 def _incidence_terms(w, w_left, w_right, w_up, w_down, u, v, r2, fx, fy, scale):
     """``(w^2, scale |m|^2 |r|^2, near)`` of a pixel of inverse depth `w` with the inverse
     depths of its 4-neighbours (_FAR_W: nothing or outside the image).
@@ -128,7 +126,7 @@ def _incidence_terms(w, w_left, w_right, w_up, w_down, u, v, r2, fx, fy, scale):
     return w * w, (mz * mz + mu * mu + mv * mv) * r2 * scale, near_u & near_v
 
 
-@_jit
+@kernel
 def _grids(H, W, fx, fy, cx, cy):
     """Per column u - cx and (u - cx)^2 / fx^2, per row v - cy and (v - cy)^2 / fy^2 (float64)."""
     du = np.arange(W) - cx
@@ -136,7 +134,7 @@ def _grids(H, W, fx, fy, cx, cy):
     return du, (du / fx) * (du / fx), dv, (dv / fy) * (dv / fy)
 
 
-@_jit
+@kernel
 def _sensor_kernel(z, w, zz, fx, fy, cx, cy, min_range, max_range, jump, cos2, dropout, fly, noise, axial, tof1,
                    quantum, disparity_q, fb, uniform, flying, bias, out, ok, edge, c2, zfar):
     """The sensor model's per-pixel work on a depth image `z` (`w`, `zz` from :func:`_pad`).
@@ -227,7 +225,7 @@ def _sensor_kernel(z, w, zz, fx, fy, cx, cy, min_range, max_range, jump, cos2, d
             ok[i, j] = keep
 
 
-@_jit
+@kernel
 def _lateral_kernel(z, nv, nu, c, model, sigma_px, discontinuity, out):
     """Lateral jitter: `out` = `z` read at the pixel displaced by sigma_L * (`nv`, `nu`) (rounded),
     where the displaced pixel lies across a discontinuity (a jump above `discontinuity`, or one of
@@ -248,7 +246,7 @@ def _lateral_kernel(z, nv, nu, c, model, sigma_px, discontinuity, out):
             out[i, j] = o if across else d
 
 
-@_jit
+@kernel
 def _multipath_kernel(z, r, peak, depth_scale, out):
     """Multipath bias (deeper) per pixel: `peak` * clip((z - mean) / `depth_scale`, 0, 1), mean the
     mean depth of the pixels that see something within `r` pixels (a box window, from integral
@@ -278,7 +276,7 @@ def _multipath_kernel(z, r, peak, depth_scale, out):
             out[i, j] = np.float32(peak * min(max(excess, 0.0), 1.0))
 
 
-@_jit
+@kernel
 def _incidence_cos_kernel(z, w, fx, fy, cx, cy, c):
     H, W = z.shape
     du, au, dv, av = _grids(H, W, fx, fy, cx, cy)
@@ -315,7 +313,7 @@ def _incidence_cos(z: np.ndarray, K: np.ndarray) -> np.ndarray:
     return c
 
 
-@_jit
+@kernel
 def quantise_on_grid(depth, quantum_m, out) -> bool:
     """Depth as uint16 counts of ``quantum_m`` when it lies on that grid, in one pass.
 

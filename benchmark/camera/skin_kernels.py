@@ -8,12 +8,10 @@ from __future__ import annotations
 
 import math
 
-import numba
-
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+from fsv.jit import kernel
 
 
-@_jit
+@kernel
 def skin_points(local, body, parent_local, parent_body, weight, rot, trans, out):
     """Linear blend skinning: ``out[i] = (1 - w) T_body p + w T_parent p_parent`` in the camera frame.
 
@@ -38,7 +36,7 @@ def skin_points(local, body, parent_local, parent_body, weight, rot, trans, out)
                 out[i, r] = own
 
 
-@_jit
+@kernel
 def pulp_presses(box_pos, box_quat, point, normal, force, active, stiffness, exponent, centre, push):
     """Where each pulp presses and by how much, per frame, in the world frame.
 
@@ -74,7 +72,7 @@ def pulp_presses(box_pos, box_quat, point, normal, force, active, stiffness, exp
             push[t, k, 2] = d * (R20 * nx + R21 * ny + R22 * nz)
 
 
-@_jit
+@kernel
 def press_pulps(verts, finger, pulp, centre, push, reach):
     """Pushes each pressed pulp's vertices into the face it presses, tapering with distance.
 
@@ -103,7 +101,7 @@ def press_pulps(verts, finger, pulp, centre, push, reach):
             verts[i, r] += w * push[k, r]
 
 
-@_jit
+@kernel
 def flatten_on_box(verts, R, t, half):
     """Moves every vertex inside the box onto the box's nearest face (skin does not enter the box).
 

@@ -30,10 +30,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+from fsv.jit import kernel
+
 _EPS = np.finfo(float).eps
 
 
@@ -56,7 +56,7 @@ class Result:
     status: str
 
 
-@_jit
+@kernel
 def half_sum_squares(f):  # pragma: no cover - compiled
     """``0.5 * sum(f**2)``, summed in index order."""
     s = 0.0
@@ -65,7 +65,7 @@ def half_sum_squares(f):  # pragma: no cover - compiled
     return 0.5 * s
 
 
-@_jit
+@kernel
 def _normal_equations(J, f, scale):  # pragma: no cover - compiled
     """``A = Js^T Js`` and ``g = Js^T f`` of the column-scaled Jacobian ``Js = J diag(scale)``,
     summed over rows in index order."""
@@ -86,7 +86,7 @@ def _normal_equations(J, f, scale):  # pragma: no cover - compiled
     return A, g
 
 
-@_jit
+@kernel
 def _damped_step(A, g, free, lam):  # pragma: no cover - compiled
     """The step ``p`` with ``(A_FF + lam I) p_F = -g_F`` on the free variables (zero elsewhere), by
     a Cholesky factorisation written out; ``ok`` False if a pivot is not positive."""
@@ -129,7 +129,7 @@ def _damped_step(A, g, free, lam):  # pragma: no cover - compiled
     return p, True
 
 
-@_jit
+@kernel
 def _predicted_reduction(A, g, d):  # pragma: no cover - compiled
     """``-(g.d + 0.5 d^T A d)``: the cost's decrease that the linearisation predicts for step ``d``."""
     n = d.shape[0]
@@ -144,7 +144,7 @@ def _predicted_reduction(A, g, d):  # pragma: no cover - compiled
     return -(lin + 0.5 * quad)
 
 
-@_jit
+@kernel
 def _norm(v):  # pragma: no cover - compiled
     s = 0.0
     for i in range(v.shape[0]):

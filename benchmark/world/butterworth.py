@@ -17,12 +17,10 @@ Developers): ``buttap``, ``iirfilter``, ``lp2bp_zpk``, ``bilinear_zpk``, ``zpk2s
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 from benchmark.errors import BenchmarkError
-
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+from fsv.jit import kernel
 
 
 def bandpass_sos(order: int, low: float, high: float) -> np.ndarray:
@@ -72,7 +70,7 @@ def sosfilt(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
     return out
 
 
-@_jit
+@kernel
 def _sosfilt(sos, x, zi):  # pragma: no cover - compiled
     # scipy/signal/_sosfilt.pyx, _sosfilt_float: in place, the same products and sums in order
     for n in range(x.shape[0]):

@@ -13,10 +13,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+from fsv.jit import kernel
 
 
 def hold_passes(f: np.ndarray, c: np.ndarray, slope: np.ndarray, held_load: np.ndarray | None,
@@ -49,7 +48,7 @@ def hold_passes(f: np.ndarray, c: np.ndarray, slope: np.ndarray, held_load: np.n
                  np.ascontiguousarray(order, dtype=np.int64), float(min_force_n), int(passes), float(tolerance_n))
 
 
-@_jit
+@kernel
 def _maximum(a, b):  # pragma: no cover - compiled
     # np.maximum of two scalars: NaN if either is NaN, else the larger; of two equal values the first
     # (-0.0 against +0.0 too, where np.maximum gives +0.0)
@@ -58,7 +57,7 @@ def _maximum(a, b):  # pragma: no cover - compiled
     return b
 
 
-@_jit
+@kernel
 def _hold_passes(f, c, slope, held, use_held, press, normals, order, min_force, passes, tol):  # pragma: no cover - compiled
     N, K = f.shape[0], f.shape[1]
     deficit = np.empty(N)
@@ -123,7 +122,7 @@ def running_max(x: np.ndarray, half: int) -> np.ndarray:
     return _running_max(np.ascontiguousarray(x, dtype=np.float64), int(half))
 
 
-@_jit
+@kernel
 def _first_order(target, filtered, start, keep):  # pragma: no cover - compiled
     K = target.shape[1]
     gain = 1 - keep
@@ -134,7 +133,7 @@ def _first_order(target, filtered, start, keep):  # pragma: no cover - compiled
             filtered[i, k] = g
 
 
-@_jit
+@kernel
 def _running_max(x, half):  # pragma: no cover - compiled
     N, K = x.shape
     peak = np.empty_like(x)
@@ -223,7 +222,7 @@ def finger_torques(forces: np.ndarray, jacobians: np.ndarray, rows: np.ndarray, 
     _finger_torques(forces, jacobians, rows, qfrc)
 
 
-@_jit
+@kernel
 def _contact_loads(fingers, signs, forces, frames, box_rot, normals):  # pragma: no cover - compiled
     K = normals.shape[0]
     force = np.zeros((K, 3))
@@ -246,7 +245,7 @@ def _contact_loads(fingers, signs, forces, frames, box_rot, normals):  # pragma:
     return n, t
 
 
-@_jit
+@kernel
 def _commanded_forces(forces_obj, box_rot, normals, feedback, press, raised):  # pragma: no cover - compiled
     K = forces_obj.shape[0]
     f_obj = forces_obj.copy()
@@ -268,7 +267,7 @@ def _commanded_forces(forces_obj, box_rot, normals, feedback, press, raised):  #
     return out
 
 
-@_jit
+@kernel
 def _finger_torques(forces, jacobians, rows, qfrc):  # pragma: no cover - compiled
     for r in range(rows.shape[0]):
         k, a, dof = rows[r, 0], rows[r, 1], rows[r, 2]
@@ -302,7 +301,7 @@ def correct_feedback(n: np.ndarray, t: np.ndarray, slope: float, min_force_n: fl
                       int(write), int(read), feedback, float(gain), float(leak))
 
 
-@_jit
+@kernel
 def _correct_feedback(n, t, slope, min_force, active, deficits, write, read, feedback, gain, leak):  # pragma: no cover - compiled
     K = n.shape[0]
     for k in range(K):

@@ -7,15 +7,13 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from fsv.jit import kernel
 from fsv.track.kernel_args import readonly
 
 _FAR_M = 1.0  # background depth behind the box where no table is seen, [m] past the box
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
-_jit_inline = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")  # inlined by numba
 
 
 def _box_depth(o: np.ndarray, d: np.ndarray, bg: np.ndarray, pos: np.ndarray, rot: np.ndarray, half: np.ndarray,
@@ -43,7 +41,7 @@ def _box_rays(o, d, bg):
 # agree to rounding, not bit for bit), the normal equations summed in pixel order.
 
 
-@_jit
+@kernel
 def _box_faces(o, pos, rot, half):  # pragma: no cover - compiled
     """Signed distances of the camera outside each face's plane (> 0: the face is visible), (6,), and
     the faces' outward normals s R_a, (6, 3)."""
@@ -61,7 +59,7 @@ def _box_faces(o, pos, rot, half):  # pragma: no cover - compiled
     return dist, normal
 
 
-@_jit_inline
+@kernel(inline="always")
 def _box_pixel(o, d0, d1, d2, bg, pos, rot, half, dist, normal, fx, silhouette_px, jacobian):  # pragma: no cover
     """Predicted depth, soft coverage, extended plane depth and (with ``jacobian``) the Jacobian row
     of one pixel's ray ``d``; see :func:`predict_box_depth`."""
@@ -166,7 +164,7 @@ def _box_pixel(o, d0, d1, d2, bg, pos, rot, half, dist, normal, fx, silhouette_p
     return depth, w, plane, j0, j1, j2, j3, j4, j5
 
 
-@_jit
+@kernel
 def _box_depth_kernel(o, d, bg, pos, rot, half, fx, silhouette_px, jacobian):  # pragma: no cover - compiled
     """Depth, soft coverage, plane depth (N,) and the Jacobian (N, 6) (or (0, 6) without ``jacobian``)."""
     N = d.shape[0]
@@ -184,7 +182,7 @@ def _box_depth_kernel(o, d, bg, pos, rot, half, fx, silhouette_px, jacobian):  #
     return depth, w, plane, J
 
 
-@_jit_inline
+@kernel(inline="always")
 def _flying(z_obs, plane, background, margin):  # pragma: no cover - compiled
     """A flying pixel: behind the nearest face's extended plane ``plane`` and in front of the
     background (the table's depth, or ``_FAR_M`` behind the plane where the ray misses the table),
@@ -195,7 +193,7 @@ def _flying(z_obs, plane, background, margin):  # pragma: no cover - compiled
     return plane + margin < z_obs < back - margin
 
 
-@_jit
+@kernel
 def _flying_pixels(z_obs, plane, background, margin):  # pragma: no cover - compiled
     """:func:`_flying` per pixel, for the particle search's cost: (N,) -> (N,) bool."""
     out = np.zeros(z_obs.shape[0], dtype=np.bool_)
@@ -204,7 +202,7 @@ def _flying_pixels(z_obs, plane, background, margin):  # pragma: no cover - comp
     return out
 
 
-@_jit
+@kernel
 def _box_normal_equations(o, d, bg, z_obs, pos, rot, half, fx, silhouette_px, sigma, robust_k,
                           occluder_k, flying_k):  # pragma: no cover - compiled
     """One Gauss-Newton iteration's normal equations in one pass over the pixels, in pixel order:

@@ -14,10 +14,9 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+from fsv.jit import kernel
 
 _TINY_LENGTH_M = 1e-12  # a capsule axis shorter than this is a sphere
 _PARALLEL = 1e-12  # rays closer than this to parallel with the axis miss the cylinder wall
@@ -51,7 +50,7 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
     return depth, geom, x, nrm
 
 
-@_jit
+@kernel
 def capsule_constants(origin, a, b, radius):  # pragma: no cover - compiled
     """Per-capsule constants of :func:`cast_ray` for rays from ``origin``: unit axis u (G, 3),
     length L (G,), w = origin - a (G, 3), w.u, w.w, wb = origin - b (G, 3), wb.wb, r^2, and a
@@ -90,7 +89,7 @@ def capsule_constants(origin, a, b, radius):  # pragma: no cover - compiled
     return u, L, w, wu, ww, wb, wbwb, r2, bc, br2
 
 
-@_jit
+@kernel
 def cast_ray(origin, d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, bc, br2):  # pragma: no cover - compiled
     """First capsule met by the ray ``origin + t (d0, d1, d2)``: ``(t, g)``, (inf, -1) for none.
 
@@ -136,7 +135,7 @@ def cast_ray(origin, d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, bc, br2):  # pra
     return best, best_g
 
 
-@_jit
+@kernel
 def hit_normal(x, a, u, L, g, out):  # pragma: no cover - compiled
     """Outward unit normal of capsule g at its surface point x (3,), written to ``out`` (3,)."""
     sax = 0.0
@@ -152,7 +151,7 @@ def hit_normal(x, a, u, L, g, out):  # pragma: no cover - compiled
         out[k] /= m
 
 
-@_jit
+@kernel
 def _ray_capsules(origin, rays, a, b, radius, surface):  # pragma: no cover - compiled
     N = rays.shape[0]
     u, L, w, wu, ww, wb, wbwb, r2, bc, br2 = capsule_constants(origin, a, b, radius)
@@ -193,7 +192,7 @@ def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius
                                 np.ascontiguousarray(np.broadcast_to(radius, (a.shape[0],)), dtype=np.float64))
 
 
-@_jit
+@kernel
 def closest_capsule(p0, p1, p2, a, ab, L2, radius, cp, normal):  # pragma: no cover - compiled
     """Nearest capsule surface of the point (p0, p1, p2): ``(g, signed distance)``; the closest
     axis point and the outward unit direction towards the point ((0, 0, 1) on the axis) are
@@ -219,7 +218,7 @@ def closest_capsule(p0, p1, p2, a, ab, L2, radius, cp, normal):  # pragma: no co
     return best_g, best
 
 
-@_jit
+@kernel
 def capsule_axes(a, b):  # pragma: no cover - compiled
     """``(ab = b - a (G, 3), L2 = max(|ab|^2, tiny) (G,))`` of :func:`closest_capsule`."""
     G = a.shape[0]
@@ -234,7 +233,7 @@ def capsule_axes(a, b):  # pragma: no cover - compiled
     return ab, L2
 
 
-@_jit
+@kernel
 def _closest_on_capsules(points, a, b, radius):  # pragma: no cover - compiled
     P = points.shape[0]
     geom = np.zeros(P, dtype=np.int64)

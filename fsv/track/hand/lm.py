@@ -24,16 +24,14 @@ from __future__ import annotations
 import ctypes
 import math
 
-import numba
 import numpy as np
 from numba import types
 
+from fsv.jit import kernel
 from fsv.linalg import _lu_solve
 from fsv.rotation import POLAR_MAX_ITERATIONS, POLAR_TOLERANCE
 from fsv.track.articulation import mirror_upper, pose_chain
 from fsv.track.hand_system import hand_normal_equations, rigidity_rows
-
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
 
 def _process_has(symbol: str) -> bool:
@@ -52,7 +50,7 @@ OK, SINGULAR, FALLBACK = 0, 1, 2
 """:func:`solve`'s status: done; a damped system was singular (NumPy's loop raises there); a rotation
 left SO(3) (run the NumPy loop)."""
 
-@_jit
+@kernel
 def edot(a, b):  # pragma: no cover - compiled
     """``np.einsum("i,i->", a, b)`` of contiguous 1-D arrays at NumPy's SSE2 baseline."""
     n = a.shape[0]
@@ -77,7 +75,7 @@ def edot(a, b):  # pragma: no cover - compiled
     return 0.0 + (l0 + l1)
 
 
-@_jit
+@kernel
 def mm3(A, B):  # pragma: no cover - compiled
     """``fsv.linalg.mm(A, B)`` of 3 x 3 matrices."""
     out = np.empty((3, 3))
@@ -87,7 +85,7 @@ def mm3(A, B):  # pragma: no cover - compiled
     return out
 
 
-@_jit
+@kernel
 def mm3t(A, B):  # pragma: no cover - compiled
     """``fsv.linalg.mm(A, B.T)`` of 3 x 3 matrices (the transpose a strided view)."""
     out = np.empty((3, 3))
@@ -97,7 +95,7 @@ def mm3t(A, B):  # pragma: no cover - compiled
     return out
 
 
-@_jit
+@kernel
 def exp_so3(w):  # pragma: no cover - compiled
     """``fsv.rotation.exp_so3`` of a contiguous (3,) rotation vector."""
     theta = math.sqrt(edot(w, w))
@@ -120,7 +118,7 @@ def exp_so3(w):  # pragma: no cover - compiled
     return out
 
 
-@_jit
+@kernel
 def log_so3(R):  # pragma: no cover - compiled
     """``fsv.rotation.log_so3`` of a 3 x 3 rotation."""
     c = ((R[0, 0] + R[1, 1]) + R[2, 2] - 1.0) / 2.0
@@ -154,14 +152,14 @@ def log_so3(R):  # pragma: no cover - compiled
     return out
 
 
-@_jit
+@kernel
 def _det3(X):  # pragma: no cover - compiled
     return (X[0, 0] * (X[1, 1] * X[2, 2] - X[1, 2] * X[2, 1])
             - X[0, 1] * (X[1, 0] * X[2, 2] - X[1, 2] * X[2, 0])
             + X[0, 2] * (X[1, 0] * X[2, 1] - X[1, 1] * X[2, 0]))
 
 
-@_jit
+@kernel
 def project_to_so3(M):  # pragma: no cover - compiled
     """``fsv.rotation.project_to_so3`` where ``det(M) > 0``: ``(X, True)``; ``(M, False)`` otherwise
     (its singular-value branch is NumPy's)."""
@@ -198,7 +196,7 @@ def project_to_so3(M):  # pragma: no cover - compiled
     return X, True
 
 
-@_jit
+@kernel
 def hinges(K, KK, q):  # pragma: no cover - compiled
     """``fsv.rotation.rot_from_skew(K, KK, q)``: every hinge's rotation, (n, 3, 3)."""
     n = q.shape[0]
@@ -212,7 +210,7 @@ def hinges(K, KK, q):  # pragma: no cover - compiled
     return out
 
 
-@_jit
+@kernel
 def system(palm_pos, palm_rot, joints, prior_pos, prior_rot, prior_joints, ws_pos, ws_rot, ws_joint,
            kin, data, rigid, anchor, anchor_axis, w_rigid, box_pos, box_rot):  # pragma: no cover - compiled
     """``HandTracker._system``: ``(A, g, cost, explained)`` of a configuration.
@@ -257,7 +255,7 @@ def system(palm_pos, palm_rot, joints, prior_pos, prior_rot, prior_joints, ws_po
     return A, g, cost, explained
 
 
-@_jit
+@kernel
 def solve(palm_pos, palm_rot, joints, prior_pos, prior_rot, prior_joints, ws_pos, ws_rot, ws_joint, kin, data,
           rigid, anchor, anchor_axis, w_rigid, box_pos, box_rot, lo, hi, iterations):  # pragma: no cover - compiled
     """``HandTracker._solve``: Levenberg-Marquardt from the configuration, a step taken only if it
