@@ -8,7 +8,7 @@ from benchmark.world.hand import hand_model
 from fsv import ObjectModel
 from fsv.linalg import gram, rows_mt, tmv, vm
 from fsv.rotation import exp_so3
-from fsv.track.articulation import add_row, mirror_upper, point_row
+from fsv.track.articulation import add_row, add_row_span, joint_spans, mirror_upper, point_row
 from fsv.track.camera import CameraRays
 from fsv.track.capsules import closest_on_capsules, ray_capsules
 from fsv.track.hand import HandKinematics, HandState, HandTracker, HandTrackerConfig
@@ -147,6 +147,46 @@ def test_point_rows_equal_gram_of_the_point_jacobian():
     mirror_upper(A)
     np.testing.assert_allclose(A, gram(J, w), rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(g, -tmv(J, w * r), rtol=1e-12, atol=1e-14)
+
+
+def test_joint_spans_are_each_segments_hinges():
+    kin = HandKinematics(HAND)
+    spans = joint_spans(kin.moves)
+    for s, (lo, hi) in enumerate(spans):
+        hinges = np.flatnonzero(kin.moves[s])
+        assert list(range(lo - 6, hi - 6)) == list(hinges), s  # the hand's chains: consecutive hinges
+    assert tuple(spans[0]) == (6, 6)  # the palm: no hinge moves it
+    scattered = np.zeros((2, 5), bool)
+    scattered[0, [1, 3]] = True
+    scattered[1, [2]] = True
+    assert joint_spans(scattered).tolist() == [[6, 11], [8, 9]]  # not consecutive: every hinge entry
+
+
+def test_a_spanned_row_adds_the_bits_of_the_whole_row():
+    """Point rows of every segment, weights and residuals of every sign, rows with a zero in their
+    span, and weights whose products are not finite (inf times a hinge entry that is 0 is NaN, which
+    the whole row adds): ``A`` and ``g`` equal :func:`add_row`'s bit for bit, NaN where it has NaN."""
+    kin = HandKinematics(HAND)
+    st = HandState(np.array([0.0, -0.01, 0.13]), exp_so3([np.pi, 0.0, 0.0]), np.mean(HAND.joint_range, 1))
+    pose = kin.pose(st)
+    spans = joint_spans(kin.moves)
+    rng = np.random.default_rng(5)
+    D = 6 + HAND.num_joints
+    for trial in range(3):
+        A, g, A2, g2 = np.zeros((D, D)), np.zeros(D), np.zeros((D, D)), np.zeros(D)
+        row = np.empty(D)
+        for p in range(400):
+            s = int(rng.integers(0, len(HAND.segment_names)))
+            x = pose[0][s] + rng.normal(0.0, 0.02, 3)
+            point_row(row, *x, s, *rng.normal(size=3), rng.normal(), pose[0][0], kin.moves, pose[2], pose[3])
+            if p % 7 == 0:
+                row[int(rng.integers(0, 6))] = 0.0
+            w = rng.random() * (np.inf if trial == 2 and p == 200 else 1.0)
+            r = rng.normal()
+            add_row(A, g, row, w, r)
+            add_row_span(A2, g2, row, w, r, spans[s, 0], spans[s, 1])
+        assert A.tobytes() == A2.tobytes() and g.tobytes() == g2.tobytes(), trial
+    assert np.isnan(A).any() and not np.isnan(A[0, 0])  # the last trial's infinite weight reached A
 
 
 def test_box_distance_gradient_matches_differences_and_faces():

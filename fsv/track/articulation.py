@@ -13,13 +13,14 @@ order of operations on every machine: scalar loops, no BLAS, no fast-math).
 
 from __future__ import annotations
 
-import numba
+import math
+
 import numpy as np
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+from fsv.jit import kernel
 
 
-@_jit
+@kernel
 def pose_chain(palm_pos, palm_rot, hinge, parent, offset_pos, offset_rot, joint_start, joint_ids, joint_axis):  # pragma: no cover - compiled
     """Segment poses and hinge frames of a kinematic tree (segments ordered parents first).
 
@@ -86,7 +87,7 @@ def pose_chain(palm_pos, palm_rot, hinge, parent, offset_pos, offset_rot, joint_
     return pos, rot, axis, pivot
 
 
-@_jit
+@kernel
 def point_row(row, x0, x1, x2, s, d0, d1, d2, f, palm, moves, axis, pivot):  # pragma: no cover - compiled
     """Writes ``f * d(direction . x) / d(state)`` of the point x on segment s into ``row`` (6 + n,)."""
     l0, l1, l2 = x0 - palm[0], x1 - palm[1], x2 - palm[2]
@@ -103,7 +104,7 @@ def point_row(row, x0, x1, x2, s, d0, d1, d2, f, palm, moves, axis, pivot):  # p
             row[6 + j] = 0.0
 
 
-@_jit
+@kernel
 def add_row(A, g, row, w, r):  # pragma: no cover - compiled
     """``A += w row row^T`` (upper triangle) and ``g -= w row r``."""
     D = row.shape[0]
@@ -118,7 +119,73 @@ def add_row(A, g, row, w, r):  # pragma: no cover - compiled
         g[i] -= ri * wr
 
 
-@_jit
+@kernel
+def joint_spans(moves):  # pragma: no cover - compiled
+    """Where :func:`point_row` can write a non-zero hinge entry: for each segment s, ``[lo, hi)`` of
+    the row entries ``6 + j`` of the hinges that move it, (B, 2) int64. The hinges of a segment
+    are consecutive in a tree numbered parents first along each chain (the hand's: a finger's
+    hinges); where they are not, the span is every hinge entry, ``[6, 6 + n)``; a segment no hinge
+    moves (the palm) has the empty span ``[6, 6)``."""
+    B, n = moves.shape
+    span = np.empty((B, 2), np.int64)
+    for s in range(B):
+        first = -1
+        last = -1
+        count = 0
+        for j in range(n):
+            if moves[s, j]:
+                if first < 0:
+                    first = j
+                last = j
+                count += 1
+        if count == 0:
+            span[s, 0], span[s, 1] = 6, 6
+        elif count == last - first + 1:
+            span[s, 0], span[s, 1] = 6 + first, 7 + last
+        else:
+            span[s, 0], span[s, 1] = 6, 6 + n
+    return span
+
+
+@kernel
+def add_row_span(A, g, row, w, r, lo, hi):  # pragma: no cover - compiled
+    """:func:`add_row` of a row that is zero outside ``[0, 6)`` and ``[lo, hi)`` (a :func:`point_row`
+    row of a segment whose span is ``[lo, hi)``, :func:`joint_spans`), with the same bits: only the
+    products of a zero entry are left out, and adding such a product (+-0) to an entry of ``A``
+    changes nothing (the entries start at +0 and a sum is never -0 under round-to-nearest);
+    where ``w row[i]`` is not finite (its product with 0 is NaN) the whole row is added as
+    :func:`add_row` adds it."""
+    D = row.shape[0]
+    wr = w * r
+    for i in range(6):
+        ri = row[i]
+        if ri == 0.0:
+            continue
+        wi = w * ri
+        if math.isfinite(wi):
+            for k in range(i, 6):
+                A[i, k] += wi * row[k]
+            for k in range(lo, hi):
+                A[i, k] += wi * row[k]
+        else:
+            for k in range(i, D):
+                A[i, k] += wi * row[k]
+        g[i] -= ri * wr
+    for i in range(lo, hi):
+        ri = row[i]
+        if ri == 0.0:
+            continue
+        wi = w * ri
+        if math.isfinite(wi):
+            for k in range(i, hi):
+                A[i, k] += wi * row[k]
+        else:
+            for k in range(i, D):
+                A[i, k] += wi * row[k]
+        g[i] -= ri * wr
+
+
+@kernel
 def mirror_upper(A):  # pragma: no cover - compiled
     """Copies the upper triangle of a square matrix onto its lower triangle, in place."""
     D = A.shape[0]

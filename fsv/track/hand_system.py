@@ -11,16 +11,14 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
-from fsv.track.articulation import add_row, point_row
+from fsv.jit import kernel
+from fsv.track.articulation import add_row_span, joint_spans, point_row
 from fsv.track.capsules import capsule_axes, capsule_constants, cast_ray, closest_capsule, hit_normal
 
-_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 
-
-@_jit
+@kernel
 def box_sdf(p0, p1, p2, half, grad):  # pragma: no cover - compiled
     """Signed distance of the object-frame point (p0, p1, p2) to the box of half extents ``half``
     centred at the origin (negative inside); its gradient, the outward unit direction of steepest
@@ -60,7 +58,7 @@ def box_signed_distance(points_obj: np.ndarray, half: np.ndarray) -> tuple[np.nd
                                 np.ascontiguousarray(half, dtype=np.float64))
 
 
-@_jit
+@kernel
 def _box_signed_distance(points, half):  # pragma: no cover - compiled
     dist = np.empty(points.shape[0])
     grad = np.zeros((points.shape[0], 3))
@@ -69,7 +67,7 @@ def _box_signed_distance(points, half):  # pragma: no cover - compiled
     return dist, grad
 
 
-@_jit
+@kernel
 def _segment_point_in_box(pos, rot, s, local, box_pos, box_rot, x):  # pragma: no cover - compiled
     """The point ``local`` (3,) of segment s: written to ``x`` (3,) in the world; returned in the
     box's frame, ``(q0, q1, q2) = (x - box_pos) @ box_rot``."""
@@ -84,7 +82,7 @@ def _segment_point_in_box(pos, rot, s, local, box_pos, box_rot, x):  # pragma: n
     return q0, q1, q2
 
 
-@_jit
+@kernel
 def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromto, radius,
                           origin, rays, z_obs, free_rays, free_z, sigma, cauchy_k, assign_max_m,
                           pen_local, pen_segment, pen_radius, penetration_m, box_pos, box_rot, half,
@@ -124,6 +122,7 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
     g = np.zeros(D)
     row = np.empty(D)
     palm = pos[0]
+    span = joint_spans(moves)
     # Capsule end points in the world.
     a = np.empty((G, 3))
     b = np.empty((G, 3))
@@ -156,9 +155,9 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
                 x[i] = origin[i] + t * rays[p, i]
             hit_normal(x, a, u, L, c, nrm)
             nd = nrm[0] * d0 + nrm[1] * d1 + nrm[2] * d2
-            point_row(row, x[0], x[1], x[2], geom_segment[c], nrm[0], nrm[1], nrm[2], -1.0 / nd, palm, moves,
-                      axis, pivot)
-            add_row(A, g, row, 1.0 / (1.0 + (r / k) ** 2), r)
+            s = geom_segment[c]
+            point_row(row, x[0], x[1], x[2], s, nrm[0], nrm[1], nrm[2], -1.0 / nd, palm, moves, axis, pivot)
+            add_row_span(A, g, row, 1.0 / (1.0 + (r / k) ** 2), r, span[s, 0], span[s, 1])
             cost += 0.5 * k2 * math.log1p((r / k) ** 2)
             if abs(r) < 2.0 * sigma:
                 explained += 1.0
@@ -169,9 +168,9 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
             if dist < assign_max_m:
                 if abs(dist) < 2.0 * sigma:
                     explained += 1.0
-                point_row(row, cp[0], cp[1], cp[2], geom_segment[c], nrm[0], nrm[1], nrm[2], -1.0, palm, moves,
-                          axis, pivot)
-                add_row(A, g, row, 1.0 / (1.0 + (dist / k) ** 2), dist)
+                s = geom_segment[c]
+                point_row(row, cp[0], cp[1], cp[2], s, nrm[0], nrm[1], nrm[2], -1.0, palm, moves, axis, pivot)
+                add_row_span(A, g, row, 1.0 / (1.0 + (dist / k) ** 2), dist, span[s, 0], span[s, 1])
             d_c = min(abs(dist), assign_max_m)
             cost += 0.5 * k2 * math.log1p((d_c / k) ** 2)
     if z_obs.shape[0] > 0:
@@ -187,8 +186,9 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
         hit_normal(x, a, u, L, c, nrm)
         nd = nrm[0] * d0 + nrm[1] * d1 + nrm[2] * d2
         r = free_z[p] - t
-        point_row(row, x[0], x[1], x[2], geom_segment[c], nrm[0], nrm[1], nrm[2], -1.0 / nd, palm, moves, axis, pivot)
-        add_row(A, g, row, 1.0 / (1.0 + (r / k) ** 2), r)
+        s = geom_segment[c]
+        point_row(row, x[0], x[1], x[2], s, nrm[0], nrm[1], nrm[2], -1.0 / nd, palm, moves, axis, pivot)
+        add_row_span(A, g, row, 1.0 / (1.0 + (r / k) ** 2), r, span[s, 0], span[s, 1])
         cost += 0.5 * k2 * math.log1p((r / k) ** 2)
     # No interpenetration with the box: capsule samples at least their radius outside.
     grad = np.empty(3)
@@ -202,7 +202,7 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
         for i in range(3):  # the gradient in the world
             nrm[i] = box_rot[i, 0] * grad[0] + box_rot[i, 1] * grad[1] + box_rot[i, 2] * grad[2]
         point_row(row, x[0], x[1], x[2], s, nrm[0], nrm[1], nrm[2], -1.0, palm, moves, axis, pivot)
-        add_row(A, g, row, wp, pen)
+        add_row_span(A, g, row, wp, pen, span[s, 0], span[s, 1])
         cost += 0.5 * wp * pen * pen
     # Grasp closure: a hidden finger whose pad is near the box flexes until the pad meets it;
     # only its flexion hinges move (the palm stays where the depth puts it).
@@ -222,12 +222,12 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
             row[i] = 0.0
         for j in range(n):
             row[6 + j] *= flexion[j]
-        add_row(A, g, row, wc, gap)
+        add_row_span(A, g, row, wc, gap, span[s, 0], span[s, 1])
         cost += 0.5 * wc * gap * gap
     return A, g, cost, explained
 
 
-@_jit
+@kernel
 def rigidity_rows(A, g, pos, rot, axis, pivot, moves, tip_segment, tip_offset, fingers, anchor, anchor_axis,
                   box_pos, box_rot, w):  # pragma: no cover - compiled
     """Adds the grasp-rigidity rows (:mod:`fsv.track.hand`) to ``A`` (upper triangle) and ``g`` and
@@ -236,6 +236,7 @@ def rigidity_rows(A, g, pos, rot, axis, pivot, moves, tip_segment, tip_offset, f
     the two box axes other than ``anchor_axis[k]`` (the axes of the face it touches), weight ``w``
     (``(sigma / rigidity_m)^2``)."""
     row = np.zeros(A.shape[0])
+    span = joint_spans(moves)
     x = np.empty(3)
     t = np.empty(3)
     cost = 0.0
@@ -250,6 +251,6 @@ def rigidity_rows(A, g, pos, rot, axis, pivot, moves, tip_segment, tip_offset, f
             d0, d1, d2 = box_rot[0, a], box_rot[1, a], box_rot[2, a]
             r = d0 * (x[0] - t[0]) + d1 * (x[1] - t[1]) + d2 * (x[2] - t[2])
             point_row(row, x[0], x[1], x[2], s, d0, d1, d2, 1.0, pos[0], moves, axis, pivot)
-            add_row(A, g, row, w, r)
+            add_row_span(A, g, row, w, r, span[s, 0], span[s, 1])
             cost += 0.5 * w * r * r
     return cost
