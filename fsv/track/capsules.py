@@ -54,7 +54,7 @@ def ray_capsules(origin: np.ndarray, rays: np.ndarray, a: np.ndarray, b: np.ndar
 def capsule_constants(origin, a, b, radius):  # pragma: no cover - compiled
     """Per-capsule constants of :func:`cast_ray` for rays from ``origin``: unit axis u (G, 3),
     length L (G,), w = origin - a (G, 3), w.u, w.w, wb = origin - b (G, 3), wb.wb, r^2, and a
-    bounding sphere (centre (G, 3), squared radius (G,))."""
+    bounding sphere: its centre c less the origin and c.c, by rows (4, G), and its squared radius (G,)."""
     G = a.shape[0]
     u = np.empty((G, 3))
     L = np.empty(G)
@@ -64,7 +64,7 @@ def capsule_constants(origin, a, b, radius):  # pragma: no cover - compiled
     wb = np.empty((G, 3))
     wbwb = np.empty(G)
     r2 = np.empty(G)
-    bc = np.empty((G, 3))
+    sphere = np.empty((4, G))
     br2 = np.empty(G)
     for g in range(G):
         l2 = 0.0
@@ -78,30 +78,31 @@ def capsule_constants(origin, a, b, radius):  # pragma: no cover - compiled
             u[g, k] = (b[g, k] - a[g, k]) / L[g]
             w[g, k] = origin[k] - a[g, k]
             wb[g, k] = origin[k] - b[g, k]
-            bc[g, k] = 0.5 * (a[g, k] + b[g, k])
+            sphere[k, g] = 0.5 * (a[g, k] + b[g, k]) - origin[k]
         for k in range(3):
             wu[g] += w[g, k] * u[g, k]
             ww[g] += w[g, k] * w[g, k]
             wbwb[g] += wb[g, k] * wb[g, k]
+        sphere[3, g] = sphere[0, g] * sphere[0, g] + sphere[1, g] * sphere[1, g] + sphere[2, g] * sphere[2, g]
         r2[g] = radius[g] * radius[g]
         R = 0.5 * L[g] + radius[g] + _BOUND_MARGIN_M
         br2[g] = R * R
-    return u, L, w, wu, ww, wb, wbwb, r2, bc, br2
+    return u, L, w, wu, ww, wb, wbwb, r2, sphere, br2
 
 
 @kernel
-def cast_ray(origin, d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, bc, br2):  # pragma: no cover - compiled
+def cast_ray(d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, sphere, br2):  # pragma: no cover - compiled
     """First capsule met by the ray ``origin + t (d0, d1, d2)``: ``(t, g)``, (inf, -1) for none.
 
-    The capsule constants are :func:`capsule_constants`'."""
+    The capsule constants are :func:`capsule_constants`' for the origin: a capsule is intersected
+    only where the ray's line meets its bounding sphere."""
     dd = d0 * d0 + d1 * d1 + d2 * d2
     best = np.inf
     best_g = -1
     for g in range(L.shape[0]):
         # Bounding sphere: the squared distance of its centre from the ray's line.
-        c0, c1, c2 = bc[g, 0] - origin[0], bc[g, 1] - origin[1], bc[g, 2] - origin[2]
-        cd = c0 * d0 + c1 * d1 + c2 * d2
-        if c0 * c0 + c1 * c1 + c2 * c2 - cd * cd / dd > br2[g]:
+        cd = sphere[0, g] * d0 + sphere[1, g] * d1 + sphere[2, g] * d2
+        if sphere[3, g] - cd * cd / dd > br2[g]:
             continue
         t_g = np.inf
         du = d0 * u[g, 0] + d1 * u[g, 1] + d2 * u[g, 2]
@@ -154,13 +155,13 @@ def hit_normal(x, a, u, L, g, out):  # pragma: no cover - compiled
 @kernel
 def _ray_capsules(origin, rays, a, b, radius, surface):  # pragma: no cover - compiled
     N = rays.shape[0]
-    u, L, w, wu, ww, wb, wbwb, r2, bc, br2 = capsule_constants(origin, a, b, radius)
+    u, L, w, wu, ww, wb, wbwb, r2, sphere, br2 = capsule_constants(origin, a, b, radius)
     depth = np.full(N, np.inf)
     geom = np.full(N, -1, dtype=np.int64)
     x = np.zeros((N, 3))
     nrm = np.zeros((N, 3))
     for n in range(N):
-        best, g = cast_ray(origin, rays[n, 0], rays[n, 1], rays[n, 2], u, L, w, wu, ww, wb, wbwb, r2, bc, br2)
+        best, g = cast_ray(rays[n, 0], rays[n, 1], rays[n, 2], u, L, w, wu, ww, wb, wbwb, r2, sphere, br2)
         if g < 0:
             continue
         depth[n] = best

@@ -136,7 +136,7 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
                 vb += rot[s, i, k] * geom_fromto[c, 3 + k]
             a[c, i] = pos[s, i] + va
             b[c, i] = pos[s, i] + vb
-    u, L, w, wu, ww, wb, wbwb, r2, bc, br2 = capsule_constants(origin, a, b, radius)
+    u, L, w, wu, ww, wb, wbwb, r2, sphere, br2 = capsule_constants(origin, a, b, radius)
     ab, L2 = capsule_axes(a, b)
     k = cauchy_k * sigma
     k2 = k * k
@@ -148,7 +148,7 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
     # Candidates: along the ray where a capsule is hit in front of the observation, else ICP.
     for p in range(z_obs.shape[0]):
         d0, d1, d2 = rays[p, 0], rays[p, 1], rays[p, 2]
-        t, c = cast_ray(origin, d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, bc, br2)
+        t, c = cast_ray(d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, sphere, br2)
         r = z_obs[p] - t
         if c >= 0 and r > -3.0 * sigma:
             for i in range(3):
@@ -178,7 +178,7 @@ def hand_normal_equations(pos, rot, axis, pivot, moves, geom_segment, geom_fromt
     # Free space: a capsule predicted in front of what a scene pixel sees.
     for p in range(free_z.shape[0]):
         d0, d1, d2 = free_rays[p, 0], free_rays[p, 1], free_rays[p, 2]
-        t, c = cast_ray(origin, d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, bc, br2)
+        t, c = cast_ray(d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, sphere, br2)
         if c < 0:
             continue
         for i in range(3):
