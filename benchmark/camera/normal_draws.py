@@ -69,7 +69,7 @@ def _fill(rng, flat):  # pragma: no cover - compiled
         flat[i] = _draw(bitgen)
 
 
-@kernel(nogil=False)
+@kernel(nogil=False, inline="always")
 def _draw(bitgen):  # pragma: no cover - compiled
     # random_standard_normal_f of NumPy's distributions.c, line for line
     while True:
