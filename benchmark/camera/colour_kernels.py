@@ -86,6 +86,12 @@ def draw_triangles(verts, faces, face_label, id_offset, fx, fy, cx, cy, znear, z
     H, W = zbuf.shape
     tri = np.empty((3, 3))
     box = np.empty(4)
+    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
+    for u in range(W):
+        ray_x[u] = (u - cx) / fx
+    ray_y = np.empty(H)
+    for v in range(H):
+        ray_y[v] = (v - cy) / fy
     for f in range(faces.shape[0]):
         for k in range(3):
             for c in range(3):
@@ -114,9 +120,9 @@ def draw_triangles(verts, faces, face_label, id_offset, fx, fy, cx, cy, znear, z
         ux, uy, uz = nx * inv, ny * inv, nz * inv
         fid = id_offset + f
         for v in range(v0, v1):
-            dy = (v - cy) / fy
+            dy = ray_y[v]
             for u in range(u0, u1):
-                dx = (u - cx) / fx
+                dx = ray_x[u]
                 if ax * dx + ay * dy + az > 0.0 or bx * dx + by * dy + bz > 0.0 or gx * dx + gy * dy + gz > 0.0:
                     continue
                 den = nx * dx + ny * dy + nz
@@ -157,6 +163,12 @@ def draw_capsules(ends, radius, cap_label, id_offset, fx, fy, cx, cy, znear, zfa
     H, W = zbuf.shape
     corners = np.empty((8, 3))
     box = np.empty(4)
+    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
+    for u in range(W):
+        ray_x[u] = (u - cx) / fx
+    ray_y = np.empty(H)
+    for v in range(H):
+        ray_y[v] = (v - cy) / fy
     for c in range(ends.shape[0]):
         r = radius[c]
         rr = r * r
@@ -185,9 +197,9 @@ def draw_capsules(ends, radius, cap_label, id_offset, fx, fy, cx, cy, znear, zfa
         label = cap_label[c]
         cid = id_offset + c
         for v in range(v0, v1):
-            dy = (v - cy) / fy
+            dy = ray_y[v]
             for u in range(u0, u1):
-                dx = (u - cx) / fx
+                dx = ray_x[u]
                 dd = dx * dx + dy * dy + 1.0
                 tc = (mx * dx + my * dy + mz) / dd
                 ox, oy, oz = tc * dx, tc * dy, tc

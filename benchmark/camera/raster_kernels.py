@@ -119,6 +119,12 @@ def draw_triangles(verts, faces, face_label, fx, fy, cx, cy, znear, zfar, zbuf, 
     H, W = zbuf.shape
     tri = np.empty((3, 3))
     box = np.empty(4)
+    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
+    for u in range(W):
+        ray_x[u] = (u - cx) / fx
+    ray_y = np.empty(H)
+    for v in range(H):
+        ray_y[v] = (v - cy) / fy
     for f in range(faces.shape[0]):
         for k in range(3):
             for c in range(3):
@@ -145,9 +151,9 @@ def draw_triangles(verts, faces, face_label, fx, fy, cx, cy, znear, zfar, zbuf, 
         gz = tri[2, 0] * tri[0, 1] - tri[2, 1] * tri[0, 0]
         label = face_label[f]
         for v in range(v0, v1):
-            dy = (v - cy) / fy
+            dy = ray_y[v]
             for u in range(u0, u1):
-                dx = (u - cx) / fx
+                dx = ray_x[u]
                 if ax * dx + ay * dy + az > 0.0 or bx * dx + by * dy + bz > 0.0 or gx * dx + gy * dy + gz > 0.0:
                     continue
                 den = nx * dx + ny * dy + nz
@@ -183,6 +189,12 @@ def draw_capsules(ends, radius, cap_label, fx, fy, cx, cy, znear, zfar, zbuf, lb
     H, W = zbuf.shape
     corners = np.empty((8, 3))
     box = np.empty(4)
+    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
+    for u in range(W):
+        ray_x[u] = (u - cx) / fx
+    ray_y = np.empty(H)
+    for v in range(H):
+        ray_y[v] = (v - cy) / fy
     for c in range(ends.shape[0]):
         r = radius[c]
         rr = r * r
@@ -211,9 +223,9 @@ def draw_capsules(ends, radius, cap_label, fx, fy, cx, cy, znear, zfar, zbuf, lb
         baba = bax * bax + bay * bay + baz * baz
         label = cap_label[c]
         for v in range(v0, v1):
-            dy = (v - cy) / fy
+            dy = ray_y[v]
             for u in range(u0, u1):
-                dx = (u - cx) / fx
+                dx = ray_x[u]
                 dd = dx * dx + dy * dy + 1.0
                 tc = (mx * dx + my * dy + mz) / dd  # solve near the capsule: no cancellation at range
                 ox, oy, oz = tc * dx, tc * dy, tc
