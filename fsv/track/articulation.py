@@ -87,7 +87,7 @@ def pose_chain(palm_pos, palm_rot, hinge, parent, offset_pos, offset_rot, joint_
     return pos, rot, axis, pivot
 
 
-@kernel(inline="always")
+@kernel
 def point_row(row, x0, x1, x2, s, d0, d1, d2, f, palm, moves, axis, pivot):  # pragma: no cover - compiled
     """Writes ``f * d(direction . x) / d(state)`` of the point x on segment s into ``row`` (6 + n,)."""
     l0, l1, l2 = x0 - palm[0], x1 - palm[1], x2 - palm[2]
@@ -147,7 +147,7 @@ def joint_spans(moves):  # pragma: no cover - compiled
     return span
 
 
-@kernel(inline="always")
+@kernel
 def add_row_span(A, g, row, w, r, lo, hi):  # pragma: no cover - compiled
     """:func:`add_row` of a row that is zero outside ``[0, 6)`` and ``[lo, hi)`` (a :func:`point_row`
     row of a segment whose span is ``[lo, hi)``, :func:`joint_spans`), with the same bits: only the

@@ -90,7 +90,7 @@ def capsule_constants(origin, a, b, radius):  # pragma: no cover - compiled
     return u, L, w, wu, ww, wb, wbwb, r2, sphere, br2
 
 
-@kernel(inline="always")
+@kernel
 def cast_ray(d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, sphere, br2):  # pragma: no cover - compiled
     """First capsule met by the ray ``origin + t (d0, d1, d2)``: ``(t, g)``, (inf, -1) for none.
 
@@ -136,7 +136,7 @@ def cast_ray(d0, d1, d2, u, L, w, wu, ww, wb, wbwb, r2, sphere, br2):  # pragma:
     return best, best_g
 
 
-@kernel(inline="always")
+@kernel
 def hit_normal(x, a, u, L, g, out):  # pragma: no cover - compiled
     """Outward unit normal of capsule g at its surface point x (3,), written to ``out`` (3,)."""
     sax = 0.0
@@ -193,7 +193,7 @@ def closest_on_capsules(points: np.ndarray, a: np.ndarray, b: np.ndarray, radius
                                 np.ascontiguousarray(np.broadcast_to(radius, (a.shape[0],)), dtype=np.float64))
 
 
-@kernel(inline="always")
+@kernel
 def closest_capsule(p0, p1, p2, a, ab, L2, radius, cp, normal):  # pragma: no cover - compiled
     """Nearest capsule surface of the point (p0, p1, p2): ``(g, signed distance)``; the closest
     axis point and the outward unit direction towards the point ((0, 0, 1) on the axis) are
