@@ -11,7 +11,8 @@ another commit, a tracker that is not the code's.
 :func:`kernel` compiles a function as ``numba.njit(cache=True, nogil=True, error_model="numpy")``
 does, and keys its cache by :func:`sources_digest`: the bytes of its own module and of every module
 of the same installation that it imports, directly or not (for the tracker's solver, 7 files). A
-change to any of them compiles the function again, in every process, once; nothing else does.
+change to any of them compiles the function again, once (the first process that needs it writes
+the new cache, the later ones load it); nothing else does.
 """
 
 from __future__ import annotations
