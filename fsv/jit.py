@@ -30,7 +30,7 @@ _IMPORT = re.compile(r"^[ \t]*import[ \t]+([^\n]*)", re.M)
 
 def _names(text: str) -> list[str]:
     """The names of an import list: ``a, b as c`` or ``(a,\\n b)`` -> ``["a", "b"]``."""
-    text = text.split("#", 1)[0] if not text.startswith("(") else re.sub(r"#[^\n]*", "", text)
+    text = re.sub(r"#[^\n]*", "", text)  # comments
     return [n.split()[0] for n in text.strip("()\n ").replace("\n", " ").split(",") if n.strip()]
 
 

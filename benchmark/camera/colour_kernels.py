@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from benchmark.camera.raster_kernels import pixel_rays
 from fsv.jit import kernel
 
 _MASK32 = 0xFFFFFFFF
@@ -86,12 +87,7 @@ def draw_triangles(verts, faces, face_label, id_offset, fx, fy, cx, cy, znear, z
     H, W = zbuf.shape
     tri = np.empty((3, 3))
     box = np.empty(4)
-    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
-    for u in range(W):
-        ray_x[u] = (u - cx) / fx
-    ray_y = np.empty(H)
-    for v in range(H):
-        ray_y[v] = (v - cy) / fy
+    ray_x, ray_y = pixel_rays(H, W, fx, fy, cx, cy)
     for f in range(faces.shape[0]):
         for k in range(3):
             for c in range(3):
@@ -163,12 +159,7 @@ def draw_capsules(ends, radius, cap_label, id_offset, fx, fy, cx, cy, znear, zfa
     H, W = zbuf.shape
     corners = np.empty((8, 3))
     box = np.empty(4)
-    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
-    for u in range(W):
-        ray_x[u] = (u - cx) / fx
-    ray_y = np.empty(H)
-    for v in range(H):
-        ray_y[v] = (v - cy) / fy
+    ray_x, ray_y = pixel_rays(H, W, fx, fy, cx, cy)
     for c in range(ends.shape[0]):
         r = radius[c]
         rr = r * r

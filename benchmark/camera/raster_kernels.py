@@ -104,6 +104,20 @@ def _clipped_box(p, znear, fx, fy, cx, cy, box):
 
 
 @kernel
+def pixel_rays(H, W, fx, fy, cx, cy):
+    """Each column's and row's ray coordinate, ``(u - cx) / fx`` (W,) and ``(v - cy) / fy`` (H,):
+    what the rasterisers' pixel loops read, made once a call instead of once a pixel of every
+    primitive's box."""
+    ray_x = np.empty(W)
+    for u in range(W):
+        ray_x[u] = (u - cx) / fx
+    ray_y = np.empty(H)
+    for v in range(H):
+        ray_y[v] = (v - cy) / fy
+    return ray_x, ray_y
+
+
+@kernel
 def draw_triangles(verts, faces, face_label, fx, fy, cx, cy, znear, zfar, zbuf, lbuf):
     """Draws triangles (front faces only) into the depth and label buffers.
 
@@ -119,12 +133,7 @@ def draw_triangles(verts, faces, face_label, fx, fy, cx, cy, znear, zfar, zbuf, 
     H, W = zbuf.shape
     tri = np.empty((3, 3))
     box = np.empty(4)
-    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
-    for u in range(W):
-        ray_x[u] = (u - cx) / fx
-    ray_y = np.empty(H)
-    for v in range(H):
-        ray_y[v] = (v - cy) / fy
+    ray_x, ray_y = pixel_rays(H, W, fx, fy, cx, cy)
     for f in range(faces.shape[0]):
         for k in range(3):
             for c in range(3):
@@ -189,12 +198,7 @@ def draw_capsules(ends, radius, cap_label, fx, fy, cx, cy, znear, zfar, zbuf, lb
     H, W = zbuf.shape
     corners = np.empty((8, 3))
     box = np.empty(4)
-    ray_x = np.empty(W)  # each column's and row's ray, (u - cx) / fx and (v - cy) / fy, made once
-    for u in range(W):
-        ray_x[u] = (u - cx) / fx
-    ray_y = np.empty(H)
-    for v in range(H):
-        ray_y[v] = (v - cy) / fy
+    ray_x, ray_y = pixel_rays(H, W, fx, fy, cx, cy)
     for c in range(ends.shape[0]):
         r = radius[c]
         rr = r * r
