@@ -7,7 +7,15 @@ import os
 import types
 
 import pytest
-from conftest import UNIT_SECONDS, pytest_unconfigure, report_unit, unit_seconds, unit_seconds_json, worker_unit
+from conftest import (
+    UNIT_SECONDS,
+    one_core_each,
+    pytest_unconfigure,
+    report_unit,
+    unit_seconds,
+    unit_seconds_json,
+    worker_unit,
+)
 from kernel_python import KernelPythons, ScriptFailed
 
 _SHOW = """
@@ -110,3 +118,35 @@ def test_the_unit_seconds_file_holds_the_units_of_a_second_or_more_longest_first
     text = unit_seconds_json({"test_b": 2.04, "ray": 11.36, "test_c": 0.99, "test_a": 2.04, "openblas-kernels": 36.0})
     assert list(json.loads(text).items()) == [("openblas-kernels", 36.0), ("ray", 11.4), ("test_a", 2.0), ("test_b", 2.0)]
     assert text.endswith("}\n") and text == unit_seconds_json(json.loads(text) | {"test_c": 0.5})
+
+
+@pytest.mark.parametrize("worker, count, preset, taken", [
+    ("gw0", "2", {}, {"LP_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"}),
+    ("gw1", "2", {"OMP_NUM_THREADS": "4"}, {"LP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"}),
+    ("gw0", "1", {}, set()),  # fewer workers than cores: the libraries may use the others
+    (None, None, {}, set()),  # not an xdist worker (pytest without -n)
+])
+def test_an_xdist_worker_of_one_per_core_takes_one_cores_settings_the_environment_leaves_unset(
+        monkeypatch, worker, count, preset, taken):
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    for k, v in {"PYTEST_XDIST_WORKER": worker, "PYTEST_XDIST_WORKER_COUNT": count}.items():
+        monkeypatch.delenv(k, raising=False) if v is None else monkeypatch.setenv(k, v)
+    for k in ("LP_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
+        monkeypatch.delenv(k, raising=False)
+    for k, v in preset.items():
+        monkeypatch.setenv(k, v)
+    settings = one_core_each()
+    assert set(settings) == taken and set(settings.values()) <= {"1"}
+
+
+def test_a_worker_of_one_per_core_runs_openblas_on_one_thread():
+    """The setting took effect: NumPy's OpenBLAS, loaded after tests/conftest.py set it, runs one thread
+    in this worker (the machine's cores, 2 here, without it)."""
+    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0"))
+    if not os.environ.get("PYTEST_XDIST_WORKER") or workers < (os.cpu_count() or 1):
+        pytest.skip("not an xdist worker of one per core (pytest without -n auto)")
+    import numpy  # noqa: F401  (loaded already, by tests/conftest.py)
+    from threadpoolctl import threadpool_info
+
+    threads = [i["num_threads"] for i in threadpool_info() if i["internal_api"] == "openblas"]
+    assert threads and set(threads) == {1}, threads
