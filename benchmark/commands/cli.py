@@ -294,13 +294,16 @@ def run_stages(record: Run, args: argparse.Namespace, background: Background) ->
     """
     parts, timing = [], {}
     record = dataclasses.replace(record, background=background)
+    if not args.no_pictures:
+        # the pictures' library, imported while the first stages work, before any child is forked: the
+        # render stage's depth preview (in a child beside the tracker) and every later figure inherit
+        # it. Imported after the first stage, it was imported twice, in that child and here (0.3 s of CPU)
+        background.preload("matplotlib.pyplot")
     for stage in STAGES:
         t0 = time.perf_counter()
         result = stage(record, args)
         record = dataclasses.replace(record, **result.updates())
         complete(result, record.out, background)
-        if (result.pictures or result.later) and not args.no_pictures:  # for the later stages' figures, imported while the next stage works
-            background.preload("matplotlib.pyplot")  # (the render stage's depth, in a child beside it, too)
         parts += [result, *result.later]
         timing[stage.name] = time.perf_counter() - t0
     return parts, timing, dataclasses.replace(record, background=None)
