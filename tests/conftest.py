@@ -11,14 +11,20 @@ import benchmark  # noqa: F401  (NumPy at its baseline instructions: set before 
 from benchmark.parallel import ONE_CORE_ENV
 
 
+def one_worker_per_core() -> bool:
+    """Whether this process is an xdist worker of as many as the machine has cores (``-n auto``)."""
+    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0"))
+    return bool(os.environ.get("PYTEST_XDIST_WORKER")) and workers >= (os.cpu_count() or 1)
+
+
 def one_core_each() -> dict:
     """The settings of :data:`benchmark.parallel.ONE_CORE_ENV` that this test process takes, and what it
-    starts: all of them (those the environment does not set) in an xdist worker of as many as the machine
-    has cores (``-n auto``), as a pool's worker takes them; none otherwise. Each library would otherwise
-    start a thread per core in each worker: OpenBLAS's threads, waiting for work, took the other worker's
-    core (measured on the whole suite, 2 workers on 2 cores: 8-9 s of 265 s of CPU, 4 s of its wall time)."""
-    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0"))
-    if not os.environ.get("PYTEST_XDIST_WORKER") or workers < (os.cpu_count() or 1):
+    starts: all of them (those the environment does not set) in an xdist worker of one per core
+    (:func:`one_worker_per_core`), as a pool's worker takes them; none otherwise. Each library would
+    otherwise start a thread per core in each worker: OpenBLAS's threads, waiting for work, took the other
+    worker's core (measured on the whole suite, 2 workers on 2 cores: 8-9 s of 265 s of CPU, 4 s of its
+    wall time)."""
+    if not one_worker_per_core():
         return {}
     return {k: v for k, v in ONE_CORE_ENV.items() if k not in os.environ}
 

@@ -389,7 +389,6 @@ def test_output_read_only_in_part_ends_the_command_without_a_traceback():
     assert run.stderr.strip() == "status 0", run.stderr
 
 
-
 def test_the_pictures_library_is_preloaded_before_the_first_stage_runs(monkeypatch):
     """The main command imports matplotlib (in a thread) before its first stage, so that every child it
     forks later inherits it: the render stage's child (the depth preview, beside the tracker) imported it

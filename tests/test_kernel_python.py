@@ -10,6 +10,7 @@ import pytest
 from conftest import (
     UNIT_SECONDS,
     one_core_each,
+    one_worker_per_core,
     pytest_unconfigure,
     report_unit,
     unit_seconds,
@@ -142,8 +143,7 @@ def test_an_xdist_worker_of_one_per_core_takes_one_cores_settings_the_environmen
 def test_a_worker_of_one_per_core_runs_openblas_on_one_thread():
     """The setting took effect: NumPy's OpenBLAS, loaded after tests/conftest.py set it, runs one thread
     in this worker (the machine's cores, 2 here, without it)."""
-    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0"))
-    if not os.environ.get("PYTEST_XDIST_WORKER") or workers < (os.cpu_count() or 1):
+    if not one_worker_per_core():
         pytest.skip("not an xdist worker of one per core (pytest without -n auto)")
     import numpy  # noqa: F401  (loaded already, by tests/conftest.py)
     from threadpoolctl import threadpool_info

@@ -297,7 +297,7 @@ def run_stages(record: Run, args: argparse.Namespace, background: Background) ->
     if not args.no_pictures:
         # the pictures' library, imported while the first stages work, before any child is forked: the
         # render stage's depth preview (in a child beside the tracker) and every later figure inherit
-        # it. Imported after the first stage, it was imported twice, in that child and here (0.3 s of CPU)
+        # it. Imported after the first stage, it was imported twice, in that child and here (0.1 s of CPU)
         background.preload("matplotlib.pyplot")
     for stage in STAGES:
         t0 = time.perf_counter()
