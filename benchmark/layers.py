@@ -12,7 +12,7 @@ from benchmark.source import import_graph  # noqa: F401 (the graph the floors ar
 FLOORS: tuple = (
     ("fsv", ("fsv",)),
     ("base", ("benchmark.errors", "benchmark.atomic", "benchmark.archive", "benchmark.sealed_table",
-              "benchmark.background", "benchmark.simd", "benchmark.parallel", "benchmark.pool_server", "benchmark.collector", "benchmark.fingerprint", "benchmark.layers", "benchmark.source", "benchmark.interrupt", "benchmark.limits")),
+              "benchmark.background", "benchmark.simd", "benchmark.parallel", "benchmark.pool_server", "benchmark.pool_ready", "benchmark.collector", "benchmark.fingerprint", "benchmark.layers", "benchmark.source", "benchmark.interrupt", "benchmark.limits")),
     ("world", ("benchmark.world",)),
     ("camera", ("benchmark.camera",)),
     ("method", ("benchmark.method",)),

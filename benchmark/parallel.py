@@ -165,8 +165,11 @@ def _stop(pool, processes: list) -> None:
 
 SERVER_SETUP = "benchmark.pool_server"
 """The module the fork server imports first (:func:`pool_context`): it sets :data:`ONE_CORE_ENV` in
-the server's environment before any numerical library loads there, and makes numba's CPU target
-ready once for every worker."""
+the server's environment before any numerical library loads there."""
+
+SERVER_READY = "benchmark.pool_ready"
+"""The module the fork server imports last, after the job's: it makes numba's CPU target ready once
+for every worker where the job's module uses numba."""
 
 _server_env: dict | None = None
 """This process's environment when it started the fork server, less :data:`MOMENTARY_ENV` (None: it
@@ -189,7 +192,8 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
 
     A spawned worker starts an interpreter and imports NumPy, SciPy, MuJoCo, numba and the job's
     module again (about 1 s of CPU a worker, measured); the fork server (Linux) imports them once,
-    with :data:`ONE_CORE_ENV` (:data:`SERVER_SETUP`), and forks each worker from itself. It is
+    with :data:`ONE_CORE_ENV` (:data:`SERVER_SETUP`; numba readied where the job uses it:
+    :data:`SERVER_READY`), and forks each worker from itself. It is
     started by this process's first pool, with ``fn``'s module preloaded, and serves its later pools
     while the process's environment is the one it started with, :data:`MOMENTARY_ENV` aside (a
     worker must see this process's: the libraries the server loaded read some of it when they
@@ -213,7 +217,8 @@ def pool_context(fn: Callable) -> multiprocessing.context.BaseContext:
     if _server_env is None:
         if server._forkserver_pid is not None:
             return spawn
-        preload = [SERVER_SETUP] + ([fn.__module__] if fn.__module__ not in ("__main__", __name__) else [])
+        job = [fn.__module__] if fn.__module__ not in ("__main__", __name__) else []
+        preload = [SERVER_SETUP, *job, SERVER_READY]
         server.set_forkserver_preload(preload)
         server.ensure_running()
         _server_env = _settings_env()

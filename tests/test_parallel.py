@@ -60,6 +60,9 @@ JOBS = textwrap.dedent("""
         return (os.getppid(), os.environ.get("OPENBLAS_NUM_THREADS"), os.environ.get("NPY_ENABLE_CPU_FEATURES"),
                 os.environ.get("FSV_TEST_CHANGED"))
 
+    def numba_state(x):  # a job of __main__: the server imported nothing of it
+        return "numba" in sys.modules, "numba.np.arraymath" in sys.modules
+
     KEPT = []
 
     def keep(x):
@@ -78,6 +81,10 @@ JOBS = textwrap.dedent("""
         elif sys.argv[1] == "teardown":
             KEPT.append(Said("teardown-parent"))
             print(sorted(run_jobs(keep, [1, 2], workers=2)))
+        elif sys.argv[1] == "numba-state":
+            import numba_job  # a module that uses numba (tests/test_parallel.py writes it beside this file)
+            fn = numba_job.numba_state if sys.argv[2] == "numba-job" else numba_state
+            print(json.dumps(sorted(set(r for _, r in run_jobs(fn, [0, 1], workers=2)))))
         elif sys.argv[1] == "lambda":
             list(run_jobs(lambda x: x, [0, 1], workers=2))
         elif sys.argv[1] == "where":
@@ -107,6 +114,31 @@ def test_a_pool_gives_every_result_and_hears_the_workers_progress(tmp_path):
                          timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "[(0, 1), (1, 4), (2, 9), (3, 16)] [1, 2, 3, 4]"
+
+
+NUMBA_JOB = textwrap.dedent("""
+    import sys
+
+    import numba  # noqa: F401  (what makes this a job that uses numba)
+
+    def numba_state(x):
+        return "numba" in sys.modules, "numba.np.arraymath" in sys.modules  # the second: the CPU target readied
+""")
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="forks its workers from a fork server on Linux only")
+@pytest.mark.parametrize("job, expected", [("numba-job", [[True, True]]), ("main-job", [[False, False]])])
+def test_the_fork_server_readies_numba_only_for_a_job_that_uses_it(tmp_path, job, expected):
+    """A job whose module imports numba gets workers whose numba CPU target the server readied once
+    (its registries' modules loaded before the fork); a job of ``__main__``, whose module the server
+    does not import, gets workers without numba: its server did not import it (measured: 0.5 s of
+    CPU a server)."""
+    (tmp_path / "jobs.py").write_text(JOBS)
+    (tmp_path / "numba_job.py").write_text(NUMBA_JOB)
+    out = subprocess.run([sys.executable, "jobs.py", "numba-state", job], cwd=tmp_path, capture_output=True,
+                         text=True, timeout=120, env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert out.returncode == 0, out.stderr
+    assert json.loads(out.stdout) == expected
 
 
 def test_a_worker_leaves_ctrl_c_to_its_parent_and_says_nothing(tmp_path):
