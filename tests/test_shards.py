@@ -6,7 +6,7 @@ import pytest
 from frames_data import cached_episode
 
 from benchmark.errors import DatasetError, DatasetFileError
-from benchmark.paper.dataset.shards import read_shard, verify_shard, write_shard
+from benchmark.paper.dataset.shards import content_sha256, open_shard, read_shard, verify_shard, write_shard
 from benchmark.world.scenario import Scenario
 from fsv.rotation import quat_to_rot
 
@@ -23,6 +23,18 @@ def shard(episode, tmp_path_factory):
                        privileged=dict(person={"name": "u0", "share": [0.3, 0.7]}, grasp={"family": "width-four"}))
     path.write_bytes(data)
     return path, data, time.time()
+
+
+def test_the_content_digest_written_from_memory_is_the_one_read_back(episode, shard):
+    """The writer hashes the frames from the arrays it wrote; read back from the file (what a
+    reader's check does), the same digest, for raw and JPEG colour; it differs once one value does."""
+    jpeg = write_shard(episode, streams=("depth", "colour"), colour_encoding="jpeg")
+    for data in (shard[1], jpeg):
+        with open_shard(None, data) as f:
+            assert f.attrs["content_sha256"] == content_sha256(f)
+            frames = f["depth/frames"][()]
+            frames[0, 0, 0] += 1
+            assert content_sha256(f, {"/depth/frames": frames}) != content_sha256(f)
 
 
 def test_a_shard_holds_the_episodes_values_bit_for_bit(episode, shard):
