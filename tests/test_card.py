@@ -8,6 +8,8 @@ from frames_data import make_tiny
 from benchmark.paper.dataset.card import RAI, SHARD_ARRAYS
 from benchmark.paper.dataset.frames import read_index
 
+pytestmark = pytest.mark.xdist_group("frames-data")  # one worker renders frames_data's episodes once
+
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):

@@ -12,6 +12,8 @@ from benchmark.paper.dataset import DatasetSpec
 from benchmark.paper.dataset.frames import INDEX_COLUMNS, check_frames, check_training_people, read_index
 from benchmark.paper.dataset.shards import read_shard
 
+pytestmark = pytest.mark.xdist_group("frames-data")  # one worker renders frames_data's episodes once
+
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):

@@ -4,6 +4,7 @@ and what tests/conftest.py hands an xdist worker, and how a worker ends."""
 import atexit
 import json
 import os
+import pathlib
 import types
 
 import pytest
@@ -103,6 +104,18 @@ def test_an_xdist_worker_ends_at_unconfigure_without_the_interpreters_finalisati
             os._exit(99)  # reached only if pytest_unconfigure returned
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == code and not marker.exists()
+
+
+@pytest.mark.parametrize("fixtures, named, unit", [
+    (("tmp_path",), None, "test_x"),  # its file
+    (("tmp_path",), "frames-data", "frames-data"),  # the group its file names (files that share a cache)
+    (("kernel_python",), "frames-data", "openblas-kernels"),  # a shared fixture's group first
+])
+def test_a_tests_unit_is_its_shared_fixtures_then_its_files_named_group_then_its_file(fixtures, named, unit):
+    mark = pytest.mark.xdist_group(named).mark if named else None
+    item = types.SimpleNamespace(fixturenames=fixtures, path=pathlib.Path("tests/test_x.py"),
+                                 get_closest_marker=lambda name: mark if name == "xdist_group" else None)
+    assert worker_unit(item) == unit
 
 
 @pytest.mark.parametrize("nodeid, unit", [

@@ -10,6 +10,8 @@ from benchmark.paper.dataset.shards import content_sha256, open_shard, read_shar
 from benchmark.world.scenario import Scenario
 from fsv.rotation import quat_to_rot
 
+pytestmark = pytest.mark.xdist_group("frames-data")  # one worker renders frames_data's episodes once
+
 
 @pytest.fixture(scope="module")
 def episode():

@@ -10,6 +10,8 @@ from frames_data import make_tiny
 from benchmark.errors import DatasetError
 from benchmark.paper.dataset.shards import read_shard
 
+pytestmark = pytest.mark.xdist_group("frames-data")  # one worker renders frames_data's episodes once
+
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "data.md"
 
 
