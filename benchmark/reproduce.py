@@ -118,6 +118,7 @@ class Result:
         compare: ``(new, committed) -> [difference, ...]`` on the two paths.
         docs_pictures: ``(file in the result, path under docs/)`` pairs: pictures the docs show,
             copied there whenever the result is written, so the docs never show an older run.
+        omitted: Files its commands write that the committed result leaves out (removed after them).
     """
 
     name: str
@@ -126,6 +127,7 @@ class Result:
     commands: tuple
     compare: Callable
     docs_pictures: tuple = ()
+    omitted: tuple = ()
 
 
 def _leaves(obj, prefix=""):
@@ -276,7 +278,7 @@ RESULTS = (
            compare=_compare_json("direct_curve.json")),
     Result(name="reference-run", path="results/lift-u0-g0-m0-s0", datasets=(),
            commands=(("fsv-bench", "--task", "lift", "--noise", "0.01", "--no-gif", "--out", "{out}"),),
-           compare=_compare_run,
+           compare=_compare_run, omitted=("episode.npz",),  # the reference's episode is not committed
            docs_pictures=(("depth_preview.png", "depth_preview.png"),
                           ("tracking_overlay.png", "pictures/lift-u0-g0-s0-tracking_overlay.png"),
                           ("forces_fig5.png", "pictures/lift-u0-g0-s0-forces_fig5.png"))),
@@ -388,8 +390,8 @@ def make(result: Result, data: pathlib.Path, out: pathlib.Path, *, workers: int 
         _generate(name, data, workers, log)
     for command in result.commands:
         _run(command, data, out, result.path, log)
-    if result.name == "reference-run":  # the committed reference omits the episode file
-        (out / "episode.npz").unlink(missing_ok=True)
+    for name in result.omitted:
+        (out / name).unlink(missing_ok=True)
 
 
 def _select(only: str | None) -> list[Result]:
