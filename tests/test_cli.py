@@ -292,6 +292,8 @@ def test_the_console_script_ends_the_main_command_after_its_output_is_complete(t
     assert proc.returncode == (0 if summary["verdict"]["verdict"] == "pass" else 1), proc.stderr
     assert proc.stdout.rstrip().splitlines()[-1].startswith(f"summary: {out / 'summary.json'} (")  # flushed
     assert (out / "episode.npz").exists() and not [p for p in tmp_path.iterdir() if p.name != "run"]
+    for picture in ("depth_preview.png", "tracking_overlay.png", "fig4_kinematics.png", "forces_fig5.png"):
+        assert (out / picture).stat().st_size > 10_000, picture  # drawn beside the stages, done before the exit
 
 
 def test_help_lists_the_task_names(capsys):
