@@ -272,7 +272,7 @@ def content_sha256(f, written: dict | None = None) -> str:
     ``written`` maps datasets' names to the arrays just written into them (:func:`write_shard`): their
     values are hashed from memory, the same bytes as read back, without decompressing the frames
     again (about a quarter of the time to write a shard with colour); the rest is read from ``f``."""
-    h = hashlib.sha256()
+    h, written = hashlib.sha256(), written or {}
 
     def attrs(name, obj):
         items = {k: (v.tolist() if isinstance(v, np.ndarray) else v.item() if isinstance(v, np.generic) else v)
@@ -291,8 +291,7 @@ def content_sha256(f, written: dict | None = None) -> str:
                 for k in range(obj.shape[0]):
                     v = obj[k].tobytes()
                     h.update(len(v).to_bytes(8, "little") + v)
-            elif (kept := (written or {}).get(name if name.startswith("/") else "/" + name)) is not None \
-                    and kept.dtype == obj.dtype and kept.shape == obj.shape:
+            elif (kept := written.get(obj.name)) is not None and (kept.dtype, kept.shape) == (obj.dtype, obj.shape):
                 h.update(np.ascontiguousarray(kept))  # C order: the frames' bytes one after another
             else:
                 for k in range(obj.shape[0] if obj.ndim else 1):  # a chunk's worth at a time for images
